@@ -1,0 +1,89 @@
+//! Rays with a parametric interval, and spawning of rays from surfaces.
+
+use glam::Vec3;
+
+/// A ray `o + t·d` restricted to `t ∈ [t_min, t_max]`. `d` need not be unit length
+/// (shadow rays use `d = p_light − p` with `t_max < 1`).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Ray {
+    pub o: Vec3,
+    pub d: Vec3,
+    pub t_min: f32,
+    pub t_max: f32,
+}
+
+impl Ray {
+    pub fn new(o: Vec3, d: Vec3) -> Self {
+        Ray {
+            o,
+            d,
+            t_min: 0.0,
+            t_max: f32::INFINITY,
+        }
+    }
+
+    pub fn segment(o: Vec3, d: Vec3, t_max: f32) -> Self {
+        Ray {
+            o,
+            d,
+            t_min: 0.0,
+            t_max,
+        }
+    }
+
+    #[inline]
+    pub fn at(&self, t: f32) -> Vec3 {
+        self.o + t * self.d
+    }
+}
+
+/// Moves a surface point `p` off its surface, to the side of `w`, far enough that
+/// the floating-point error of `p` (`p_error`, a conservative per-axis bound) cannot
+/// put the new origin behind the surface (pbrt-v4 `OffsetRayOrigin`). The offset
+/// scales with the magnitudes that produced `p`, so scenes at 1e-3 or 1e4 behave alike.
+pub fn offset_ray_origin(p: Vec3, p_error: Vec3, ng: Vec3, w: Vec3) -> Vec3 {
+    let d = ng.abs().dot(p_error);
+    let mut offset = d * ng;
+    if w.dot(ng) < 0.0 {
+        offset = -offset;
+    }
+    let mut po = p + offset;
+    // Round away from p so the offset survives the addition's own rounding.
+    for i in 0..3 {
+        if offset[i] > 0.0 {
+            po[i] = next_float_up(po[i]);
+        } else if offset[i] < 0.0 {
+            po[i] = next_float_down(po[i]);
+        }
+    }
+    po
+}
+
+/// Smallest float greater than `v`.
+pub fn next_float_up(v: f32) -> f32 {
+    if v.is_infinite() && v > 0.0 {
+        return v;
+    }
+    let v = if v == -0.0 { 0.0 } else { v };
+    let bits = v.to_bits();
+    let bits = if v >= 0.0 { bits + 1 } else { bits - 1 };
+    f32::from_bits(bits)
+}
+
+/// Largest float smaller than `v`.
+pub fn next_float_down(v: f32) -> f32 {
+    if v.is_infinite() && v < 0.0 {
+        return v;
+    }
+    let v = if v == 0.0 { -0.0 } else { v };
+    let bits = v.to_bits();
+    let bits = if v > 0.0 { bits - 1 } else { bits + 1 };
+    f32::from_bits(bits)
+}
+
+/// `γ(n) = nε/(1−nε)`, the classic bound on the relative error of `n` float operations.
+#[inline]
+pub const fn gamma(n: i32) -> f32 {
+    let e = f32::EPSILON * 0.5;
+    (n as f32 * e) / (1.0 - n as f32 * e)
+}

@@ -1,0 +1,16 @@
+//! ember: a physically based CPU path tracer for the CS184 COLLADA scenes.
+//!
+//! The library holds everything; the `ember` binary only parses arguments.
+//! Scene semantics follow `shared/docs/scene-semantics.md`.
+
+pub mod accel;
+pub mod camera;
+pub mod color;
+pub mod geometry;
+pub mod lights;
+pub mod materials;
+pub mod sampling;
+pub mod scene;
+
+pub use color::Color;
+pub use glam::{Vec2, Vec3};

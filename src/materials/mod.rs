@@ -1,0 +1,97 @@
+//! Materials (BSDFs) of spec §6. Each is a small self-contained unit whose
+//! `eval`, `sample` and `pdf` agree; directions are in the local shading frame
+//! (+z = shading normal), `wo` toward the eye, `wi` toward the light.
+
+use crate::Color;
+use glam::{Vec2, Vec3};
+
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Material {
+    Lambertian {
+        albedo: Color,
+    },
+    Mirror {
+        reflectance: Color,
+    },
+    /// Smooth dielectric: index `ior` on the back (−z) side, 1 on the front.
+    Glass {
+        ior: f32,
+        reflectance: Color,
+        transmittance: Color,
+    },
+    /// Glass without its reflection.
+    Refraction {
+        ior: f32,
+        transmittance: Color,
+    },
+    /// Rough conductor: Beckmann NDF, separable Smith G, exact conductor Fresnel.
+    Microfacet {
+        alpha: f32,
+        eta: Color,
+        k: Color,
+    },
+    /// Emits `radiance` from the front side; reflects nothing.
+    Emission {
+        radiance: Color,
+    },
+}
+
+impl Default for Material {
+    fn default() -> Self {
+        Material::Lambertian {
+            albedo: Color::splat(0.5),
+        }
+    }
+}
+
+/// A direction drawn by `Material::sample`.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct BsdfSample {
+    /// Local incident direction (unit).
+    pub wi: Vec3,
+    /// The estimator weight `f·|cos θi| / pdf` (for delta lobes: the lobe's reflectance or transmittance factor).
+    pub weight: Color,
+    /// Solid-angle pdf of `wi`; for a delta lobe, the probability of choosing that lobe.
+    pub pdf: f32,
+    /// True when `wi` came from a delta (specular) lobe.
+    pub delta: bool,
+}
+
+impl Material {
+    /// `f(wo, wi)` without the cosine; zero for delta materials.
+    pub fn eval(&self, _wo: Vec3, _wi: Vec3) -> Color {
+        todo!("materials: eval")
+    }
+
+    /// Solid-angle density with which `sample` returns `wi`; zero for delta lobes.
+    pub fn pdf(&self, _wo: Vec3, _wi: Vec3) -> f32 {
+        todo!("materials: pdf")
+    }
+
+    /// Draws `wi` given `wo`. `u_lobe` chooses a lobe, `u` the direction.
+    pub fn sample(&self, _wo: Vec3, _u_lobe: f32, _u: Vec2) -> Option<BsdfSample> {
+        todo!("materials: sample")
+    }
+
+    /// True when every lobe is a delta distribution (mirror, glass, refraction):
+    /// light sampling is pointless there.
+    pub fn is_delta(&self) -> bool {
+        matches!(
+            self,
+            Material::Mirror { .. } | Material::Glass { .. } | Material::Refraction { .. }
+        )
+    }
+
+    /// True when the material scatters no light at all (emitters).
+    pub fn is_black(&self) -> bool {
+        matches!(self, Material::Emission { .. })
+    }
+
+    /// Radiance emitted toward local direction `wo` (front side only).
+    pub fn emitted(&self, wo: Vec3) -> Color {
+        match self {
+            Material::Emission { radiance } if wo.z > 0.0 => *radiance,
+            _ => Color::ZERO,
+        }
+    }
+}

@@ -1,0 +1,204 @@
+//! The flat scene ember renders: world-space triangles and spheres, materials,
+//! lights and one camera. No scene graph survives loading.
+
+pub mod collada;
+
+use crate::geometry::{ray::gamma, Aabb, Ray};
+use crate::lights::Light;
+use crate::materials::Material;
+use glam::{Vec2, Vec3};
+
+/// Marker for "no light" in `Triangle::light`.
+pub const NO_LIGHT: u32 = u32::MAX;
+
+/// A triangle of the flat scene: indices into `Scene::positions` (and `Scene::normals`).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Triangle {
+    pub v: [u32; 3],
+    /// Per-corner shading normals, if the mesh had a NORMAL input.
+    pub n: Option<[u32; 3]>,
+    pub material: u32,
+    /// Index into `Scene::lights` when this triangle is the surface of an area light.
+    pub light: u32,
+}
+
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Sphere {
+    pub centre: Vec3,
+    pub radius: f32,
+    pub material: u32,
+}
+
+/// What the file says about the view; the eye itself comes from the scene bounds (spec §4).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct CameraDesc {
+    /// Unit forward direction `F`.
+    pub forward: Vec3,
+    /// Unit up `U`, orthogonal to `F`.
+    pub up: Vec3,
+    /// `tan(xfov/2)` as given or derived from the file, if known.
+    pub tan_half_x: Option<f32>,
+    /// `tan(yfov/2)` as given or derived from the file, if known.
+    pub tan_half_y: Option<f32>,
+}
+
+impl Default for CameraDesc {
+    fn default() -> Self {
+        // No camera in the file: look down −Z like COLLADA's default camera, 49.13° wide.
+        CameraDesc {
+            forward: Vec3::NEG_Z,
+            up: Vec3::Y,
+            tan_half_x: Some((49.13434f32.to_radians() * 0.5).tan()),
+            tan_half_y: None,
+        }
+    }
+}
+
+#[derive(Clone, Debug, Default)]
+pub struct Scene {
+    pub positions: Vec<Vec3>,
+    pub normals: Vec<Vec3>,
+    pub triangles: Vec<Triangle>,
+    pub spheres: Vec<Sphere>,
+    pub materials: Vec<Material>,
+    pub lights: Vec<Light>,
+    pub camera: CameraDesc,
+    /// Bounds of triangles and spheres (spec §4 `B`); area-light quads are excluded.
+    pub bounds: Aabb,
+    /// Non-fatal problems found while loading (e.g. a missing material).
+    pub warnings: Vec<String>,
+}
+
+/// A primitive id: triangles first, then spheres.
+pub type PrimId = u32;
+
+/// The minimal answer of an acceleration structure: enough to rebuild the full
+/// surface interaction identically whichever backend found it.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct PrimHit {
+    pub t: f32,
+    pub prim: PrimId,
+    /// Barycentrics of corners 1 and 2 for triangles (Embree's u, v); unused for spheres.
+    pub b1: f32,
+    pub b2: f32,
+}
+
+/// Everything shading needs about a hit point.
+#[derive(Clone, Copy, Debug)]
+pub struct SurfaceInteraction {
+    pub t: f32,
+    pub p: Vec3,
+    /// Conservative per-axis bound on the error of `p`.
+    pub p_error: Vec3,
+    /// Unit geometric normal; it points to the surface's front.
+    pub ng: Vec3,
+    /// Unit shading normal, on the same side as `ng`.
+    pub ns: Vec3,
+    pub uv: Vec2,
+    pub prim: PrimId,
+    pub material: u32,
+    pub light: u32,
+}
+
+impl Scene {
+    pub fn num_prims(&self) -> usize {
+        self.triangles.len() + self.spheres.len()
+    }
+
+    /// Bounds of one primitive (triangles first, then spheres).
+    pub fn prim_bounds(&self, prim: PrimId) -> Aabb {
+        let i = prim as usize;
+        if i < self.triangles.len() {
+            let t = &self.triangles[i];
+            let mut b = Aabb::from_point(self.positions[t.v[0] as usize]);
+            b.grow(self.positions[t.v[1] as usize]);
+            b.grow(self.positions[t.v[2] as usize]);
+            b
+        } else {
+            let s = &self.spheres[i - self.triangles.len()];
+            Aabb::new(
+                s.centre - Vec3::splat(s.radius),
+                s.centre + Vec3::splat(s.radius),
+            )
+        }
+    }
+
+    /// Corner positions of triangle `i`.
+    #[inline]
+    pub fn triangle_positions(&self, i: usize) -> [Vec3; 3] {
+        let t = &self.triangles[i];
+        [
+            self.positions[t.v[0] as usize],
+            self.positions[t.v[1] as usize],
+            self.positions[t.v[2] as usize],
+        ]
+    }
+
+    /// Full surface interaction of a primitive hit along `ray`. Points come from
+    /// barycentrics (triangles) or are projected onto the sphere, so their error
+    /// scales with the scene's magnitudes, not with `t`.
+    pub fn interaction(&self, ray: &Ray, h: &PrimHit) -> SurfaceInteraction {
+        let i = h.prim as usize;
+        if i < self.triangles.len() {
+            self.triangle_interaction(i, h)
+        } else {
+            self.sphere_interaction(ray, i - self.triangles.len(), h)
+        }
+    }
+
+    fn triangle_interaction(&self, i: usize, h: &PrimHit) -> SurfaceInteraction {
+        let tri = &self.triangles[i];
+        let [p0, p1, p2] = self.triangle_positions(i);
+        let b0 = 1.0 - h.b1 - h.b2;
+        let p = b0 * p0 + h.b1 * p1 + h.b2 * p2;
+        let p_error = gamma(7) * ((b0 * p0).abs() + (h.b1 * p1).abs() + (h.b2 * p2).abs());
+        let mut ng = (p1 - p0).cross(p2 - p0).normalize_or_zero();
+        let mut ns = ng;
+        if let Some(n) = tri.n {
+            let [n0, n1, n2] = n.map(|k| self.normals[k as usize]);
+            // The loader already oriented ng toward the corner-normal sum; interpolate.
+            let interp = (b0 * n0 + h.b1 * n1 + h.b2 * n2).normalize_or_zero();
+            if (n0 + n1 + n2).dot(ng) < 0.0 {
+                ng = -ng;
+            }
+            if interp != Vec3::ZERO {
+                ns = interp;
+            }
+        }
+        if ns.dot(ng) < 0.0 {
+            // Shading normals are kept on the front side so BSDF sides agree with ng.
+            ns = -ns;
+        }
+        SurfaceInteraction {
+            t: h.t,
+            p,
+            p_error,
+            ng,
+            ns,
+            uv: Vec2::new(h.b1, h.b2),
+            prim: h.prim,
+            material: tri.material,
+            light: tri.light,
+        }
+    }
+
+    fn sphere_interaction(&self, ray: &Ray, si: usize, h: &PrimHit) -> SurfaceInteraction {
+        let s = &self.spheres[si];
+        let raw = ray.at(h.t) - s.centre;
+        let n = raw.normalize_or_zero();
+        let n = if n == Vec3::ZERO { Vec3::Y } else { n };
+        let p = s.centre + s.radius * n;
+        let p_error = gamma(5) * (s.centre.abs() + Vec3::splat(s.radius)) + gamma(5) * p.abs();
+        SurfaceInteraction {
+            t: h.t,
+            p,
+            p_error,
+            ng: n,
+            ns: n,
+            uv: Vec2::ZERO,
+            prim: h.prim,
+            material: s.material,
+            light: NO_LIGHT,
+        }
+    }
+}
