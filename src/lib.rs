@@ -6,9 +6,13 @@
 pub mod accel;
 pub mod camera;
 pub mod color;
+pub mod film;
 pub mod geometry;
+pub mod image_io;
+pub mod integrators;
 pub mod lights;
 pub mod materials;
+pub mod render;
 pub mod sampling;
 pub mod scene;
 

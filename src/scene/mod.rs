@@ -6,6 +6,7 @@ pub mod collada;
 use crate::geometry::{ray::gamma, Aabb, Ray};
 use crate::lights::Light;
 use crate::materials::Material;
+use crate::Color;
 use glam::{Vec2, Vec3};
 
 /// Marker for "no light" in `Triangle::light`.
@@ -67,6 +68,9 @@ pub struct Scene {
     pub bounds: Aabb,
     /// Non-fatal problems found while loading (e.g. a missing material).
     pub warnings: Vec<String>,
+    /// Two-sided emission attached to primitives on top of their material, found only by
+    /// BSDF sampling. The loader never sets it; analytic test scenes (the furnace) do.
+    pub surface_emission: Vec<(PrimId, Color)>,
 }
 
 /// A primitive id: triangles first, then spheres.
@@ -101,6 +105,15 @@ pub struct SurfaceInteraction {
 }
 
 impl Scene {
+    /// Radiance leaving the surface of `si` toward world direction `wo`.
+    pub fn emission(&self, si: &SurfaceInteraction, wo: Vec3) -> Color {
+        let mut le = self.materials[si.material as usize].emitted(Vec3::new(0.0, 0.0, wo.dot(si.ng)));
+        if !self.surface_emission.is_empty() {
+            le += self.surface_emission.iter().filter(|(p, _)| *p == si.prim).map(|(_, c)| *c).sum::<Color>();
+        }
+        le
+    }
+
     pub fn num_prims(&self) -> usize {
         self.triangles.len() + self.spheres.len()
     }

@@ -1,0 +1,47 @@
+//! Light transport. One path tracer serves every CS184 mode (`-m 0` emitted
+//! light, `-m 1` direct lighting, `-m N` global illumination), with the
+//! direct-lighting strategy chosen by the user; debug views live in `debug`.
+
+pub mod debug;
+pub mod path;
+
+pub use path::PathIntegrator;
+
+/// How light arriving directly from emitters is estimated at each scattering vertex.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum DirectStrategy {
+    /// `-H`: uniform hemisphere directions; only emitters that rays can hit are seen.
+    Hemisphere,
+    /// Light sampling (`-l` samples per area light, one per delta light).
+    Light,
+    /// Light sampling and BSDF sampling combined by the power heuristic.
+    Mis,
+}
+
+/// Russian roulette policy. The depth cap `-m` is never a roulette decision.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Roulette {
+    Off,
+    /// From bounce `start` on, continue with probability `min(1, max channel of throughput)`, at least `min_prob`.
+    Throughput { start: u32, min_prob: f32 },
+    /// From bounce `start` on, continue with the fixed probability `prob`.
+    Fixed { start: u32, prob: f32 },
+}
+
+impl Default for Roulette {
+    fn default() -> Self {
+        Roulette::Throughput { start: 3, min_prob: 0.05 }
+    }
+}
+
+impl Roulette {
+    /// Continuation probability after `bounces` scattering events with throughput `beta`.
+    pub fn continue_prob(&self, bounces: u32, beta: crate::Color) -> f32 {
+        match *self {
+            Roulette::Off => 1.0,
+            Roulette::Throughput { start, min_prob } if bounces >= start => beta.max_element().clamp(min_prob, 1.0),
+            Roulette::Fixed { start, prob } if bounces >= start => prob.clamp(1e-6, 1.0),
+            _ => 1.0,
+        }
+    }
+}

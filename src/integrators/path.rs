@@ -1,0 +1,238 @@
+//! The unidirectional path tracer of spec §7.
+//!
+//! A path with `k` scattering events ("bounces") contributes when `k ≤ m`
+//! (accumulation on) or `k = m` (off). Emission found by a ray leaving vertex
+//! `x_k` and light sampled at `x_k` both belong to paths of `k` bounces.
+
+use super::{DirectStrategy, Roulette};
+use crate::accel::Accel;
+use crate::color::is_finite;
+use crate::geometry::{offset_ray_origin, Frame, Ray};
+use crate::lights::Light;
+use crate::materials::Material;
+use crate::sampling::{power_heuristic, uniform_hemisphere, uniform_hemisphere_pdf, Sampler};
+use crate::scene::{Scene, SurfaceInteraction, NO_LIGHT};
+use crate::Color;
+use glam::Vec3;
+
+/// Shadow rays stop this fraction short of the sampled light point, so the light's own
+/// surface does not occlude it; relative, so it works at every scene scale.
+const SHADOW_EPSILON: f32 = 1e-4;
+
+pub struct PathIntegrator<'a> {
+    pub scene: &'a Scene,
+    pub accel: &'a dyn Accel,
+    pub max_depth: u32,
+    pub accumulate: bool,
+    pub light_samples: u32,
+    pub strategy: DirectStrategy,
+    pub roulette: Roulette,
+}
+
+/// State of the vertex a ray just left, needed to weight emission it finds.
+#[derive(Clone, Copy)]
+struct PrevVertex {
+    p: Vec3,
+    bsdf_pdf: f32,
+    delta: bool,
+}
+
+impl PathIntegrator<'_> {
+    #[inline]
+    fn counts(&self, bounces: u32) -> bool {
+        if self.accumulate {
+            bounces <= self.max_depth
+        } else {
+            bounces == self.max_depth
+        }
+    }
+
+    /// Radiance arriving along the camera ray `ray`.
+    pub fn li(&self, mut ray: Ray, sampler: &mut Sampler) -> Color {
+        let mut l = Color::ZERO;
+        let mut beta = Color::ONE;
+        let mut prev: Option<PrevVertex> = None; // None: the camera
+        let mut bounces = 0u32;
+        loop {
+            let Some(hit) = self.accel.intersect(&ray) else {
+                if self.counts(bounces) {
+                    l += beta * self.escaped(&ray, prev);
+                }
+                break;
+            };
+            let si = self.scene.interaction(&ray, &hit);
+            let wo_world = -ray.d.normalize();
+            let material = &self.scene.materials[si.material as usize];
+            if self.counts(bounces) {
+                l += beta * self.emitted(&si, wo_world, prev);
+            }
+            if bounces >= self.max_depth || material.is_black() {
+                break;
+            }
+            bounces += 1;
+            let frame = Frame::from_normal(si.ns);
+            let wo = frame.to_local(wo_world);
+            if !material.is_delta() && self.counts(bounces) {
+                l += beta * self.direct(&si, &frame, material, wo, sampler);
+            }
+            let Some(bs) = material.sample(wo, sampler.next_f32(), sampler.next_2d()) else { break };
+            let wi_world = frame.to_world(bs.wi);
+            if !geometrically_consistent(&si, wo_world, wi_world, bs.wi.z * wo.z > 0.0) {
+                break;
+            }
+            beta *= bs.weight;
+            let q = self.roulette.continue_prob(bounces, beta);
+            if q < 1.0 {
+                if sampler.next_f32() >= q {
+                    break;
+                }
+                beta /= q;
+            }
+            if !is_finite(beta) || beta == Color::ZERO {
+                break;
+            }
+            prev = Some(PrevVertex { p: si.p, bsdf_pdf: bs.pdf, delta: bs.delta });
+            ray = Ray::new(offset_ray_origin(si.p, si.p_error, si.ng, wi_world), wi_world);
+        }
+        l
+    }
+
+    /// MIS weight of emission found by a BSDF-sampled ray leaving `prev`. `light` is
+    /// the light it belongs to (None for emissive surfaces that light sampling cannot pick).
+    fn bsdf_hit_weight(&self, prev: Option<PrevVertex>, light: Option<&Light>, dir: Vec3) -> f32 {
+        match prev {
+            None => 1.0,
+            Some(v) if v.delta => 1.0,
+            Some(v) => match (self.strategy, light) {
+                // The hemisphere estimator already counted every emitter the direction finds.
+                (DirectStrategy::Hemisphere, _) => 0.0,
+                (_, None) => 1.0,
+                (DirectStrategy::Light, Some(_)) => 0.0,
+                (DirectStrategy::Mis, Some(l)) => {
+                    power_heuristic(1.0, v.bsdf_pdf, self.light_samples as f32, l.pdf_li(v.p, dir))
+                }
+            },
+        }
+    }
+
+    fn emitted(&self, si: &SurfaceInteraction, wo: Vec3, prev: Option<PrevVertex>) -> Color {
+        let le = self.scene.emission(si, wo);
+        if le == Color::ZERO {
+            return le;
+        }
+        let light = (si.light != NO_LIGHT).then(|| &self.scene.lights[si.light as usize]);
+        le * self.bsdf_hit_weight(prev, light, -wo)
+    }
+
+    fn escaped(&self, ray: &Ray, prev: Option<PrevVertex>) -> Color {
+        let d = ray.d.normalize();
+        let mut l = Color::ZERO;
+        for light in &self.scene.lights {
+            let le = light.le_escaped(d);
+            if le != Color::ZERO {
+                l += le * self.bsdf_hit_weight(prev, Some(light), d);
+            }
+        }
+        l
+    }
+
+    /// Direct light at a non-delta vertex by the chosen strategy.
+    fn direct(&self, si: &SurfaceInteraction, frame: &Frame, m: &Material, wo: Vec3, s: &mut Sampler) -> Color {
+        match self.strategy {
+            DirectStrategy::Hemisphere => self.direct_hemisphere(si, frame, m, wo, s),
+            DirectStrategy::Light | DirectStrategy::Mis => {
+                let mut l = Color::ZERO;
+                for light in &self.scene.lights {
+                    let n = if light.is_delta() { 1 } else { self.light_samples.max(1) };
+                    for _ in 0..n {
+                        l += self.light_sample(si, frame, m, wo, light, n, s) / n as f32;
+                    }
+                }
+                l
+            }
+        }
+    }
+
+    /// One light sample's contribution `f·Li·|cos|/pdf`, MIS-weighted when asked.
+    #[allow(clippy::too_many_arguments)]
+    fn light_sample(
+        &self,
+        si: &SurfaceInteraction,
+        frame: &Frame,
+        m: &Material,
+        wo: Vec3,
+        light: &Light,
+        n: u32,
+        s: &mut Sampler,
+    ) -> Color {
+        let Some(ls) = light.sample_li(si.p, s.next_2d()) else { return Color::ZERO };
+        if !(ls.pdf > 0.0) || ls.li == Color::ZERO {
+            return Color::ZERO;
+        }
+        let wi = frame.to_local(ls.wi);
+        let wo_world = frame.to_world(wo);
+        if !geometrically_consistent(si, wo_world, ls.wi, wi.z * wo.z > 0.0) {
+            return Color::ZERO;
+        }
+        let f = m.eval(wo, wi);
+        if f == Color::ZERO {
+            return Color::ZERO;
+        }
+        if self.shadowed(si, &ls) {
+            return Color::ZERO;
+        }
+        let w = if ls.delta || self.strategy != DirectStrategy::Mis {
+            1.0
+        } else {
+            power_heuristic(n as f32, ls.pdf, 1.0, m.pdf(wo, wi))
+        };
+        f * ls.li * (wi.z.abs() * w / ls.pdf)
+    }
+
+    fn shadowed(&self, si: &SurfaceInteraction, ls: &crate::lights::LightSample) -> bool {
+        let o = offset_ray_origin(si.p, si.p_error, si.ng, ls.wi);
+        let ray = if ls.dist.is_finite() {
+            Ray::segment(o, ls.p_light - o, 1.0 - SHADOW_EPSILON)
+        } else {
+            Ray::new(o, ls.wi)
+        };
+        self.accel.occluded(&ray)
+    }
+
+    /// `-H`: `l` uniform directions on the hemisphere of `wo`, counting whatever emission they find.
+    fn direct_hemisphere(&self, si: &SurfaceInteraction, frame: &Frame, m: &Material, wo: Vec3, s: &mut Sampler) -> Color {
+        let n = self.light_samples.max(1);
+        let mut l = Color::ZERO;
+        for _ in 0..n {
+            let mut wi = uniform_hemisphere(s.next_2d());
+            if wo.z < 0.0 {
+                wi.z = -wi.z;
+            }
+            let wi_world = frame.to_world(wi);
+            let f = m.eval(wo, wi);
+            if f == Color::ZERO || !geometrically_consistent(si, frame.to_world(wo), wi_world, true) {
+                continue;
+            }
+            let ray = Ray::new(offset_ray_origin(si.p, si.p_error, si.ng, wi_world), wi_world);
+            let le = match self.accel.intersect(&ray) {
+                Some(h) => self.scene.emission(&self.scene.interaction(&ray, &h), -wi_world),
+                None => self.scene.lights.iter().map(|lt| lt.le_escaped(wi_world)).sum(),
+            };
+            l += f * le * (wi.z.abs() / uniform_hemisphere_pdf());
+        }
+        l / n as f32
+    }
+}
+
+/// Rejects directions whose side of the geometric surface contradicts the BSDF's
+/// (shading-frame) reflection/transmission choice, so shading normals cannot leak light.
+#[inline]
+fn geometrically_consistent(si: &SurfaceInteraction, wo: Vec3, wi: Vec3, reflect: bool) -> bool {
+    let a = wo.dot(si.ng);
+    let b = wi.dot(si.ng);
+    if reflect {
+        a * b > 0.0
+    } else {
+        a * b < 0.0
+    }
+}

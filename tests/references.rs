@@ -1,0 +1,109 @@
+//! Comparison with the Mitsuba 3 reference renders in ../shared/references, as
+//! their README prescribes: image mean, and RMSE of 8×8 block averages against
+//! the combined noise floor of the reference and of this render.
+
+mod common;
+
+use common::{load, render_halves, shared};
+use ember::accel::{AccelKind, BvhBuilder};
+use ember::film::Image;
+use ember::image_io::read_image;
+use ember::integrators::{DirectStrategy, Roulette};
+use ember::render::RenderSettings;
+
+struct Reference {
+    mean: [f64; 3],
+    mean_clamped: [f64; 3],
+    noise_box8: f64,
+    image: Image,
+}
+
+fn reference(file: &str) -> Reference {
+    let text = std::fs::read_to_string(shared("references/manifest.json")).expect("manifest");
+    let v: serde_json::Value = serde_json::from_str(&text).expect("manifest json");
+    let e = v["images"].as_array().unwrap().iter().find(|e| e["file"] == file).expect("manifest entry");
+    let arr = |k: &str| -> [f64; 3] {
+        let a = e[k].as_array().unwrap();
+        [a[0].as_f64().unwrap(), a[1].as_f64().unwrap(), a[2].as_f64().unwrap()]
+    };
+    Reference {
+        mean: arr("mean_rgb"),
+        mean_clamped: arr("mean_rgb_clamped"),
+        noise_box8: e["noise_rmse_box8"].as_f64().unwrap(),
+        image: read_image(&shared(&format!("references/{file}"))).expect("reference exr"),
+    }
+}
+
+fn clamp01(img: &Image) -> Image {
+    Image { pixels: img.pixels.iter().map(|p| p.clamp(ember::Color::ZERO, ember::Color::ONE)).collect(), ..img.clone() }
+}
+
+/// Renders `scene` at 160×120 with max depth `m` and checks it against `file`.
+fn check(scene_rel: &str, file: &str, m: u32, spp: u32, clamped_mean: bool) {
+    let r = reference(file);
+    let scene = load(scene_rel);
+    let settings = RenderSettings {
+        width: 160,
+        height: 120,
+        spp,
+        max_depth: m,
+        strategy: if m > 1 { DirectStrategy::Mis } else { DirectStrategy::Light },
+        roulette: Roulette::default(),
+        seed: 1234,
+        ..Default::default()
+    };
+    let h = render_halves(&scene, &settings, AccelKind::Native(BvhBuilder::Sah));
+    assert!(h.avg.all_finite());
+    assert_eq!((r.image.width, r.image.height), (160, 120));
+
+    // 1. Image mean: 1.5 % of the reference plus 4 standard errors of our own mean.
+    let (ours, want) = if clamped_mean { (clamp01(&h.avg).mean(), r.mean_clamped) } else { (h.avg.mean(), r.mean) };
+    let (ca, cb) = (clamp01(&h.a), clamp01(&h.b));
+    let se_mean = if clamped_mean { ca.rmse(&cb) / 2.0 / (ca.pixels.len() as f64).sqrt() } else { h.noise_of_mean() };
+    for c in 0..3 {
+        let tol = 0.015 * want[c] + 4.0 * se_mean;
+        assert!((ours[c] as f64 - want[c]).abs() <= tol, "{file}: mean[{c}] = {} vs reference {} (tol {tol})", ours[c], want[c]);
+    }
+
+    // 2. Block RMSE at the noise floor: up to 3× the expected value plus 0.002 for edges.
+    let rmse8 = h.avg.block_average(8).rmse(&r.image.block_average(8));
+    let expected = (r.noise_box8.powi(2) + h.noise_box8().powi(2)).sqrt();
+    let tol = 3.0 * expected + 0.002;
+    eprintln!("{file}: box8 RMSE {rmse8:.5}, expected noise {expected:.5}, tol {tol:.5}; mean {ours} vs {want:?}");
+    assert!(rmse8 <= tol, "{file}: 8x8-block RMSE {rmse8} exceeds {tol} (noise floor {expected})");
+}
+
+#[test]
+fn cbspheres_lambertian_m1() {
+    check("scenes/cs184/sky/CBspheres_lambertian.dae", "CBspheres_lambertian_m1.exr", 1, 64, false);
+}
+
+#[test]
+fn cbspheres_lambertian_m5() {
+    check("scenes/cs184/sky/CBspheres_lambertian.dae", "CBspheres_lambertian_m5.exr", 5, 64, false);
+}
+
+#[test]
+fn cbbunny_m1() {
+    check("scenes/cs184/sky/CBbunny.dae", "CBbunny_m1.exr", 1, 64, false);
+}
+
+#[test]
+fn cbbunny_m5() {
+    check("scenes/cs184/sky/CBbunny.dae", "CBbunny_m5.exr", 5, 64, false);
+}
+
+#[test]
+fn cbempty_m1() {
+    check("scenes/cs184/sky/CBempty.dae", "CBempty_m1.exr", 1, 64, true);
+}
+
+#[test]
+fn cbempty_m5() {
+    check("scenes/cs184/sky/CBempty.dae", "CBempty_m5.exr", 5, 128, true);
+}
+
+#[test]
+fn cbspheres_glass_mirror_m8() {
+    check("scenes/cs184/sky/CBspheres.dae", "CBspheres_m8.exr", 8, 128, false);
+}

@@ -1,0 +1,197 @@
+//! Analytic checks of the light transport: the furnace and the irradiance of a
+//! rectangular light. Tolerances come from the estimators' own standard errors.
+
+use ember::accel::{self, AccelKind, BvhBuilder};
+use ember::camera::Camera;
+use ember::geometry::{Aabb, Ray};
+use ember::integrators::{DirectStrategy, PathIntegrator, Roulette};
+use ember::lights::Light;
+use ember::materials::Material;
+use ember::render::{render, RenderSettings};
+use ember::sampling::Sampler;
+use ember::scene::{Scene, Sphere, Triangle, NO_LIGHT};
+use ember::{Color, Vec3};
+
+/// A closed sphere that emits `le` (both sides) and reflects with Lambertian albedo `a`,
+/// seen from its centre.
+fn furnace(a: f32, le: f32) -> (Scene, Camera) {
+    let scene = Scene {
+        spheres: vec![Sphere { centre: Vec3::ZERO, radius: 1.0, material: 0 }],
+        materials: vec![Material::Lambertian { albedo: Color::splat(a) }],
+        surface_emission: vec![(0, Color::splat(le))],
+        bounds: Aabb::new(Vec3::splat(-1.0), Vec3::splat(1.0)),
+        ..Default::default()
+    };
+    let mut cam = Camera::new(&scene.camera, &scene.bounds, 16, 16);
+    cam.eye = Vec3::new(0.1, -0.2, 0.05); // inside, off-centre
+    (scene, cam)
+}
+
+fn furnace_expected(a: f32, le: f32, m: u32, accumulate: bool) -> f32 {
+    if accumulate {
+        (0..=m).map(|k| le * a.powi(k as i32)).sum()
+    } else {
+        le * a.powi(m as i32)
+    }
+}
+
+fn furnace_render(a: f32, m: u32, accumulate: bool, strategy: DirectStrategy, roulette: Roulette) -> (f64, f64) {
+    let (scene, cam) = furnace(a, 1.0);
+    let accel = accel::build(&scene, AccelKind::Native(BvhBuilder::Sah)).unwrap();
+    let s = RenderSettings {
+        width: 16,
+        height: 16,
+        spp: 64,
+        max_depth: m,
+        accumulate,
+        strategy,
+        roulette,
+        seed: 7,
+        ..Default::default()
+    };
+    let out = render(&scene, accel.as_ref(), &cam, &s, &|_| {});
+    assert_eq!(out.nonfinite_samples, 0);
+    let vals: Vec<f64> = out.image.pixels.iter().map(|p| p.y as f64).collect();
+    let n = vals.len() as f64;
+    let mean = vals.iter().sum::<f64>() / n;
+    let var = vals.iter().map(|v| (v - mean).powi(2)).sum::<f64>() / (n - 1.0);
+    (mean, (var / n).sqrt())
+}
+
+#[test]
+fn furnace_without_roulette_is_exact_at_every_pixel() {
+    // Cosine sampling of a Lambertian BSDF has weight exactly a: zero variance.
+    for strategy in [DirectStrategy::Light, DirectStrategy::Mis, DirectStrategy::Hemisphere] {
+        for (a, m) in [(0.5, 0), (0.5, 1), (0.8, 5), (0.9, 12)] {
+            for acc in [true, false] {
+                let (scene, cam) = furnace(a, 1.0);
+                let accel = accel::build(&scene, AccelKind::Native(BvhBuilder::Sah)).unwrap();
+                let s = RenderSettings {
+                    width: 16,
+                    height: 16,
+                    spp: 4,
+                    max_depth: m,
+                    accumulate: acc,
+                    strategy,
+                    roulette: Roulette::Off,
+                    ..Default::default()
+                };
+                let out = render(&scene, accel.as_ref(), &cam, &s, &|_| {});
+                let want = furnace_expected(a, 1.0, m, acc);
+                // Hemisphere sampling is not zero-variance; it is checked by its mean below.
+                if strategy == DirectStrategy::Hemisphere {
+                    continue;
+                }
+                for p in &out.image.pixels {
+                    assert!((p.y - want).abs() <= 1e-4 * want.max(1.0), "{strategy:?} a={a} m={m} acc={acc}: {p} vs {want}");
+                }
+            }
+        }
+    }
+}
+
+#[test]
+fn furnace_means_with_roulette_and_hemisphere_sampling() {
+    let cases = [
+        (DirectStrategy::Mis, Roulette::default()),
+        (DirectStrategy::Light, Roulette::Fixed { start: 1, prob: 0.3 }),
+        (DirectStrategy::Hemisphere, Roulette::Off),
+        (DirectStrategy::Hemisphere, Roulette::default()),
+    ];
+    for (strategy, rr) in cases {
+        let (a, m) = (0.8, 8);
+        let (mean, se) = furnace_render(a, m, true, strategy, rr);
+        let want = furnace_expected(a, 1.0, m, true) as f64;
+        // 4.5 standard errors: a false failure has probability < 1e-5 per case.
+        assert!((mean - want).abs() <= 4.5 * se + 1e-5 * want, "{strategy:?} {rr:?}: {mean} ± {se} vs {want}");
+    }
+}
+
+#[test]
+fn furnace_converges_to_geometric_series_limit() {
+    let (a, le) = (0.7f32, 1.0f32);
+    let limit = le / (1.0 - a);
+    let (mean, _) = furnace_render(a, 60, true, DirectStrategy::Mis, Roulette::Off);
+    assert!((mean as f32 - limit).abs() < 1e-3 * limit, "{mean} vs {limit}");
+}
+
+/// Irradiance at `x` (normal `n`) from a uniformly emitting polygon of radiance `le`
+/// (Lambert's closed form): `E = le/2 · Σ Θ_i (n · Γ_i)`.
+fn polygon_irradiance(x: Vec3, n: Vec3, verts: &[Vec3], le: f32) -> f32 {
+    let mut sum = 0.0f64;
+    for i in 0..verts.len() {
+        let a = (verts[i] - x).normalize().as_dvec3();
+        let b = (verts[(i + 1) % verts.len()] - x).normalize().as_dvec3();
+        let theta = a.dot(b).clamp(-1.0, 1.0).acos();
+        let gamma = a.cross(b).normalize();
+        sum += theta * n.as_dvec3().dot(gamma);
+    }
+    (0.5 * le as f64 * sum.abs()) as f32
+}
+
+/// A large Lambertian floor (y = 0) under a 1.0 × 0.8 area light at height 1.2 facing down.
+fn lit_floor(albedo: f32, le: f32) -> (Scene, [Vec3; 4]) {
+    let (c, ex, ey) = (Vec3::new(0.2, 1.2, -0.1), Vec3::new(1.0, 0.0, 0.0), Vec3::new(0.0, 0.0, 0.8));
+    let normal = Vec3::NEG_Y;
+    let q = [c - 0.5 * ex - 0.5 * ey, c + 0.5 * ex - 0.5 * ey, c + 0.5 * ex + 0.5 * ey, c - 0.5 * ex + 0.5 * ey];
+    let f = 20.0;
+    let mut positions = vec![Vec3::new(-f, 0.0, -f), Vec3::new(f, 0.0, -f), Vec3::new(f, 0.0, f), Vec3::new(-f, 0.0, f)];
+    positions.extend_from_slice(&q);
+    // Floor faces up: (p1−p0)×(p2−p0) must be +Y. Light faces down.
+    let tri = |v: [u32; 3], material, light| Triangle { v, n: None, material, light };
+    let triangles = vec![
+        tri([0, 2, 1], 0, NO_LIGHT),
+        tri([0, 3, 2], 0, NO_LIGHT),
+        tri([4, 5, 6], 1, 0),
+        tri([4, 6, 7], 1, 0),
+    ];
+    let scene = Scene {
+        positions,
+        triangles,
+        materials: vec![Material::Lambertian { albedo: Color::splat(albedo) }, Material::Emission { radiance: Color::splat(le) }],
+        lights: vec![Light::Area { centre: c, ex, ey, normal, area: 0.8, radiance: Color::splat(le) }],
+        bounds: Aabb::new(Vec3::new(-f, 0.0, -f), Vec3::new(f, 0.0, f)),
+        ..Default::default()
+    };
+    (scene, q)
+}
+
+#[test]
+fn area_light_irradiance_matches_closed_form() {
+    let (albedo, le) = (0.8f32, 4.0f32);
+    let (scene, quad) = lit_floor(albedo, le);
+    // Sanity of the scene: the light quads face down.
+    let [p0, p1, p2] = scene.triangle_positions(2);
+    assert!((p1 - p0).cross(p2 - p0).y < 0.0);
+    let accel = accel::build(&scene, AccelKind::Native(BvhBuilder::Sah)).unwrap();
+    let points = [Vec3::new(0.0, 0.0, 0.0), Vec3::new(0.3, 0.0, 0.2), Vec3::new(1.5, 0.0, -0.7), Vec3::new(-2.0, 0.0, 3.0)];
+    for strategy in [DirectStrategy::Light, DirectStrategy::Hemisphere, DirectStrategy::Mis] {
+        let integ = PathIntegrator {
+            scene: &scene,
+            accel: accel.as_ref(),
+            max_depth: 1,
+            accumulate: true,
+            light_samples: 4,
+            strategy,
+            roulette: Roulette::Off,
+        };
+        for (k, &x) in points.iter().enumerate() {
+            let want = albedo / std::f32::consts::PI * polygon_irradiance(x, Vec3::Y, &quad, le);
+            let eye = x + Vec3::new(0.05, 0.1, 0.08);
+            let n = if strategy == DirectStrategy::Hemisphere { 200_000 } else { 20_000 };
+            let mut sampler = Sampler::new(11, k as u64, 0);
+            let (mut s1, mut s2) = (0f64, 0f64);
+            for _ in 0..n {
+                let v = integ.li(Ray::new(eye, (x - eye).normalize()), &mut sampler).y as f64;
+                s1 += v;
+                s2 += v * v;
+            }
+            let mean = s1 / n as f64;
+            let se = ((s2 / n as f64 - mean * mean).max(0.0) / n as f64).sqrt();
+            assert!(
+                (mean - want as f64).abs() <= 4.5 * se + 1e-4 * want as f64,
+                "{strategy:?} at {x}: {mean} ± {se}, closed form {want}"
+            );
+        }
+    }
+}
