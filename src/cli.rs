@@ -326,7 +326,11 @@ fn progress_bar(total: u64, quiet: bool) -> ProgressBar {
     pb
 }
 
-fn render_command(args: RenderArgs) -> Result<()> {
+fn render_command(mut args: RenderArgs) -> Result<()> {
+    adopt_scene_from_adaptive(&mut args);
+    if args.accel == AccelArg::Embree && !cfg!(feature = "embree") {
+        bail!("{}", accel::AccelError::EmbreeUnavailable);
+    }
     let Some(scene_path) = args.scene.clone() else {
         bail!("no scene given; usage: ember [OPTIONS] SCENE.dae (see ember --help)");
     };
@@ -378,6 +382,19 @@ fn render_command(args: RenderArgs) -> Result<()> {
         }
     }
     Ok(())
+}
+
+/// `-a` takes up to two values, so `ember -a scene.dae` hands the scene to `-a`;
+/// give it back when it is clearly not a number.
+fn adopt_scene_from_adaptive(args: &mut RenderArgs) {
+    if args.scene.is_some() {
+        return;
+    }
+    if let Some(v) = args.adaptive.as_mut() {
+        if v.last().is_some_and(|s| s.parse::<f64>().is_err()) {
+            args.scene = v.pop().map(PathBuf::from);
+        }
+    }
 }
 
 fn rate_path(out: &Path) -> PathBuf {

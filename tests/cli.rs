@@ -1,0 +1,111 @@
+//! The command line end to end: flags, errors, and never a partial output file.
+
+use std::path::PathBuf;
+use std::process::Command;
+
+fn ember() -> Command {
+    Command::new(env!("CARGO_BIN_EXE_ember"))
+}
+
+fn shared(rel: &str) -> PathBuf {
+    PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../shared").join(rel)
+}
+
+#[test]
+fn cs184_command_line_is_accepted_verbatim() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("out.png");
+    let st = ember()
+        .args(["-t", "2", "-s", "2", "-l", "2", "-m", "2", "-r", "32", "24", "-f"])
+        .arg(&out)
+        .arg(shared("scenes/cs184/sky/CBspheres_lambertian.dae"))
+        .output()
+        .unwrap();
+    assert!(st.status.success(), "{}", String::from_utf8_lossy(&st.stderr));
+    let img = image::open(&out).unwrap();
+    assert_eq!((img.width(), img.height()), (32, 24));
+}
+
+#[test]
+fn exr_output_and_adaptive_rate_map() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("x.exr");
+    let st = ember()
+        .args(["-s", "64", "-a", "8", "0.1", "-m", "1", "-r", "24", "18", "-f"])
+        .arg(&out)
+        .arg(shared("scenes/cs184/sky/CBspheres_lambertian.dae"))
+        .output()
+        .unwrap();
+    assert!(st.status.success(), "{}", String::from_utf8_lossy(&st.stderr));
+    let img = ember::image_io::read_image(&out).unwrap();
+    assert_eq!((img.width, img.height), (24, 18));
+    // The light is seen directly at radiance 10: EXR keeps linear values above 1.
+    assert!(img.pixels.iter().any(|p| p.x > 5.0));
+    assert!(dir.path().join("x_rate.png").exists());
+}
+
+fn fails_with(args: &[&str], needle: &str) {
+    let st = ember().args(args).output().unwrap();
+    let err = String::from_utf8_lossy(&st.stderr);
+    assert!(!st.status.success(), "{args:?} succeeded");
+    assert!(err.contains(needle), "{args:?}: stderr {err:?} lacks {needle:?}");
+    assert!(!err.contains("panicked"), "{args:?} panicked: {err}");
+}
+
+#[test]
+fn bad_flags_and_paths_fail_cleanly() {
+    let scene = shared("scenes/cs184/sky/CBempty.dae");
+    let scene = scene.to_str().unwrap();
+    fails_with(&["--frobnicate", scene], "--frobnicate");
+    fails_with(&["-s", "zero", scene], "-s");
+    fails_with(&["-o", "2", scene], "-o");
+    fails_with(&["-r", "0", "10", scene], "resolution");
+    fails_with(&["-f", "out.jpg", scene], "out.jpg");
+    fails_with(&["/nonexistent/scene.dae"], "/nonexistent/scene.dae");
+    fails_with(&["--accel", "bogus", scene], "bogus");
+    fails_with(&["-a", "0", "0.05", scene], "BATCH");
+}
+
+#[test]
+fn unwritable_output_leaves_no_file() {
+    let dir = tempfile::tempdir().unwrap();
+    let target = dir.path().join("no/such/dir/out.png");
+    let st = ember()
+        .args(["-s", "1", "-r", "8", "6", "-f"])
+        .arg(&target)
+        .arg(shared("scenes/cs184/sky/CBempty.dae"))
+        .output()
+        .unwrap();
+    assert!(!st.status.success());
+    assert!(String::from_utf8_lossy(&st.stderr).contains("out.png"));
+    assert!(!target.exists());
+    // A directory in place of the file: the write fails and the temporary is cleaned up.
+    let as_dir = dir.path().join("taken.png");
+    std::fs::create_dir(&as_dir).unwrap();
+    let st = ember().args(["-s", "1", "-r", "8", "6", "-f"]).arg(&as_dir).arg(shared("scenes/cs184/sky/CBempty.dae")).output().unwrap();
+    assert!(!st.status.success());
+    let leftovers: Vec<_> = std::fs::read_dir(dir.path()).unwrap().map(|e| e.unwrap().file_name()).collect();
+    assert_eq!(leftovers, vec![std::ffi::OsString::from("taken.png")], "a temporary file was left behind");
+}
+
+#[test]
+fn malformed_scene_is_an_error_naming_the_file() {
+    let dir = tempfile::tempdir().unwrap();
+    let bad = dir.path().join("broken.dae");
+    std::fs::write(&bad, "<COLLADA><library_geometries><geometry id=\"g\"><mesh>").unwrap();
+    let out = dir.path().join("o.png");
+    let st = ember().arg("-f").arg(&out).arg(&bad).output().unwrap();
+    assert!(!st.status.success());
+    assert!(String::from_utf8_lossy(&st.stderr).contains("broken.dae"));
+    assert!(!out.exists());
+}
+
+#[test]
+fn embree_request_without_feature_says_how_to_get_it() {
+    if cfg!(feature = "embree") {
+        return;
+    }
+    let st = ember().args(["--accel", "embree", "-r", "8", "6"]).arg(shared("scenes/cs184/sky/CBempty.dae")).output().unwrap();
+    assert!(!st.status.success());
+    assert!(String::from_utf8_lossy(&st.stderr).contains("rebuild with --features embree"));
+}
