@@ -1,0 +1,135 @@
+//! Log-log line charts for the benchmarks, written as PNG and SVG with plotters.
+//! The font ships inside the binary (DejaVu Sans), so charts need no system fonts.
+
+use plotters::prelude::*;
+use std::path::Path;
+use std::sync::Once;
+
+/// One line of a chart.
+#[derive(Clone, Debug)]
+pub struct Series {
+    pub name: String,
+    pub points: Vec<(f64, f64)>,
+}
+
+pub struct ChartSpec<'a> {
+    pub title: &'a str,
+    pub x_label: &'a str,
+    pub y_label: &'a str,
+    pub log_x: bool,
+    pub log_y: bool,
+}
+
+fn register_font() {
+    static ONCE: Once = Once::new();
+    ONCE.call_once(|| {
+        // Registration can only fail on a malformed font; the embedded one is fine.
+        let _ = plotters::style::register_font("sans-serif", FontStyle::Normal, dejavu::sans::regular());
+    });
+}
+
+/// Writes the chart to `stem.png` and `stem.svg`.
+pub fn write_chart(stem: &Path, spec: &ChartSpec, series: &[Series]) -> anyhow::Result<()> {
+    register_font();
+    let png = stem.with_extension("png");
+    let svg = stem.with_extension("svg");
+    {
+        let root = BitMapBackend::new(&png, (900, 600)).into_drawing_area();
+        draw(root, spec, series)?;
+    }
+    {
+        let root = SVGBackend::new(&svg, (900, 600)).into_drawing_area();
+        draw(root, spec, series)?;
+    }
+    Ok(())
+}
+
+fn bounds(series: &[Series], pick: impl Fn(&(f64, f64)) -> f64, log: bool) -> (f64, f64) {
+    let vals = series.iter().flat_map(|s| s.points.iter().map(&pick)).filter(|v| v.is_finite() && (!log || *v > 0.0));
+    let (mut lo, mut hi) = vals.fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), v| (a.min(v), b.max(v)));
+    if !lo.is_finite() {
+        (lo, hi) = (1.0, 10.0);
+    }
+    if log {
+        (lo / 1.5, hi * 1.5)
+    } else {
+        let pad = (hi - lo).abs().max(1e-9) * 0.05;
+        (lo - pad, hi + pad)
+    }
+}
+
+fn draw<DB: DrawingBackend>(root: DrawingArea<DB, plotters::coord::Shift>, spec: &ChartSpec, series: &[Series]) -> anyhow::Result<()>
+where
+    DB::ErrorType: 'static,
+{
+    root.fill(&WHITE).map_err(|e| anyhow::anyhow!("chart: {e}"))?;
+    let (x0, x1) = bounds(series, |p| p.0, spec.log_x);
+    let (y0, y1) = bounds(series, |p| p.1, spec.log_y);
+    let mut builder = ChartBuilder::on(&root);
+    builder.caption(spec.title, ("sans-serif", 24)).margin(15).x_label_area_size(50).y_label_area_size(80);
+    macro_rules! finish {
+        ($chart:expr) => {{
+            let mut chart = $chart.map_err(|e| anyhow::anyhow!("chart: {e}"))?;
+            chart
+                .configure_mesh()
+                .x_desc(spec.x_label)
+                .y_desc(spec.y_label)
+                .label_style(("sans-serif", 14))
+                .draw()
+                .map_err(|e| anyhow::anyhow!("chart: {e}"))?;
+            for (i, s) in series.iter().enumerate() {
+                let color = Palette99::pick(i).to_rgba();
+                let pts: Vec<(f64, f64)> = s
+                    .points
+                    .iter()
+                    .copied()
+                    .filter(|p| p.0.is_finite() && p.1.is_finite() && (!spec.log_x || p.0 > 0.0) && (!spec.log_y || p.1 > 0.0))
+                    .collect();
+                chart
+                    .draw_series(LineSeries::new(pts.clone(), color.stroke_width(2)))
+                    .map_err(|e| anyhow::anyhow!("chart: {e}"))?
+                    .label(s.name.clone())
+                    .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], color.stroke_width(2)));
+                chart
+                    .draw_series(pts.into_iter().map(|p| Circle::new(p, 3, color.filled())))
+                    .map_err(|e| anyhow::anyhow!("chart: {e}"))?;
+            }
+            chart
+                .configure_series_labels()
+                .background_style(WHITE.mix(0.85))
+                .border_style(BLACK)
+                .label_font(("sans-serif", 14))
+                .draw()
+                .map_err(|e| anyhow::anyhow!("chart: {e}"))?;
+        }};
+    }
+    match (spec.log_x, spec.log_y) {
+        (true, true) => finish!(builder.build_cartesian_2d((x0..x1).log_scale(), (y0..y1).log_scale())),
+        (true, false) => finish!(builder.build_cartesian_2d((x0..x1).log_scale(), y0..y1)),
+        (false, true) => finish!(builder.build_cartesian_2d(x0..x1, (y0..y1).log_scale())),
+        (false, false) => finish!(builder.build_cartesian_2d(x0..x1, y0..y1)),
+    }
+    root.present().map_err(|e| anyhow::anyhow!("chart: {e}"))?;
+    Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn writes_png_and_svg() {
+        let dir = tempfile::tempdir().unwrap();
+        let stem = dir.path().join("c");
+        let s = vec![
+            Series { name: "a".into(), points: vec![(1.0, 1.0), (2.0, 0.5), (4.0, 0.25)] },
+            Series { name: "b".into(), points: vec![(1.0, 2.0), (2.0, 1.0), (4.0, 0.6)] },
+        ];
+        let spec = ChartSpec { title: "t", x_label: "time (s)", y_label: "RMSE", log_x: true, log_y: true };
+        write_chart(&stem, &spec, &s).unwrap();
+        let png = image::open(stem.with_extension("png")).unwrap();
+        assert_eq!(png.width(), 900);
+        let svg = std::fs::read_to_string(stem.with_extension("svg")).unwrap();
+        assert!(svg.contains("RMSE") && svg.contains("<svg"));
+    }
+}

@@ -1,0 +1,3 @@
+//! Benchmarks: speed against accuracy, and acceleration-structure cost.
+
+pub mod chart;
