@@ -205,9 +205,8 @@ fn load_scene(path: &Path) -> Result<Scene> {
 fn info(path: &Path, w: u32, h: u32) -> Result<()> {
     check_resolution(w, h)?;
     let scene = load_scene(path)?;
-    let cam = Camera::new(&scene.camera, &scene.bounds, w, h);
-    println!("{}: {} triangles, {} spheres, {} lights", path.display(), scene.triangles.len(), scene.spheres.len(), scene.lights.len());
-    println!("camera: {cam:?}");
+    println!("{}", path.display());
+    print!("{}", ember::info::scene_info(&scene, w, h));
     Ok(())
 }
 
