@@ -1,3 +1,4 @@
 //! Benchmarks: speed against accuracy, and acceleration-structure cost.
 
 pub mod chart;
+pub mod converge;

@@ -1,0 +1,327 @@
+//! `ember bench converge`: error against time for each method, so speed and
+//! accuracy can be charted against each other.
+//!
+//! Each point is a fresh render (its own seed) at a doubled sample count, timed
+//! render-only with all threads. Errors are measured against a reference: a given
+//! EXR (e.g. the Mitsuba references, whose noise is negligible at their spp and
+//! is subtracted anyway when known) or ember's own high-spp render, rendered as
+//! two halves so that its own noise variance can be subtracted from every MSE.
+
+use super::chart::{write_chart, ChartSpec, Series};
+use crate::accel::{self, AccelKind, BvhBuilder, EmbreeQuality};
+use crate::camera::Camera;
+use crate::film::Image;
+use crate::image_io::{read_image, write_image};
+use crate::integrators::{DirectStrategy, Roulette};
+use crate::render::{render, Adaptive, RenderSettings};
+use crate::scene::{collada, Scene};
+use anyhow::{bail, Context, Result};
+use std::fmt::Write as _;
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+
+#[derive(Clone, Debug)]
+pub struct ConvergeOptions {
+    pub scene: PathBuf,
+    /// Linear EXR to measure against; None renders (and caches) ember's own.
+    pub reference: Option<PathBuf>,
+    /// Per-pixel RMS noise of `reference`, if known (e.g. from the references' manifest).
+    pub reference_noise: Option<f64>,
+    pub width: u32,
+    pub height: u32,
+    pub max_depth: u32,
+    /// Largest spp of the doubling sequence.
+    pub max_spp: u32,
+    /// A method stops doubling once one render takes longer than this.
+    pub max_seconds_per_point: f64,
+    /// spp of ember's own reference (split into two halves).
+    pub reference_spp: u32,
+    pub out_dir: PathBuf,
+    /// RMSE whose time-to-reach is tabulated; None: the largest final RMSE among the methods.
+    pub target_rmse: Option<f64>,
+    pub seed: u64,
+    /// Add the Embree backend as a method when this build has it.
+    pub compare_backends: bool,
+}
+
+/// One way of rendering the image.
+#[derive(Clone, Debug)]
+pub struct Method {
+    pub name: String,
+    pub settings: RenderSettings,
+    pub accel: AccelKind,
+}
+
+#[derive(Clone, Debug)]
+pub struct Point {
+    pub method: String,
+    pub spp: u32,
+    pub samples: u64,
+    pub seconds: f64,
+    pub rmse: f64,
+    pub rel_mse: f64,
+}
+
+pub struct ConvergeReport {
+    pub points: Vec<Point>,
+    pub target_rmse: f64,
+    /// (method, seconds to reach the target RMSE, if it did).
+    pub time_to_target: Vec<(String, Option<f64>)>,
+    pub reference_note: String,
+}
+
+/// The methods compared for depth `m`: the direct-lighting estimators at `m = 1`,
+/// MIS with and without roulette and at several `-l` beyond; adaptive sampling and
+/// (optionally) Embree with the default method.
+pub fn methods(base: &RenderSettings, compare_backends: bool) -> Vec<Method> {
+    let native = AccelKind::Native(BvhBuilder::Sah);
+    let m = |name: &str, s: RenderSettings| Method { name: name.to_string(), settings: s, accel: native };
+    let mut v = Vec::new();
+    let default_strategy = if base.max_depth > 1 { DirectStrategy::Mis } else { DirectStrategy::Light };
+    if base.max_depth <= 1 {
+        v.push(m("hemisphere", RenderSettings { strategy: DirectStrategy::Hemisphere, ..base.clone() }));
+        v.push(m("light sampling", RenderSettings { strategy: DirectStrategy::Light, ..base.clone() }));
+        v.push(m("MIS", RenderSettings { strategy: DirectStrategy::Mis, ..base.clone() }));
+    } else {
+        v.push(m("light sampling, RR", RenderSettings { strategy: DirectStrategy::Light, ..base.clone() }));
+        v.push(m("MIS, RR", RenderSettings { strategy: DirectStrategy::Mis, ..base.clone() }));
+        v.push(m("MIS, no RR", RenderSettings { strategy: DirectStrategy::Mis, roulette: Roulette::Off, ..base.clone() }));
+        v.push(m("MIS, RR, -l 4", RenderSettings { strategy: DirectStrategy::Mis, light_samples: 4, ..base.clone() }));
+        v.push(m("MIS, RR, -l 16", RenderSettings { strategy: DirectStrategy::Mis, light_samples: 16, ..base.clone() }));
+    }
+    v.push(m(
+        "adaptive (-a 16 0.05)",
+        RenderSettings { strategy: default_strategy, adaptive: Some(Adaptive::new(16, 0.05)), ..base.clone() },
+    ));
+    if compare_backends && cfg!(feature = "embree") {
+        v.push(Method {
+            name: "Embree backend".into(),
+            settings: RenderSettings { strategy: default_strategy, ..base.clone() },
+            accel: AccelKind::Embree(EmbreeQuality::Medium),
+        });
+    }
+    v
+}
+
+struct Reference {
+    image: Image,
+    /// Per-pixel-channel noise variance of the reference, subtracted from every MSE.
+    noise_var: f64,
+    note: String,
+}
+
+pub fn run(opts: &ConvergeOptions, log: &mut dyn FnMut(&str)) -> Result<ConvergeReport> {
+    let scene = collada::load(&opts.scene)?;
+    let base = RenderSettings {
+        width: opts.width,
+        height: opts.height,
+        max_depth: opts.max_depth,
+        seed: opts.seed,
+        ..Default::default()
+    };
+    let reference = reference(opts, &scene, &base, log)?;
+    let mut points = Vec::new();
+    for method in methods(&base, opts.compare_backends) {
+        log(&format!("method: {}", method.name));
+        points.extend(run_method(&scene, &method, opts, &reference)?);
+    }
+    let target = opts.target_rmse.unwrap_or_else(|| default_target(&points));
+    let time_to_target = time_to_reach(&points, target);
+    Ok(ConvergeReport { points, target_rmse: target, time_to_target, reference_note: reference.note })
+}
+
+fn run_method(scene: &Scene, method: &Method, opts: &ConvergeOptions, r: &Reference) -> Result<Vec<Point>> {
+    let accel = accel::build(scene, method.accel)?;
+    let cam = Camera::new(&scene.camera, &scene.bounds, opts.width, opts.height);
+    let mut out = Vec::new();
+    let mut spp = 1;
+    while spp <= opts.max_spp {
+        let s = RenderSettings { spp, seed: opts.seed.wrapping_add(1000 + spp as u64), ..method.settings.clone() };
+        let t = Instant::now();
+        let o = render(scene, accel.as_ref(), &cam, &s, &|_| {});
+        let seconds = t.elapsed().as_secs_f64();
+        let (rmse, rel_mse) = errors(&o.image, r);
+        out.push(Point { method: method.name.clone(), spp, samples: o.total_samples(), seconds, rmse, rel_mse });
+        if seconds > opts.max_seconds_per_point {
+            break;
+        }
+        spp *= 2;
+    }
+    Ok(out)
+}
+
+/// RMSE and relMSE with the reference's own noise variance removed (never below 0).
+fn errors(img: &Image, r: &Reference) -> (f64, f64) {
+    let mse = img.rmse(&r.image).powi(2);
+    let rmse = (mse - r.noise_var).max(0.0).sqrt();
+    let n = (3 * img.pixels.len()) as f64;
+    let mut rel = 0.0;
+    for (a, b) in img.pixels.iter().zip(&r.image.pixels) {
+        for c in 0..3 {
+            let (a, b) = (a[c] as f64, b[c] as f64);
+            rel += ((a - b).powi(2) - r.noise_var) / (b * b + 0.01);
+        }
+    }
+    (rmse, (rel / n).max(0.0))
+}
+
+fn reference(opts: &ConvergeOptions, scene: &Scene, base: &RenderSettings, log: &mut dyn FnMut(&str)) -> Result<Reference> {
+    if let Some(p) = &opts.reference {
+        let image = read_image(p)?;
+        if (image.width, image.height) != (opts.width, opts.height) {
+            bail!("{}: reference is {}x{}, but the renders are {}x{} (use -r)", p.display(), image.width, image.height, opts.width, opts.height);
+        }
+        let noise_var = opts.reference_noise.map_or(0.0, |n| n * n);
+        let note = format!(
+            "reference {} (its per-pixel noise {} is subtracted from every MSE)",
+            p.display(),
+            opts.reference_noise.map_or("unknown, taken as negligible,".to_string(), |n| format!("{n:.2e}"))
+        );
+        return Ok(Reference { image, noise_var, note });
+    }
+    own_reference(opts, scene, base, log)
+}
+
+fn own_reference(opts: &ConvergeOptions, scene: &Scene, base: &RenderSettings, log: &mut dyn FnMut(&str)) -> Result<Reference> {
+    let stem = opts.scene.file_stem().map(|s| s.to_string_lossy().into_owned()).unwrap_or_default();
+    let cache = opts.out_dir.join("cache");
+    std::fs::create_dir_all(&cache).with_context(|| format!("{}: cannot create", cache.display()))?;
+    let name = |half: &str| cache.join(format!("{stem}_m{}_{}x{}_{}spp_{half}.exr", opts.max_depth, opts.width, opts.height, opts.reference_spp));
+    let (pa, pb) = (name("a"), name("b"));
+    let (a, b) = if pa.exists() && pb.exists() {
+        log(&format!("reference: cached {}", pa.display()));
+        (read_image(&pa)?, read_image(&pb)?)
+    } else {
+        log(&format!("reference: rendering {} spp (two halves) with MIS, no roulette", opts.reference_spp));
+        let accel = accel::build(scene, AccelKind::Native(BvhBuilder::Sah))?;
+        let cam = Camera::new(&scene.camera, &scene.bounds, opts.width, opts.height);
+        let mut halves = Vec::new();
+        for (k, p) in [(1u64, &pa), (2, &pb)] {
+            let s = RenderSettings {
+                spp: (opts.reference_spp / 2).max(1),
+                strategy: if base.max_depth > 1 { DirectStrategy::Mis } else { DirectStrategy::Light },
+                roulette: Roulette::Off,
+                seed: 0xC0FFEE + k,
+                ..base.clone()
+            };
+            let img = render(scene, accel.as_ref(), &cam, &s, &|_| {}).image;
+            write_image(&img, p)?;
+            halves.push(img);
+        }
+        let b = halves.pop().expect("two halves");
+        (halves.pop().expect("two halves"), b)
+    };
+    let noise_var = a.rmse(&b).powi(2) / 4.0;
+    let image = Image { pixels: a.pixels.iter().zip(&b.pixels).map(|(x, y)| 0.5 * (*x + *y)).collect(), ..a };
+    let note = format!(
+        "ember's own reference, {} spp in two halves; its per-pixel noise {:.2e} (from the halves) is subtracted from every MSE",
+        opts.reference_spp,
+        noise_var.sqrt()
+    );
+    Ok(Reference { image, noise_var, note })
+}
+
+fn default_target(points: &[Point]) -> f64 {
+    let mut finals: std::collections::BTreeMap<&str, f64> = Default::default();
+    for p in points {
+        finals.insert(&p.method, p.rmse);
+    }
+    finals.values().copied().fold(0.0, f64::max)
+}
+
+/// Seconds at which each method's RMSE first falls to `target`, interpolated in log-log.
+pub fn time_to_reach(points: &[Point], target: f64) -> Vec<(String, Option<f64>)> {
+    let mut names: Vec<String> = Vec::new();
+    for p in points {
+        if !names.contains(&p.method) {
+            names.push(p.method.clone());
+        }
+    }
+    names
+        .into_iter()
+        .map(|name| {
+            let ps: Vec<&Point> = points.iter().filter(|p| p.method == name).collect();
+            let t = ps.windows(2).find_map(|w| {
+                let (a, b) = (w[0], w[1]);
+                if a.rmse <= target {
+                    return Some(a.seconds);
+                }
+                if b.rmse <= target && a.rmse > target && a.seconds > 0.0 && b.seconds > 0.0 && b.rmse > 0.0 {
+                    let f = (a.rmse.ln() - target.ln()) / (a.rmse.ln() - b.rmse.ln());
+                    return Some((a.seconds.ln() + f * (b.seconds.ln() - a.seconds.ln())).exp());
+                }
+                None
+            });
+            let t = t.or_else(|| ps.last().filter(|p| p.rmse <= target).map(|p| p.seconds));
+            (name, t)
+        })
+        .collect()
+}
+
+impl ConvergeReport {
+    pub fn to_csv(&self, scene: &str) -> String {
+        let mut s = String::from("scene,method,spp,samples,seconds,rmse,relmse\n");
+        for p in &self.points {
+            let _ = writeln!(s, "{scene},{},{},{},{:.6},{:.6e},{:.6e}", p.method, p.spp, p.samples, p.seconds, p.rmse, p.rel_mse);
+        }
+        s
+    }
+
+    /// Time each method needs to reach the target RMSE, and its ratio to the fastest.
+    pub fn efficiency_table(&self) -> String {
+        let best = self.time_to_target.iter().filter_map(|(_, t)| *t).fold(f64::INFINITY, f64::min);
+        let mut s = format!("| method | seconds to RMSE {:.4} | × fastest |\n|---|---|---|\n", self.target_rmse);
+        for (name, t) in &self.time_to_target {
+            match t {
+                Some(t) => {
+                    let _ = writeln!(s, "| {name} | {t:.3} | {:.2} |", t / best);
+                }
+                None => {
+                    let _ = writeln!(s, "| {name} | not reached | – |");
+                }
+            }
+        }
+        s
+    }
+
+    fn series(&self, y: impl Fn(&Point) -> f64) -> Vec<Series> {
+        let mut out: Vec<Series> = Vec::new();
+        for p in &self.points {
+            match out.iter_mut().find(|s| s.name == p.method) {
+                Some(s) => s.points.push((p.seconds, y(p))),
+                None => out.push(Series { name: p.method.clone(), points: vec![(p.seconds, y(p))] }),
+            }
+        }
+        out
+    }
+
+    /// Writes `<stem>.csv`, and error-vs-time charts `<stem>_rmse.{png,svg}` and `<stem>_relmse.{png,svg}`.
+    pub fn write(&self, stem: &Path, scene: &str, title: &str) -> Result<()> {
+        let csv = stem.with_extension("csv");
+        std::fs::write(&csv, self.to_csv(scene)).with_context(|| format!("{}: cannot write", csv.display()))?;
+        let name = |suffix: &str| stem.with_file_name(format!("{}_{suffix}", stem.file_name().unwrap_or_default().to_string_lossy()));
+        let spec = ChartSpec { title, x_label: "render time (s, 2 threads)", y_label: "RMSE vs reference", log_x: true, log_y: true };
+        write_chart(&name("rmse"), &spec, &self.series(|p| p.rmse))?;
+        let spec = ChartSpec { y_label: "relMSE vs reference", ..spec };
+        write_chart(&name("relmse"), &spec, &self.series(|p| p.rel_mse))?;
+        Ok(())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn pt(method: &str, seconds: f64, rmse: f64) -> Point {
+        Point { method: method.into(), spp: 1, samples: 1, seconds, rmse, rel_mse: 0.0 }
+    }
+
+    #[test]
+    fn time_to_reach_interpolates_in_log_log() {
+        let pts = vec![pt("a", 1.0, 0.4), pt("a", 4.0, 0.1), pt("b", 1.0, 0.5), pt("b", 2.0, 0.45)];
+        let t = time_to_reach(&pts, 0.2);
+        // RMSE ∝ t^-1 between the points: 0.2 is reached at t = 2.
+        assert!((t[0].1.unwrap() - 2.0).abs() < 1e-9);
+        assert_eq!(t[1].1, None);
+    }
+}
