@@ -108,7 +108,13 @@ fn chi2_rejects_a_wrong_pdf() {
         100_000,
         7,
         |s: &mut Sampler| lambert.sample(wo, 0.5, s.next_2d()).map(|b| b.wi),
-        &|wi| if wi.z > 0.0 { 0.5 / std::f64::consts::PI } else { 0.0 },
+        &|wi| {
+            if wi.z > 0.0 {
+                0.5 / std::f64::consts::PI
+            } else {
+                0.0
+            }
+        },
     )
     .unwrap();
     assert!(p < 1e-6, "p = {p}");
@@ -119,7 +125,9 @@ fn pdf_integrates_to_one_for_lambertian() {
     let lambert = Material::Lambertian { albedo: Color::ONE };
     for back in [false, true] {
         let wo = wo_at(40.0, back);
-        let total: f64 = integrate_bins(&|wi| lambert.pdf(wo, wi) as f64).iter().sum();
+        let total: f64 = integrate_bins(&|wi| lambert.pdf(wo, wi) as f64)
+            .iter()
+            .sum();
         assert!((total - 1.0).abs() < 1e-4, "∫pdf = {total}");
     }
 }
@@ -232,12 +240,21 @@ fn white_furnace_microfacet() {
                 let wo = wo_at(theta, back);
                 let mut s = Sampler::from_seed(17);
                 let weights: Vec<f64> = (0..n)
-                    .map(|_| m.sample(wo, 0.5, s.next_2d()).map_or(0.0, |b| b.weight.x as f64))
+                    .map(|_| {
+                        m.sample(wo, 0.5, s.next_2d())
+                            .map_or(0.0, |b| b.weight.x as f64)
+                    })
                     .collect();
                 let (albedo, se) = mean_and_stderr(&weights);
-                assert!(albedo <= 1.0 + 4.0 * se, "α={alpha} θo={theta}: albedo {albedo} ± {se}");
+                assert!(
+                    albedo <= 1.0 + 4.0 * se,
+                    "α={alpha} θo={theta}: albedo {albedo} ± {se}"
+                );
                 if theta == 0.0 && alpha <= 0.25 {
-                    assert!(albedo >= 0.99 - 4.0 * se, "α={alpha}: albedo {albedo} ± {se}");
+                    assert!(
+                        albedo >= 0.99 - 4.0 * se,
+                        "α={alpha}: albedo {albedo} ± {se}"
+                    );
                 }
             }
         }
@@ -251,7 +268,8 @@ fn beckmann_lambda_limits() {
     assert!(beckmann_lambda(Vec3::X, 0.3).is_infinite());
     // a = 1: Λ = (erf(1) − 1)/2 + e^{-1}/(2√π).
     let w = Vec3::new(1.0, 0.0, 0.5).normalize(); // tan θ = 2, α = 0.5 → a = 1
-    let expected = (libm::erf(1.0) - 1.0) / 2.0 + (-1.0f64).exp() / (2.0 * std::f64::consts::PI.sqrt());
+    let expected =
+        (libm::erf(1.0) - 1.0) / 2.0 + (-1.0f64).exp() / (2.0 * std::f64::consts::PI.sqrt());
     assert!((beckmann_lambda(w, 0.5) as f64 - expected).abs() < 1e-6);
 }
 
@@ -283,7 +301,10 @@ fn complex_fresnel(cos_i: f64, eta: f64, k: f64) -> f64 {
     };
     let sqrt = |a: C| {
         let r = (a.0 * a.0 + a.1 * a.1).sqrt();
-        (((r + a.0) / 2.0).sqrt(), ((r - a.0) / 2.0).sqrt().copysign(a.1))
+        (
+            ((r + a.0) / 2.0).sqrt(),
+            ((r - a.0) / 2.0).sqrt().copysign(a.1),
+        )
     };
     let n: C = (eta, k);
     let sin2 = 1.0 - cos_i * cos_i;
@@ -293,7 +314,10 @@ fn complex_fresnel(cos_i: f64, eta: f64, k: f64) -> f64 {
     let n_ct = mul(n, cos_t);
     let rs = div((ci.0 - n_ct.0, -n_ct.1), (ci.0 + n_ct.0, n_ct.1));
     let n_ci = mul(n, ci);
-    let rp = div((n_ci.0 - cos_t.0, n_ci.1 - cos_t.1), (n_ci.0 + cos_t.0, n_ci.1 + cos_t.1));
+    let rp = div(
+        (n_ci.0 - cos_t.0, n_ci.1 - cos_t.1),
+        (n_ci.0 + cos_t.0, n_ci.1 + cos_t.1),
+    );
     let abs2 = |a: C| a.0 * a.0 + a.1 * a.1;
     0.5 * (abs2(rs) + abs2(rp))
 }
@@ -318,7 +342,10 @@ fn conductor_fresnel_reduces_to_dielectric_for_k_zero() {
             let c = (deg as f32).to_radians().cos();
             let conductor = fresnel::conductor(c, Color::splat(eta), Color::ZERO).x;
             let dielectric = fresnel::dielectric(c, 1.0, eta);
-            assert!((conductor - dielectric).abs() < 1e-5, "η={eta} θ={deg}: {conductor} vs {dielectric}");
+            assert!(
+                (conductor - dielectric).abs() < 1e-5,
+                "η={eta} θ={deg}: {conductor} vs {dielectric}"
+            );
         }
     }
 }
@@ -326,18 +353,33 @@ fn conductor_fresnel_reduces_to_dielectric_for_k_zero() {
 #[test]
 fn conductor_fresnel_known_values() {
     let (eta, k) = gold();
-    let aluminium = (Color::new(1.657, 0.880, 0.521), Color::new(9.224, 6.270, 4.837));
+    let aluminium = (
+        Color::new(1.657, 0.880, 0.521),
+        Color::new(9.224, 6.270, 4.837),
+    );
     for (eta, k) in [(eta, k), aluminium] {
         let f0 = fresnel::conductor(1.0, eta, k);
         let expected = ((eta - 1.0).powf(2.0) + k * k) / ((eta + 1.0).powf(2.0) + k * k);
-        assert!((f0 - expected).abs().max_element() < 1e-5, "{f0} vs {expected}");
-        assert!((fresnel::conductor(0.0, eta, k) - Color::ONE).abs().max_element() < 1e-5);
+        assert!(
+            (f0 - expected).abs().max_element() < 1e-5,
+            "{f0} vs {expected}"
+        );
+        assert!(
+            (fresnel::conductor(0.0, eta, k) - Color::ONE)
+                .abs()
+                .max_element()
+                < 1e-5
+        );
         for deg in (0..90).step_by(5) {
             let c = (deg as f64).to_radians().cos();
             let f = fresnel::conductor(c as f32, eta, k);
             for ch in 0..3 {
                 let reference = complex_fresnel(c, eta[ch] as f64, k[ch] as f64);
-                assert!((f[ch] as f64 - reference).abs() < 1e-5, "θ={deg}: {} vs {reference}", f[ch]);
+                assert!(
+                    (f[ch] as f64 - reference).abs() < 1e-5,
+                    "θ={deg}: {} vs {reference}",
+                    f[ch]
+                );
             }
         }
     }
@@ -381,7 +423,12 @@ fn glass_lobes_probabilities_and_weights() {
         assert!((refl.pdf + refr.pdf - 1.0).abs() < 1e-5);
         let scale = (eta_i / eta_t).powi(2);
         assert!((refl.weight * refl.pdf - f * r).abs().max_element() < 1e-5);
-        assert!((refr.weight * refr.pdf - (1.0 - f) * t * scale).abs().max_element() < 1e-5);
+        assert!(
+            (refr.weight * refr.pdf - (1.0 - f) * t * scale)
+                .abs()
+                .max_element()
+                < 1e-5
+        );
         // Snell's law, with the azimuth turned by π.
         let sin_i = (1.0 - wo.z * wo.z).max(0.0).sqrt();
         let sin_t = (1.0 - refr.wi.z * refr.wi.z).max(0.0).sqrt();
@@ -437,7 +484,10 @@ fn glass_reflection_only_when_transmittance_is_zero() {
 #[test]
 fn refraction_transmits_without_fresnel_and_ends_on_tir() {
     let t = Color::new(0.5, 0.7, 0.9);
-    let m = Material::Refraction { ior: 1.5, transmittance: t };
+    let m = Material::Refraction {
+        ior: 1.5,
+        transmittance: t,
+    };
     let outside = wo_at(50.0, false);
     let b = m.sample(outside, 0.3, Vec2::ZERO).unwrap();
     assert!(b.delta && b.pdf == 1.0 && b.wi.z < 0.0);
@@ -445,7 +495,10 @@ fn refraction_transmits_without_fresnel_and_ends_on_tir() {
     let inside_steep = wo_at(20.0, true);
     let b = m.sample(inside_steep, 0.3, Vec2::ZERO).unwrap();
     assert!((b.weight - t * 2.25).abs().max_element() < 1e-5 && b.wi.z > 0.0);
-    assert!(m.sample(wo_at(60.0, true), 0.3, Vec2::ZERO).is_none(), "TIR must end the path");
+    assert!(
+        m.sample(wo_at(60.0, true), 0.3, Vec2::ZERO).is_none(),
+        "TIR must end the path"
+    );
 }
 
 #[test]
@@ -464,7 +517,9 @@ fn mirror_reflects_on_both_faces() {
 
 #[test]
 fn emission_is_black() {
-    let m = Material::Emission { radiance: Color::splat(3.0) };
+    let m = Material::Emission {
+        radiance: Color::splat(3.0),
+    };
     let wo = wo_at(10.0, false);
     assert!(m.sample(wo, 0.5, Vec2::splat(0.5)).is_none());
     assert_eq!(m.eval(wo, wo), Color::ZERO);
@@ -478,13 +533,24 @@ fn emission_is_black() {
 fn no_nan_anywhere() {
     let materials = [
         Material::default(),
-        Material::Mirror { reflectance: Color::ONE },
+        Material::Mirror {
+            reflectance: Color::ONE,
+        },
         glass(),
-        Material::Refraction { ior: 1.5, transmittance: Color::ONE },
-        Material::Glass { ior: 0.0, reflectance: Color::ONE, transmittance: Color::ONE },
+        Material::Refraction {
+            ior: 1.5,
+            transmittance: Color::ONE,
+        },
+        Material::Glass {
+            ior: 0.0,
+            reflectance: Color::ONE,
+            transmittance: Color::ONE,
+        },
         microfacet(0.0),
         microfacet(0.5),
-        Material::Emission { radiance: Color::ONE },
+        Material::Emission {
+            radiance: Color::ONE,
+        },
     ];
     let directions = [
         Vec3::Z,
@@ -494,32 +560,37 @@ fn no_nan_anywhere() {
         Vec3::new(1.0, 0.0, -1e-7).normalize(),
         Vec3::new(0.3, 0.4, 0.866).normalize(),
     ];
-    let us = [Vec2::ZERO, Vec2::splat(0.999_999_9), Vec2::new(0.5, 0.0), Vec2::new(0.0, 1.0)];
+    let us = [
+        Vec2::ZERO,
+        Vec2::splat(0.999_999_9),
+        Vec2::new(0.5, 0.0),
+        Vec2::new(0.0, 1.0),
+    ];
     for m in materials {
         for wo in directions {
             for wi in directions {
-                assert!(ember::color::is_finite(m.eval(wo, wi)), "{m:?} eval {wo} {wi}");
+                assert!(
+                    ember::color::is_finite(m.eval(wo, wi)),
+                    "{m:?} eval {wo} {wi}"
+                );
                 assert!(m.pdf(wo, wi).is_finite(), "{m:?} pdf {wo} {wi}");
             }
             for u in us {
                 for u_lobe in [0.0, 0.5, 0.999_999_9] {
                     if let Some(b) = m.sample(wo, u_lobe, u) {
-                        assert!(b.wi.is_finite() && (b.wi.length() - 1.0).abs() < 1e-4, "{m:?} {wo}");
+                        assert!(
+                            b.wi.is_finite() && (b.wi.length() - 1.0).abs() < 1e-4,
+                            "{m:?} {wo}"
+                        );
                         assert!(ember::color::is_finite(b.weight) && b.weight.min_element() >= 0.0);
-                        assert!(b.pdf > 0.0 && b.pdf.is_finite(), "{m:?} {wo}: pdf {}", b.pdf);
+                        assert!(
+                            b.pdf > 0.0 && b.pdf.is_finite(),
+                            "{m:?} {wo}: pdf {}",
+                            b.pdf
+                        );
                     }
                 }
             }
         }
     }
-}
-
-#[test]
-#[ignore]
-fn debug_chi2() {
-    let th: f32 = std::env::var("TH").unwrap().parse().unwrap();
-    let a: f32 = std::env::var("AL").unwrap().parse().unwrap();
-    let seed: u64 = std::env::var("SEED").unwrap().parse().unwrap();
-    let p = chi2_case(microfacet(a), wo_at(th, false), seed);
-    eprintln!("p = {p:?}");
 }

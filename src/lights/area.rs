@@ -48,7 +48,7 @@ impl AreaLight {
     /// the ray hits it there (rays reaching the back see nothing emitted).
     pub fn intersect(&self, p: Vec3, wi: Vec3) -> Option<f32> {
         let denom = wi.dot(self.normal);
-        if !(denom < 0.0) {
+        if denom.is_nan() || denom >= 0.0 {
             return None;
         }
         let dist = (self.centre - p).dot(self.normal) / denom;
@@ -64,7 +64,7 @@ impl AreaLight {
     fn plane_coords(&self, q: Vec3) -> Option<(f32, f32)> {
         let m = self.ex.cross(self.ey);
         let m2 = m.length_squared();
-        if !(m2 > 0.0) {
+        if m2.is_nan() || m2 <= 0.0 {
             return None;
         }
         let d = q - self.centre;

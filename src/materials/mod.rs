@@ -55,7 +55,8 @@ impl Default for Material {
 pub struct BsdfSample {
     /// Local incident direction (unit).
     pub wi: Vec3,
-    /// The estimator weight `f·|cos θi| / pdf` (for delta lobes: the lobe's reflectance or transmittance factor).
+    /// The estimator weight `f·|cos θi| / pdf`; for a delta lobe, the lobe's factor
+    /// (e.g. `F·R` for glass reflection) divided by the probability of choosing it.
     pub weight: Color,
     /// Solid-angle pdf of `wi`; for a delta lobe, the probability of choosing that lobe.
     pub pdf: f32,
@@ -96,8 +97,9 @@ impl Material {
                 ior,
                 reflectance,
                 transmittance,
-            } => valid_ior(ior)
-                .and_then(|ior| specular::sample_glass(ior, reflectance, transmittance, wo, u_lobe)),
+            } => valid_ior(ior).and_then(|ior| {
+                specular::sample_glass(ior, reflectance, transmittance, wo, u_lobe)
+            }),
             Material::Refraction { ior, transmittance } => {
                 valid_ior(ior).and_then(|ior| specular::sample_refraction(ior, transmittance, wo))
             }

@@ -67,7 +67,7 @@ pub fn sample_glass(
     let p_reflect_unnorm = f * luminance(reflectance).max(0.0);
     let p_refract_unnorm = (1.0 - f) * luminance(transmittance).max(0.0);
     let total = p_reflect_unnorm + p_refract_unnorm;
-    if !(total > 0.0) {
+    if total.is_nan() || total <= 0.0 {
         return None;
     }
     let p_reflect = p_reflect_unnorm / total;

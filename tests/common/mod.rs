@@ -139,24 +139,34 @@ pub fn chi2_p_value(
     let mut expected: Vec<f64> = integrate_bins(pdf).iter().map(|p| p * n as f64).collect();
     let total_expected: f64 = expected.iter().sum();
     if std::env::var("CHI2_DEBUG").is_ok() {
-        let mut idx: Vec<usize> = (0..observed.len()).collect();
-        idx.sort_by(|&a, &b| {
-            let ca = (observed[a] - expected[a]).powi(2) / expected[a].max(1e-9);
-            let cb = (observed[b] - expected[b]).powi(2) / expected[b].max(1e-9);
-            cb.total_cmp(&ca)
-        });
-        for &i in idx.iter().take(6) {
-            eprintln!("cell {} (θ{} φ{}): obs {} exp {:.2}", i, i / PHI_BINS, i % PHI_BINS, observed[i], expected[i]);
-        }
-        eprintln!("lost {lost} vs {:.2}", n as f64 - total_expected);
+        print_worst_cells(&observed, &expected, lost, n as f64 - total_expected);
     }
     observed.push(lost);
     expected.push((n as f64 - total_expected).max(0.0));
     chi2_from_cells(&observed, &expected)
 }
 
+/// Diagnostics (set `CHI2_DEBUG`): the cells contributing most to chi².
+fn print_worst_cells(observed: &[f64], expected: &[f64], lost: f64, lost_expected: f64) {
+    let contribution = |i: usize| (observed[i] - expected[i]).powi(2) / expected[i].max(1e-9);
+    let mut idx: Vec<usize> = (0..observed.len()).collect();
+    idx.sort_by(|&a, &b| contribution(b).total_cmp(&contribution(a)));
+    for &i in idx.iter().take(6) {
+        let (t, p) = (i / PHI_BINS, i % PHI_BINS);
+        eprintln!(
+            "cell θ{t} φ{p}: observed {} expected {:.2}",
+            observed[i], expected[i]
+        );
+    }
+    eprintln!("lost {lost} expected {lost_expected:.2}");
+}
+
 fn chi2_from_cells(observed: &[f64], expected: &[f64]) -> Result<f64, String> {
-    let mut cells: Vec<(f64, f64)> = observed.iter().copied().zip(expected.iter().copied()).collect();
+    let mut cells: Vec<(f64, f64)> = observed
+        .iter()
+        .copied()
+        .zip(expected.iter().copied())
+        .collect();
     cells.sort_by(|a, b| a.1.total_cmp(&b.1));
     let (mut pooled_obs, mut pooled_exp) = (0.0, 0.0);
     let (mut chi2, mut dof) = (0.0, 0usize);
