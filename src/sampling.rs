@@ -112,3 +112,40 @@ pub fn power_heuristic(nf: f32, f_pdf: f32, ng: f32, g_pdf: f32) -> f32 {
         0.0
     }
 }
+
+/// Beckmann distribution of microfacet normals,
+/// `D(h) = exp(−tan²θh/α²) / (π·α²·cos⁴θh)`, 0 below the surface.
+pub fn beckmann_d(h: Vec3, alpha: f32) -> f32 {
+    let cos2 = h.z * h.z;
+    if h.z <= 0.0 || cos2 <= 0.0 {
+        return 0.0;
+    }
+    let tan2 = (1.0 - cos2).max(0.0) / cos2;
+    let alpha2 = alpha * alpha;
+    let d = (-tan2 / alpha2).exp() / (PI * alpha2 * cos2 * cos2);
+    if d.is_finite() {
+        d
+    } else {
+        0.0
+    }
+}
+
+/// Microfacet normal drawn with density `D(h)·cos θh` (projected-area normalised,
+/// so it integrates to 1): `tan²θ = −α²·ln(1−u)`.
+pub fn beckmann_normal(u: Vec2, alpha: f32) -> Vec3 {
+    let tan2 = -alpha * alpha * (1.0 - u.x).ln();
+    let cos_theta = 1.0 / (1.0 + tan2).sqrt();
+    let sin_theta = (1.0 - cos_theta * cos_theta).max(0.0).sqrt();
+    let phi = 2.0 * PI * u.y;
+    Vec3::new(sin_theta * phi.cos(), sin_theta * phi.sin(), cos_theta)
+}
+
+pub fn beckmann_normal_pdf(h: Vec3, alpha: f32) -> f32 {
+    beckmann_d(h, alpha) * h.z.max(0.0)
+}
+
+/// Uniform point on the parallelogram `centre + s·ex + t·ey`, `s, t ∈ [−½, ½]`;
+/// its area density is `1/|ex × ey|`.
+pub fn uniform_parallelogram(u: Vec2, centre: Vec3, ex: Vec3, ey: Vec3) -> Vec3 {
+    centre + (u.x - 0.5) * ex + (u.y - 0.5) * ey
+}

@@ -1,8 +1,16 @@
 //! Lights of spec §5. Each can be sampled from a shading point (`sample_li`) and
 //! evaluated for MIS when a ray finds it (`pdf_li`).
 
+pub mod ambient;
+pub mod area;
+pub mod directional;
+pub mod point;
+
+use crate::color::luminance;
 use crate::Color;
+use area::AreaLight;
 use glam::{Vec2, Vec3};
+use std::f32::consts::PI;
 
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum Light {
@@ -30,7 +38,8 @@ pub struct LightSample {
     pub wi: Vec3,
     /// Distance to the sampled point (infinite for directional and ambient lights).
     pub dist: f32,
-    /// Point on the light (finite lights), for the shadow ray.
+    /// Point on the light, for the shadow ray (finite lights; infinite for
+    /// directional and ambient lights, whose shadow rays use `dist`).
     pub p_light: Vec3,
     /// Incident radiance (delta lights: the irradiance-like factor the estimator multiplies by).
     pub li: Color,
@@ -44,13 +53,55 @@ impl Light {
         matches!(self, Light::Point { .. } | Light::Directional { .. })
     }
 
-    pub fn sample_li(&self, _p: Vec3, _u: Vec2) -> Option<LightSample> {
-        todo!("lights: sample_li")
+    /// Draws a direction toward the light from `p`; `None` when `p` receives
+    /// nothing from that sample (behind an area light, degenerate light).
+    pub fn sample_li(&self, p: Vec3, u: Vec2) -> Option<LightSample> {
+        match *self {
+            Light::Area { .. } => self.as_area()?.sample_li(p, u),
+            Light::Point {
+                position,
+                intensity,
+            } => point::sample_li(position, intensity, p),
+            Light::Directional {
+                direction,
+                irradiance,
+            } => directional::sample_li(direction, irradiance),
+            Light::Ambient { radiance } => ambient::sample_li(radiance, u),
+        }
     }
 
     /// Solid-angle pdf with which `sample_li(p, ·)` returns `wi` (0 for delta lights).
-    pub fn pdf_li(&self, _p: Vec3, _wi: Vec3) -> f32 {
-        todo!("lights: pdf_li")
+    pub fn pdf_li(&self, p: Vec3, wi: Vec3) -> f32 {
+        match *self {
+            Light::Area { .. } => self.as_area().map_or(0.0, |a| a.pdf_li(p, wi)),
+            Light::Ambient { .. } => ambient::pdf_li(wi),
+            Light::Point { .. } | Light::Directional { .. } => 0.0,
+        }
+    }
+
+    /// Distance from `p` along unit `wi` to the emitting front of an area light
+    /// (`None` for a miss, a hit from behind, or another kind of light).
+    pub fn intersect_area(&self, p: Vec3, wi: Vec3) -> Option<f32> {
+        self.as_area()?.intersect(p, wi)
+    }
+
+    /// Approximate emitted power (luminance), for choosing lights in proportion to
+    /// it. Infinite lights count what crosses a disk of radius `scene_radius`.
+    pub fn power(&self, scene_radius: f32) -> f32 {
+        let disk = PI * scene_radius * scene_radius;
+        let value = match *self {
+            // Lambertian emitter: π·L per unit area.
+            Light::Area { area, radiance, .. } => PI * area * luminance(radiance),
+            Light::Point { intensity, .. } => 4.0 * PI * luminance(intensity),
+            Light::Directional { irradiance, .. } => disk * luminance(irradiance),
+            // Half of pbrt's uniform-sphere 4π·πr²·L.
+            Light::Ambient { radiance } => 2.0 * PI * disk * luminance(radiance),
+        };
+        if value.is_finite() {
+            value.max(0.0)
+        } else {
+            0.0
+        }
     }
 
     /// Radiance an escaping ray in direction `w` receives from this light (ambient only).
@@ -58,6 +109,28 @@ impl Light {
         match self {
             Light::Ambient { radiance } if w.y > 0.0 => *radiance,
             _ => Color::ZERO,
+        }
+    }
+
+    fn as_area(&self) -> Option<AreaLight> {
+        match *self {
+            Light::Area {
+                centre,
+                ex,
+                ey,
+                normal,
+                radiance,
+                ..
+            } => Some(AreaLight {
+                centre,
+                ex,
+                ey,
+                normal,
+                // The density of uniform sampling, whatever the stored field says.
+                area: ex.cross(ey).length(),
+                radiance,
+            }),
+            _ => None,
         }
     }
 }

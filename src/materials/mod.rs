@@ -2,8 +2,14 @@
 //! `eval`, `sample` and `pdf` agree; directions are in the local shading frame
 //! (+z = shading normal), `wo` toward the eye, `wi` toward the light.
 
+pub mod fresnel;
+pub mod lambertian;
+pub mod microfacet;
+pub mod specular;
+
 use crate::Color;
 use glam::{Vec2, Vec3};
+use microfacet::Conductor;
 
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum Material {
@@ -49,7 +55,8 @@ impl Default for Material {
 pub struct BsdfSample {
     /// Local incident direction (unit).
     pub wi: Vec3,
-    /// The estimator weight `f·|cos θi| / pdf` (for delta lobes: the lobe's reflectance or transmittance factor).
+    /// The estimator weight `f·|cos θi| / pdf`; for a delta lobe, the lobe's factor
+    /// (e.g. `F·R` for glass reflection) divided by the probability of choosing it.
     pub weight: Color,
     /// Solid-angle pdf of `wi`; for a delta lobe, the probability of choosing that lobe.
     pub pdf: f32,
@@ -59,18 +66,46 @@ pub struct BsdfSample {
 
 impl Material {
     /// `f(wo, wi)` without the cosine; zero for delta materials.
-    pub fn eval(&self, _wo: Vec3, _wi: Vec3) -> Color {
-        todo!("materials: eval")
+    pub fn eval(&self, wo: Vec3, wi: Vec3) -> Color {
+        match *self {
+            Material::Lambertian { albedo } => lambertian::eval(albedo, wo, wi),
+            Material::Microfacet { alpha, eta, k } => Conductor::new(alpha, eta, k).eval(wo, wi),
+            _ => Color::ZERO,
+        }
     }
 
     /// Solid-angle density with which `sample` returns `wi`; zero for delta lobes.
-    pub fn pdf(&self, _wo: Vec3, _wi: Vec3) -> f32 {
-        todo!("materials: pdf")
+    pub fn pdf(&self, wo: Vec3, wi: Vec3) -> f32 {
+        match *self {
+            Material::Lambertian { .. } => lambertian::pdf(wo, wi),
+            Material::Microfacet { alpha, eta, k } => Conductor::new(alpha, eta, k).pdf(wo, wi),
+            _ => 0.0,
+        }
     }
 
     /// Draws `wi` given `wo`. `u_lobe` chooses a lobe, `u` the direction.
-    pub fn sample(&self, _wo: Vec3, _u_lobe: f32, _u: Vec2) -> Option<BsdfSample> {
-        todo!("materials: sample")
+    /// `None` when nothing scatters (zero density, total internal reflection
+    /// of `Refraction`, emitters, invalid parameters).
+    pub fn sample(&self, wo: Vec3, u_lobe: f32, u: Vec2) -> Option<BsdfSample> {
+        if !wo.is_finite() {
+            return None;
+        }
+        match *self {
+            Material::Lambertian { albedo } => lambertian::sample(albedo, wo, u),
+            Material::Mirror { reflectance } => specular::sample_mirror(reflectance, wo),
+            Material::Glass {
+                ior,
+                reflectance,
+                transmittance,
+            } => valid_ior(ior).and_then(|ior| {
+                specular::sample_glass(ior, reflectance, transmittance, wo, u_lobe)
+            }),
+            Material::Refraction { ior, transmittance } => {
+                valid_ior(ior).and_then(|ior| specular::sample_refraction(ior, transmittance, wo))
+            }
+            Material::Microfacet { alpha, eta, k } => Conductor::new(alpha, eta, k).sample(wo, u),
+            Material::Emission { .. } => None,
+        }
     }
 
     /// True when every lobe is a delta distribution (mirror, glass, refraction):
@@ -94,4 +129,9 @@ impl Material {
             _ => Color::ZERO,
         }
     }
+}
+
+/// A dielectric index must be positive and finite for Snell's law to mean anything.
+fn valid_ior(ior: f32) -> Option<f32> {
+    (ior > 0.0 && ior.is_finite()).then_some(ior)
 }

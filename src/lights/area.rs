@@ -1,0 +1,84 @@
+//! One-sided parallelogram (rectangle in every scene) emitting constant radiance
+//! toward `normal`, sampled uniformly by area and converted to solid angle.
+
+use super::LightSample;
+use crate::sampling::uniform_parallelogram;
+use crate::Color;
+use glam::{Vec2, Vec3};
+
+#[derive(Clone, Copy, Debug)]
+pub struct AreaLight {
+    pub centre: Vec3,
+    pub ex: Vec3,
+    pub ey: Vec3,
+    pub normal: Vec3,
+    pub area: f32,
+    pub radiance: Color,
+}
+
+impl AreaLight {
+    pub fn sample_li(&self, p: Vec3, u: Vec2) -> Option<LightSample> {
+        let p_light = uniform_parallelogram(u, self.centre, self.ex, self.ey);
+        let to_light = p_light - p;
+        let dist2 = to_light.length_squared();
+        let dist = dist2.sqrt();
+        if !(dist > 0.0 && dist.is_finite()) {
+            return None;
+        }
+        let wi = to_light / dist;
+        let pdf = self.solid_angle_pdf(wi, dist)?;
+        Some(LightSample {
+            wi,
+            dist,
+            p_light,
+            li: self.radiance,
+            pdf,
+            delta: false,
+        })
+    }
+
+    /// The density of `sample_li`: found by intersecting the ray `(p, wi)`.
+    pub fn pdf_li(&self, p: Vec3, wi: Vec3) -> f32 {
+        self.intersect(p, wi)
+            .and_then(|dist| self.solid_angle_pdf(wi, dist))
+            .unwrap_or(0.0)
+    }
+
+    /// Distance along unit `wi` from `p` to the emitting front of the light, if
+    /// the ray hits it there (rays reaching the back see nothing emitted).
+    pub fn intersect(&self, p: Vec3, wi: Vec3) -> Option<f32> {
+        let denom = wi.dot(self.normal);
+        if denom.is_nan() || denom >= 0.0 {
+            return None;
+        }
+        let dist = (self.centre - p).dot(self.normal) / denom;
+        if !(dist > 0.0 && dist.is_finite()) {
+            return None;
+        }
+        let (s, t) = self.plane_coords(p + dist * wi)?;
+        (s.abs() <= 0.5 && t.abs() <= 0.5).then_some(dist)
+    }
+
+    /// `(s, t)` with `q = centre + s·ex + t·ey` for `q` in the light's plane
+    /// (dual basis, so sheared edges work too).
+    fn plane_coords(&self, q: Vec3) -> Option<(f32, f32)> {
+        let m = self.ex.cross(self.ey);
+        let m2 = m.length_squared();
+        if m2.is_nan() || m2 <= 0.0 {
+            return None;
+        }
+        let d = q - self.centre;
+        Some((d.cross(self.ey).dot(m) / m2, self.ex.cross(d).dot(m) / m2))
+    }
+
+    /// Area density `1/area` converted to solid angle: `dist²/(area·cos θl)`;
+    /// `None` from behind or for a degenerate light.
+    fn solid_angle_pdf(&self, wi: Vec3, dist: f32) -> Option<f32> {
+        let cos_light = -wi.dot(self.normal);
+        if !(cos_light > 0.0 && self.area > 0.0) {
+            return None;
+        }
+        let pdf = dist * dist / (self.area * cos_light);
+        (pdf.is_finite() && pdf > 0.0).then_some(pdf)
+    }
+}

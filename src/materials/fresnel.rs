@@ -1,0 +1,69 @@
+//! Exact unpolarized Fresnel reflectance (spec §6): dielectric for glass, complex
+//! index for conductors. Never Schlick: the spec asks for the exact terms.
+
+use crate::Color;
+
+/// Reflectance of a smooth dielectric interface for light arriving at
+/// `cos_theta_i = |cos θi| ∈ [0, 1]` from the side of index `eta_i` toward
+/// `eta_t`. Returns 1 under total internal reflection.
+pub fn dielectric(cos_theta_i: f32, eta_i: f32, eta_t: f32) -> f32 {
+    let cos_i = cos_theta_i.clamp(0.0, 1.0);
+    let Some(cos_t) = refracted_cos(cos_i, eta_i / eta_t) else {
+        return 1.0;
+    };
+    let rs_den = eta_i * cos_i + eta_t * cos_t;
+    let rp_den = eta_t * cos_i + eta_i * cos_t;
+    if rs_den <= 0.0 || rp_den <= 0.0 {
+        // Grazing incidence on a degenerate interface: everything reflects.
+        return 1.0;
+    }
+    let rs = (eta_i * cos_i - eta_t * cos_t) / rs_den;
+    let rp = (eta_t * cos_i - eta_i * cos_t) / rp_den;
+    (0.5 * (rs * rs + rp * rp)).clamp(0.0, 1.0)
+}
+
+/// `cos θt` from Snell's law with relative index `eta_ratio = ηi/ηt`,
+/// or `None` under total internal reflection.
+pub fn refracted_cos(cos_theta_i: f32, eta_ratio: f32) -> Option<f32> {
+    let sin2_i = (1.0 - cos_theta_i * cos_theta_i).max(0.0);
+    let sin2_t = eta_ratio * eta_ratio * sin2_i;
+    if sin2_t >= 1.0 {
+        None
+    } else {
+        Some((1.0 - sin2_t).sqrt())
+    }
+}
+
+/// Reflectance of a conductor with complex index `eta + i·k` (per channel) at
+/// `cos_theta = |cos θ|`, with the spec's closed form.
+pub fn conductor(cos_theta: f32, eta: Color, k: Color) -> Color {
+    Color::new(
+        conductor_channel(cos_theta, eta.x, k.x),
+        conductor_channel(cos_theta, eta.y, k.y),
+        conductor_channel(cos_theta, eta.z, k.z),
+    )
+}
+
+fn conductor_channel(cos_theta: f32, eta: f32, k: f32) -> f32 {
+    // f64 because A² − 2ac + c² cancels badly in f32 for k ≫ 1 at grazing angles.
+    let c = cos_theta.clamp(0.0, 1.0) as f64;
+    let (eta, k) = (eta as f64, k as f64);
+    let s2 = 1.0 - c * c;
+    let t0 = eta * eta - k * k - s2;
+    let a2 = (t0 * t0 + 4.0 * eta * eta * k * k).sqrt();
+    let a = (0.5 * (a2 + t0)).max(0.0).sqrt();
+    let rs = ratio(a2 - 2.0 * a * c + c * c, a2 + 2.0 * a * c + c * c);
+    let p_term = c * c * a2 + s2 * s2;
+    let rp = rs * ratio(p_term - 2.0 * a * c * s2, p_term + 2.0 * a * c * s2);
+    (0.5 * (rs + rp)).clamp(0.0, 1.0) as f32
+}
+
+/// `num/den` for the Fresnel ratios, whose numerator and denominator only
+/// vanish together (an index of 0 at grazing incidence): total reflection then.
+fn ratio(num: f64, den: f64) -> f64 {
+    if den > 0.0 {
+        num / den
+    } else {
+        1.0
+    }
+}
