@@ -289,7 +289,7 @@ fn hemisphere_and_directional_lights_of_banana() {
 }
 
 /// Camera of the reference manifest (shared/references/manifest.json) at 160×120.
-fn assert_camera(rel: &str, eye: [f32; 3], forward: [f32; 3], hfov: f32, vfov: f32) {
+fn assert_camera(rel: &str, eye: [f32; 3], forward: [f32; 3], hfov: f64, vfov: f64) {
     let s = load_rel(rel);
     let cam = Camera::new(&s.camera, &s.bounds, 160, 120);
     assert!(
@@ -304,8 +304,8 @@ fn assert_camera(rel: &str, eye: [f32; 3], forward: [f32; 3], hfov: f32, vfov: f
     );
     assert!((cam.up - Vec3::Y).length() < 1e-6, "{rel}: up {}", cam.up);
     let (h, v) = cam.fov_degrees();
-    assert!((h - hfov).abs() < 1e-4, "{rel}: hfov {h}");
-    assert!((v - vfov).abs() < 1e-4, "{rel}: vfov {v}");
+    assert!((h as f64 - hfov).abs() < 1e-4, "{rel}: hfov {h}");
+    assert!((v as f64 - vfov).abs() < 1e-4, "{rel}: vfov {v}");
 }
 
 #[test]

@@ -109,3 +109,35 @@ pub fn parse_err(doc: &str, needles: &[&str]) -> String {
     }
     msg
 }
+
+/// The template's libraries with `up_axis` replaced, `libs` (whole
+/// `<library_*>` elements) added, and the visual scene's content replaced by `nodes`.
+pub fn scene_doc(up: &str, libs: &str, nodes: &str) -> String {
+    let doc = edit(
+        "<up_axis>Z_UP</up_axis>",
+        &format!("<up_axis>{up}</up_axis>"),
+    );
+    let doc = edit_doc(
+        &doc,
+        "<library_visual_scenes>",
+        &format!("{libs}\n<library_visual_scenes>"),
+    );
+    let start =
+        doc.find("<visual_scene id=\"main\">").unwrap() + "<visual_scene id=\"main\">".len();
+    let end = doc.find("</visual_scene>").unwrap();
+    format!("{}{nodes}{}", &doc[..start], &doc[end..])
+}
+
+/// `<instance_geometry>` of `url` binding `symbol` to `#target`.
+pub fn geometry_instance(url: &str, symbol: &str, target: &str) -> String {
+    format!(
+        r##"<instance_geometry url="#{url}"><bind_material><technique_common>
+             <instance_material symbol="{symbol}" target="#{target}"/>
+           </technique_common></bind_material></instance_geometry>"##
+    )
+}
+
+/// The template's quad, bound to its grey material.
+pub fn quad_instance() -> String {
+    geometry_instance("quad", "grey-sym", "grey")
+}
