@@ -352,7 +352,11 @@ fn sphere_centre_radius_and_non_uniform_scale() {
         close(s.bounds.min, Vec3::new(-0.5, 0.5, 1.5))
             && close(s.bounds.max, Vec3::new(2.5, 3.5, 4.5))
     );
-    assert!(!s.warnings.iter().any(|w| w.contains("scale")), "{:?}", s.warnings);
+    assert!(
+        !s.warnings.iter().any(|w| w.contains("scale")),
+        "{:?}",
+        s.warnings
+    );
     let nodes = format!(
         "<node><scale>2 1 1</scale>{}</node>",
         geometry_instance("ball", "c", "chrome")
