@@ -26,17 +26,26 @@ struct SoupSpec {
 }
 
 fn soup_spec() -> impl Strategy<Value = SoupSpec> {
-    (any::<u64>(), 0usize..150, 0usize..40, 0usize..8, 0usize..6, 0usize..7, 0usize..5).prop_map(
-        |(seed, random, slivers, degenerate, duplicates, grid, spheres)| SoupSpec {
-            seed,
-            random,
-            slivers,
-            degenerate,
-            duplicates,
-            grid,
-            spheres,
-        },
+    (
+        any::<u64>(),
+        0usize..150,
+        0usize..40,
+        0usize..8,
+        0usize..6,
+        0usize..7,
+        0usize..5,
     )
+        .prop_map(
+            |(seed, random, slivers, degenerate, duplicates, grid, spheres)| SoupSpec {
+                seed,
+                random,
+                slivers,
+                degenerate,
+                duplicates,
+                grid,
+                spheres,
+            },
+        )
 }
 
 struct SoupBuilder {
@@ -48,7 +57,11 @@ struct SoupBuilder {
 
 impl SoupBuilder {
     fn u3(&mut self) -> Vec3 {
-        Vec3::new(self.rng.next_f32(), self.rng.next_f32(), self.rng.next_f32())
+        Vec3::new(
+            self.rng.next_f32(),
+            self.rng.next_f32(),
+            self.rng.next_f32(),
+        )
     }
 
     fn point(&mut self) -> Vec3 {
@@ -78,7 +91,11 @@ impl SoupBuilder {
 
     fn degenerate(&mut self) {
         let (a, b) = (self.point(), self.point());
-        let p = if self.rng.next_f32() < 0.5 { [a, b, b] } else { [a, a, a] };
+        let p = if self.rng.next_f32() < 0.5 {
+            [a, b, b]
+        } else {
+            [a, a, a]
+        };
         self.push(p);
     }
 
@@ -91,13 +108,17 @@ impl SoupBuilder {
     /// An n×n height field with shared (indexed) vertices.
     fn grid(&mut self, n: usize) {
         let origin = self.point();
-        let (u, v) = (uniform_sphere(self.rng.next_2d()), uniform_sphere(self.rng.next_2d()));
+        let (u, v) = (
+            uniform_sphere(self.rng.next_2d()),
+            uniform_sphere(self.rng.next_2d()),
+        );
         let w = u.cross(v).normalize_or_zero();
         let base = self.positions.len() as u32;
         for i in 0..=n {
             for j in 0..=n {
                 let h = 0.3 * (self.rng.next_f32() - 0.5);
-                self.positions.push(origin + i as f32 * u + j as f32 * v + h * w);
+                self.positions
+                    .push(origin + i as f32 * u + j as f32 * v + h * w);
             }
         }
         let at = |i: usize, j: usize| base + (i * (n + 1) + j) as u32;
@@ -142,7 +163,11 @@ fn targets(scene: &Scene) -> Vec<Vec3> {
         t.extend([a, b, c, 0.5 * (a + b), 0.5 * (b + c), 0.5 * (c + a)]);
     }
     for s in &scene.spheres {
-        t.extend([s.centre, s.centre + s.radius * Vec3::X, s.centre - s.radius * Vec3::Y]);
+        t.extend([
+            s.centre,
+            s.centre + s.radius * Vec3::X,
+            s.centre - s.radius * Vec3::Y,
+        ]);
     }
     t
 }
@@ -172,7 +197,11 @@ proptest! {
 #[test]
 fn empty_and_fully_degenerate_scenes_never_hit() {
     let empty = Scene::default();
-    let degenerate = scene_from(vec![Vec3::ONE; 3], vec![[0, 1, 2], [0, 0, 0]], vec![(Vec3::ZERO, 0.0)]);
+    let degenerate = scene_from(
+        vec![Vec3::ONE; 3],
+        vec![[0, 1, 2], [0, 0, 0]],
+        vec![(Vec3::ZERO, 0.0)],
+    );
     let ray = Ray::new(Vec3::ZERO, Vec3::X);
     for scene in [&empty, &degenerate] {
         for builder in builders() {
@@ -196,7 +225,9 @@ fn identical_centroids_build_bounded_leaves() {
         let s = bvh.stats();
         assert_eq!(s.prims, n);
         assert!(s.leaves >= n / 8, "{s:?}");
-        let hit = bvh.intersect(&Ray::new(Vec3::new(0.2, 0.2, 1.0), -Vec3::Z)).expect("hit");
+        let hit = bvh
+            .intersect(&Ray::new(Vec3::new(0.2, 0.2, 1.0), -Vec3::Z))
+            .expect("hit");
         assert_eq!(hit.t, 1.0);
     }
 }
@@ -215,13 +246,19 @@ fn trees_are_the_same_whatever_the_thread_count() {
     let scene = make_soup(&spec);
     for builder in builders() {
         let build_with = |threads: usize| {
-            let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap();
+            let pool = rayon::ThreadPoolBuilder::new()
+                .num_threads(threads)
+                .build()
+                .unwrap();
             pool.install(|| Bvh::build(&scene, builder))
         };
         let (one, four) = (build_with(1), build_with(4));
         assert!(one == four, "{builder:?} differs between 1 and 4 threads");
         let s = one.stats();
-        assert_eq!(s.prims, spec.random + spec.slivers + spec.duplicates + 2 * 20 * 20 + 30);
+        assert_eq!(
+            s.prims,
+            spec.random + spec.slivers + spec.duplicates + 2 * 20 * 20 + 30
+        );
         assert!(s.max_depth <= 64 && s.leaves * 2 - 1 == s.nodes, "{s:?}");
     }
 }
@@ -286,7 +323,11 @@ fn closed_mesh_is_watertight_from_inside() {
     let scene = closed_mesh(24, &mut rng);
     let mut aims = targets(&scene);
     aims.extend((0..2000).map(|_| 3.0 * uniform_sphere(rng.next_2d())));
-    let origins = [Vec3::ZERO, Vec3::new(0.1, -0.2, 0.05), Vec3::new(-0.3, 0.3, 0.3)];
+    let origins = [
+        Vec3::ZERO,
+        Vec3::new(0.1, -0.2, 0.05),
+        Vec3::new(-0.3, 0.3, 0.3),
+    ];
     let brute = BruteForce::new(&scene);
     let bvhs = builders().map(|b| Bvh::build(&scene, b));
     let mut rays = 0;
@@ -295,7 +336,11 @@ fn closed_mesh_is_watertight_from_inside() {
             let ray = Ray::new(o, a - o);
             assert!(brute.occluded(&ray), "brute force: leak through {ray:?}");
             for bvh in &bvhs {
-                assert!(bvh.intersect(&ray).is_some(), "{}: leak through {ray:?}", bvh.name());
+                assert!(
+                    bvh.intersect(&ray).is_some(),
+                    "{}: leak through {ray:?}",
+                    bvh.name()
+                );
             }
             rays += 1;
         }
@@ -326,11 +371,18 @@ fn flat_grid_has_no_cracks_at_edges_and_vertices() {
     for i in 1..2 * n {
         for j in 1..2 * n {
             let p = Vec3::new(i as f32 * 0.5, j as f32 * 0.5, 0.0);
-            for d in [-Vec3::Z, Vec3::Z, Vec3::new(0.5, 0.25, -1.0), Vec3::new(-1.0, 1.0, 1.0)] {
+            for d in [
+                -Vec3::Z,
+                Vec3::Z,
+                Vec3::new(0.5, 0.25, -1.0),
+                Vec3::new(-1.0, 1.0, 1.0),
+            ] {
                 let ray = Ray::new(p - 3.0 * d, d);
                 assert!(brute.intersect(&ray).is_some(), "brute: crack at {p}");
                 for bvh in &bvhs {
-                    let h = bvh.intersect(&ray).unwrap_or_else(|| panic!("{}: crack at {p}", bvh.name()));
+                    let h = bvh
+                        .intersect(&ray)
+                        .unwrap_or_else(|| panic!("{}: crack at {p}", bvh.name()));
                     assert!((h.t - 3.0).abs() < 1e-5);
                 }
                 checked += 1;
@@ -358,7 +410,10 @@ fn spawned_rays_do_not_self_intersect() {
     let base = make_soup(&spec);
     for (scale, shift) in [(1e-3, 0.0), (1.0, 0.0), (1e3, 0.0), (1.0, 1e4)] {
         let mut scene = base.clone();
-        scene.positions.iter_mut().for_each(|p| *p = *p * scale + Vec3::splat(shift));
+        scene
+            .positions
+            .iter_mut()
+            .for_each(|p| *p = *p * scale + Vec3::splat(shift));
         for s in &mut scene.spheres {
             s.centre = s.centre * scale + Vec3::splat(shift);
             s.radius *= scale;
@@ -371,7 +426,9 @@ fn spawned_rays_do_not_self_intersect() {
         let bounds = bvh_bounds(&scene);
         for _ in 0..3000 {
             let ray = random_ray(&mut rng, &bounds, &aims);
-            let Some(hit) = bvh.intersect(&ray) else { continue };
+            let Some(hit) = bvh.intersect(&ray) else {
+                continue;
+            };
             let si = scene.interaction(&ray, &hit);
             for _ in 0..4 {
                 let w = uniform_sphere(rng.next_2d());
@@ -384,12 +441,19 @@ fn spawned_rays_do_not_self_intersect() {
             }
         }
         assert!(spawned > 2000, "scale {scale}: only {spawned} spawned rays");
-        assert!(failures.is_empty(), "scale {scale} shift {shift}: {} failures, first {}", failures.len(), failures[0]);
+        assert!(
+            failures.is_empty(),
+            "scale {scale} shift {shift}: {} failures, first {}",
+            failures.len(),
+            failures[0]
+        );
     }
 }
 
 fn bvh_bounds(scene: &Scene) -> ember::geometry::Aabb {
-    (0..scene.num_prims() as u32).fold(ember::geometry::Aabb::EMPTY, |b, i| b.union(&scene.prim_bounds(i)))
+    (0..scene.num_prims() as u32).fold(ember::geometry::Aabb::EMPTY, |b, i| {
+        b.union(&scene.prim_bounds(i))
+    })
 }
 
 fn check_spawned(
@@ -403,19 +467,26 @@ fn check_spawned(
     let ntri = scene.triangles.len() as u32;
     if from < ntri {
         return match next {
-            Some(h) if h.prim == from => Err(format!("triangle {from} re-hit at t={} by {ray:?}", h.t)),
+            Some(h) if h.prim == from => {
+                Err(format!("triangle {from} re-hit at t={} by {ray:?}", h.t))
+            }
             _ => Ok(()),
         };
     }
     let sphere = scene.spheres[(from - ntri) as usize];
     let cos = ray.d.dot(si.ng);
     match next {
-        Some(h) if h.prim == from && cos > 0.0 => Err(format!("sphere re-hit outward at t={} by {ray:?}", h.t)),
+        Some(h) if h.prim == from && cos > 0.0 => {
+            Err(format!("sphere re-hit outward at t={} by {ray:?}", h.t))
+        }
         Some(h) if h.prim == from => {
             // Inward: the far side lies a chord 2r|cos θ| away.
             let chord = 2.0 * sphere.radius * cos.abs();
             if h.t * ray.d.length() < 0.5 * chord {
-                Err(format!("sphere re-hit inward at t={} (chord {chord}) by {ray:?}", h.t))
+                Err(format!(
+                    "sphere re-hit inward at t={} (chord {chord}) by {ray:?}",
+                    h.t
+                ))
             } else {
                 Ok(())
             }

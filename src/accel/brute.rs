@@ -13,7 +13,10 @@ pub struct BruteForce {
 
 impl BruteForce {
     pub fn new(scene: &Scene) -> Self {
-        let order: Vec<PrimId> = hittable_prims(scene).into_iter().map(|(id, _)| id).collect();
+        let order: Vec<PrimId> = hittable_prims(scene)
+            .into_iter()
+            .map(|(id, _)| id)
+            .collect();
         BruteForce {
             prims: PrimStore::new(scene, &order),
         }

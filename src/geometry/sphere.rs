@@ -51,7 +51,7 @@ pub fn intersect_sphere(ray: &Ray, centre: Vec3, radius: f32) -> Option<f32> {
     }
     let f_perp = f - (b / a) * d;
     let disc = a * (r2 - f_perp.length_squared());
-    if !(disc >= 0.0) {
+    if disc.is_nan() || disc < 0.0 {
         return None;
     }
     let q = -(b + disc.sqrt().copysign(b));
@@ -103,5 +103,38 @@ mod tests {
         // Grazing ray at distance 0.999 from the centre still hits.
         let g = Ray::new(Vec3::new(0.999, 0.0, -1e4), Vec3::Z);
         assert!(intersect_sphere(&g, Vec3::ZERO, 1.0).is_some());
+    }
+
+    /// Points computed on a sphere near the origin (not offset) are within
+    /// rounding of its surface on either side; the on-surface band must treat them
+    /// as on it: no hit going out, the far side going in. (Far from the origin the
+    /// point's own error exceeds the band; there `offset_ray_origin` is needed,
+    /// which tests/bvh_brute_force.rs checks.)
+    #[test]
+    fn rays_from_unoffset_surface_points() {
+        let mut rng = crate::sampling::Sampler::from_seed(9);
+        let dir =
+            |rng: &mut crate::sampling::Sampler| crate::sampling::uniform_sphere(rng.next_2d());
+        let spheres = [
+            (Vec3::ZERO, 1.0),
+            (Vec3::new(1.0, -0.5, 0.25), 2.0),
+            (Vec3::ZERO, 1e-4),
+        ];
+        for (centre, radius) in spheres {
+            for _ in 0..20000 {
+                let n = dir(&mut rng);
+                let p = centre + radius * n;
+                let w = dir(&mut rng);
+                let t = intersect_sphere(&Ray::new(p, w), centre, radius);
+                let cos = w.dot(n);
+                if cos > 0.0 {
+                    assert_eq!(t, None, "outward from {p} along {w}");
+                } else if cos < -1e-3 {
+                    let chord = 2.0 * radius * -cos;
+                    let t = t.expect("inward ray must cross the sphere");
+                    assert!((t - chord).abs() <= 1e-3 * radius, "{t} vs chord {chord}");
+                }
+            }
+        }
     }
 }

@@ -47,7 +47,8 @@ pub fn scene_from(positions: Vec<Vec3>, tris: Vec<[u32; 3]>, spheres: Vec<(Vec3,
             .collect(),
         ..Scene::default()
     };
-    scene.bounds = (0..scene.num_prims() as u32).fold(Aabb::EMPTY, |b, i| b.union(&scene.prim_bounds(i)));
+    scene.bounds =
+        (0..scene.num_prims() as u32).fold(Aabb::EMPTY, |b, i| b.union(&scene.prim_bounds(i)));
     scene
 }
 
@@ -114,7 +115,9 @@ pub fn compare_occluded(ray: &Ray, got: bool, want: Option<PrimHit>) -> Result<(
     }
     match want {
         Some(h) if ray.t_max.is_finite() && close(h.t, ray.t_max) => Ok(()),
-        _ => Err(format!("occluded {got} but oracle says {want:?} for {ray:?}")),
+        _ => Err(format!(
+            "occluded {got} but oracle says {want:?} for {ray:?}"
+        )),
     }
 }
 
@@ -146,7 +149,11 @@ pub fn random_ray(rng: &mut Sampler, bounds: &Aabb, targets: &[Vec3]) -> Ray {
         1 => {
             let mut p = lerp(u3(rng));
             let axis = (rng.next_f32() * 3.0) as usize % 3;
-            p[axis] = if rng.next_f32() < 0.5 { bounds.min[axis] } else { bounds.max[axis] };
+            p[axis] = if rng.next_f32() < 0.5 {
+                bounds.min[axis]
+            } else {
+                bounds.max[axis]
+            };
             p
         }
         2 => lerp(u3(rng) * 1.6 - Vec3::splat(0.3)),
@@ -156,9 +163,14 @@ pub fn random_ray(rng: &mut Sampler, bounds: &Aabb, targets: &[Vec3]) -> Ray {
         0 => uniform_sphere(rng.next_2d()),
         1 => axis_direction((rng.next_f32() * 8.0) as usize),
         _ if !targets.is_empty() => {
-            let t = targets[((rng.next_f32() * targets.len() as f32) as usize).min(targets.len() - 1)];
+            let t =
+                targets[((rng.next_f32() * targets.len() as f32) as usize).min(targets.len() - 1)];
             let d = t - o;
-            if d == Vec3::ZERO { Vec3::X } else { d }
+            if d == Vec3::ZERO {
+                Vec3::X
+            } else {
+                d
+            }
         }
         _ => uniform_sphere(rng.next_2d()),
     };

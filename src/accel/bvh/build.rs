@@ -122,7 +122,12 @@ fn choose_split<R: SplitRule>(
 }
 
 /// Subtree in its own vector, with child offsets relative to its start.
-fn subtree<R: SplitRule>(rule: &R, prims: &mut [BuildPrim], first: u32, depth: u32) -> Vec<BvhNode> {
+fn subtree<R: SplitRule>(
+    rule: &R,
+    prims: &mut [BuildPrim],
+    first: u32,
+    depth: u32,
+) -> Vec<BvhNode> {
     let mut v = Vec::new();
     build_into(rule, prims, first, depth, &mut v);
     v

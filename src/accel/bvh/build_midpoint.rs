@@ -26,7 +26,8 @@ impl SplitRule for MidpointBuilder {
         }
         let cb = centroid_bounds(prims);
         let axis = cb.max_axis();
-        if !(cb.max[axis] > cb.min[axis]) {
+        let extent = cb.max[axis] - cb.min[axis];
+        if extent.is_nan() || extent <= 0.0 {
             // All centroids equal: nothing separates them; the skeleton halves the node.
             return None;
         }

@@ -75,7 +75,7 @@ impl SplitRule for SahBinnedBuilder {
         let mut best: Option<(f32, Binning, usize)> = None;
         for axis in 0..3 {
             let extent = cb.max[axis] - cb.min[axis];
-            if !(extent > 0.0) {
+            if extent.is_nan() || extent <= 0.0 {
                 continue;
             }
             let binning = Binning {
