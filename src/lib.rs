@@ -7,6 +7,7 @@ pub mod accel;
 pub mod camera;
 pub mod color;
 pub mod geometry;
+pub mod info;
 pub mod lights;
 pub mod materials;
 pub mod sampling;

@@ -1,9 +1,9 @@
 //! The native BVH against the brute-force oracle on random triangle soups, plus
 //! watertightness and self-intersection checks of the primitive tests.
 
-mod common;
+mod bvh_common;
 
-use common::*;
+use bvh_common::*;
 use ember::accel::{Accel, BruteForce, Bvh, BvhBuilder};
 use ember::geometry::{offset_ray_origin, Ray};
 use ember::sampling::{uniform_sphere, Sampler};

@@ -1,213 +1,143 @@
-//! Helpers shared by the BVH tests: scene construction, random rays, and the
-//! comparison of an acceleration structure's answer with the brute-force oracle.
+//! A small valid COLLADA document that the loader tests mutate.
 
 #![allow(dead_code)]
 
-use ember::accel::{Accel, BruteForce, Bvh, BvhBuilder};
-use ember::geometry::sphere::intersect_sphere;
-use ember::geometry::triangle::intersect_triangle;
-use ember::geometry::{Aabb, Ray};
-use ember::sampling::{uniform_sphere, Sampler};
-use ember::scene::{PrimHit, Scene, Sphere, Triangle, NO_LIGHT};
-use glam::Vec3;
+use ember::scene::collada::parse;
+use ember::scene::Scene;
 
-/// Relative tolerance on `t` when two structures report different primitives.
-/// The BVH's box test is conservative against the exact hit point, but a reported
-/// `t` carries the triangle test's own rounding (pbrt's δt, a few ulps); two
-/// primitives hit within that error of each other (shared edges and vertices,
-/// touching or coincident surfaces) may legitimately come out in either order.
-/// 1e-5 is about 170 ulps: far above that error, far below any real separation
-/// in these scenes.
-pub const REL_T: f32 = 1e-5;
+/// A unit quad (two triangles with normals), a sphere, a point light and a
+/// camera, Z_UP like the course files. Loads without warnings.
+pub const TEMPLATE: &str = r##"<?xml version="1.0" encoding="utf-8"?>
+<COLLADA xmlns="http://www.collada.org/2005/11/COLLADASchema" version="1.4.1">
+  <asset><up_axis>Z_UP</up_axis></asset>
+  <library_lights>
+    <light id="lamp"><technique_common><point><color>1 2 3</color></point></technique_common></light>
+  </library_lights>
+  <library_cameras>
+    <camera id="cam"><optics><technique_common><perspective>
+      <xfov>40</xfov><aspect_ratio>1.5</aspect_ratio>
+    </perspective></technique_common></optics></camera>
+  </library_cameras>
+  <library_effects>
+    <effect id="grey-fx"><profile_COMMON><technique sid="common"><lambert>
+      <diffuse><color>0.3 0.3 0.3 1</color></diffuse>
+    </lambert></technique></profile_COMMON></effect>
+    <effect id="chrome-fx"><extra><technique profile="CGL">
+      <mirror><reflectance>0.9 0.9 0.9</reflectance></mirror>
+    </technique></extra></effect>
+  </library_effects>
+  <library_materials>
+    <material id="grey"><instance_effect url="#grey-fx"/></material>
+    <material id="chrome"><instance_effect url="#chrome-fx"/></material>
+  </library_materials>
+  <library_geometries>
+    <geometry id="quad">
+      <mesh>
+        <source id="quad-pos">
+          <float_array id="quad-pos-array" count="12">0 0 0 1 0 0 1 1 0 0 1 0</float_array>
+          <technique_common><accessor source="#quad-pos-array" count="4" stride="3"/></technique_common>
+        </source>
+        <source id="quad-nrm">
+          <float_array id="quad-nrm-array" count="3">0 0 1</float_array>
+          <technique_common><accessor source="#quad-nrm-array" count="1" stride="3"/></technique_common>
+        </source>
+        <vertices id="quad-vtx"><input semantic="POSITION" source="#quad-pos"/></vertices>
+        <polylist material="grey-sym" count="2">
+          <input semantic="VERTEX" source="#quad-vtx" offset="0"/>
+          <input semantic="NORMAL" source="#quad-nrm" offset="1"/>
+          <vcount>3 3</vcount>
+          <p>0 0 1 0 2 0 0 0 2 0 3 0</p>
+        </polylist>
+      </mesh>
+    </geometry>
+    <geometry id="ball"><extra><technique profile="CGL">
+      <sphere><radius>0.5</radius></sphere>
+    </technique></extra></geometry>
+  </library_geometries>
+  <library_visual_scenes>
+    <visual_scene id="main">
+      <node id="quad-node">
+        <matrix>1 0 0 0 0 1 0 0 0 0 1 0 0 0 0 1</matrix>
+        <instance_geometry url="#quad"><bind_material><technique_common>
+          <instance_material symbol="grey-sym" target="#grey"/>
+        </technique_common></bind_material></instance_geometry>
+      </node>
+      <node id="ball-node">
+        <translate>0 0 1</translate>
+        <instance_geometry url="#ball"><bind_material><technique_common>
+          <instance_material symbol="chrome" target="#chrome"/>
+        </technique_common></bind_material></instance_geometry>
+      </node>
+      <node id="lamp-node"><translate>0 0 3</translate><instance_light url="#lamp"/></node>
+      <node id="cam-node">
+        <matrix>1 0 0 0 0 0 -1 -3 0 1 0 1 0 0 0 1</matrix>
+        <instance_camera url="#cam"/>
+      </node>
+    </visual_scene>
+  </library_visual_scenes>
+  <scene><instance_visual_scene url="#main"/></scene>
+</COLLADA>
+"##;
 
-pub fn builders() -> [BvhBuilder; 2] {
-    [BvhBuilder::Sah, BvhBuilder::Midpoint]
+/// The template with `from` replaced by `to`; `from` must occur exactly once.
+pub fn edit(from: &str, to: &str) -> String {
+    edit_doc(TEMPLATE, from, to)
 }
 
-/// A scene holding only geometry (materials are irrelevant to intersection).
-pub fn scene_from(positions: Vec<Vec3>, tris: Vec<[u32; 3]>, spheres: Vec<(Vec3, f32)>) -> Scene {
-    let mut scene = Scene {
-        positions,
-        triangles: tris
-            .into_iter()
-            .map(|v| Triangle {
-                v,
-                n: None,
-                material: 0,
-                light: NO_LIGHT,
-            })
-            .collect(),
-        spheres: spheres
-            .into_iter()
-            .map(|(centre, radius)| Sphere {
-                centre,
-                radius,
-                material: 0,
-            })
-            .collect(),
-        ..Scene::default()
+pub fn edit_doc(doc: &str, from: &str, to: &str) -> String {
+    assert_eq!(doc.matches(from).count(), 1, "{from:?} must occur once");
+    doc.replacen(from, to, 1)
+}
+
+pub fn parse_ok(doc: &str) -> Scene {
+    parse(doc, "scene.dae").unwrap_or_else(|e| panic!("{e}"))
+}
+
+/// Parses `doc`, expecting a one-line error naming the file and containing every needle.
+pub fn parse_err(doc: &str, needles: &[&str]) -> String {
+    let msg = match parse(doc, "scene.dae") {
+        Ok(s) => panic!(
+            "expected an error, got a scene with warnings {:?}",
+            s.warnings
+        ),
+        Err(e) => e.to_string(),
     };
-    scene.bounds =
-        (0..scene.num_prims() as u32).fold(Aabb::EMPTY, |b, i| b.union(&scene.prim_bounds(i)));
-    scene
-}
-
-/// The primitive tested on its own.
-pub fn prim_alone(scene: &Scene, ray: &Ray, prim: u32) -> Option<f32> {
-    let i = prim as usize;
-    let ntri = scene.triangles.len();
-    if i < ntri {
-        let [p0, p1, p2] = scene.triangle_positions(i);
-        intersect_triangle(ray, p0, p1, p2).map(|h| h.0)
-    } else {
-        let s = &scene.spheres[i - ntri];
-        intersect_sphere(ray, s.centre, s.radius)
+    assert!(msg.starts_with("scene.dae: "), "{msg}");
+    assert!(!msg.contains('\n'), "not one line: {msg}");
+    for n in needles {
+        assert!(msg.contains(n), "{msg:?} does not contain {n:?}");
     }
+    msg
 }
 
-fn close(a: f32, b: f32) -> bool {
-    (a - b).abs() <= REL_T * a.abs().max(b.abs())
+/// The template's libraries with `up_axis` replaced, `libs` (whole
+/// `<library_*>` elements) added, and the visual scene's content replaced by `nodes`.
+pub fn scene_doc(up: &str, libs: &str, nodes: &str) -> String {
+    let doc = edit(
+        "<up_axis>Z_UP</up_axis>",
+        &format!("<up_axis>{up}</up_axis>"),
+    );
+    let doc = edit_doc(
+        &doc,
+        "<library_visual_scenes>",
+        &format!("{libs}\n<library_visual_scenes>"),
+    );
+    let start =
+        doc.find("<visual_scene id=\"main\">").unwrap() + "<visual_scene id=\"main\">".len();
+    let end = doc.find("</visual_scene>").unwrap();
+    format!("{}{nodes}{}", &doc[..start], &doc[end..])
 }
 
-/// Checks a structure's nearest hit against the oracle's.
-pub fn compare_nearest(
-    scene: &Scene,
-    ray: &Ray,
-    got: Option<PrimHit>,
-    want: Option<PrimHit>,
-) -> Result<(), String> {
-    let report = || format!("ray {ray:?}: got {got:?}, want {want:?}");
-    match (got, want) {
-        (None, None) => Ok(()),
-        (Some(g), Some(w)) if g.prim == w.prim => {
-            // Same primitive, same ray: the same test must give the same numbers.
-            if g == w {
-                Ok(())
-            } else {
-                Err(format!("same prim, different hit: {}", report()))
-            }
-        }
-        (Some(g), Some(w)) => {
-            // A tie (see REL_T); the reported primitive must really be hit there.
-            if !close(g.t, w.t) {
-                return Err(format!("different nearest prim: {}", report()));
-            }
-            if prim_alone(scene, ray, g.prim) != Some(g.t) {
-                return Err(format!("reported hit is not a hit: {}", report()));
-            }
-            Ok(())
-        }
-        (Some(h), None) | (None, Some(h)) => {
-            // Only a hit within rounding of t_max may be seen by one and not the other.
-            if ray.t_max.is_finite() && close(h.t, ray.t_max) {
-                Ok(())
-            } else {
-                Err(format!("hit/miss disagree: {}", report()))
-            }
-        }
-    }
+/// `<instance_geometry>` of `url` binding `symbol` to `#target`.
+pub fn geometry_instance(url: &str, symbol: &str, target: &str) -> String {
+    format!(
+        r##"<instance_geometry url="#{url}"><bind_material><technique_common>
+             <instance_material symbol="{symbol}" target="#{target}"/>
+           </technique_common></bind_material></instance_geometry>"##
+    )
 }
 
-/// Checks `occluded` against the oracle's nearest hit on the same ray.
-pub fn compare_occluded(ray: &Ray, got: bool, want: Option<PrimHit>) -> Result<(), String> {
-    if got == want.is_some() {
-        return Ok(());
-    }
-    match want {
-        Some(h) if ray.t_max.is_finite() && close(h.t, ray.t_max) => Ok(()),
-        _ => Err(format!(
-            "occluded {got} but oracle says {want:?} for {ray:?}"
-        )),
-    }
-}
-
-/// Directions along the axes, with mixed signed zeros in the other components.
-pub fn axis_direction(k: usize) -> Vec3 {
-    const DIRS: [[f32; 3]; 8] = [
-        [1.0, 0.0, 0.0],
-        [-1.0, -0.0, 0.0],
-        [0.0, 1.0, -0.0],
-        [-0.0, -1.0, 0.0],
-        [0.0, 0.0, 1.0],
-        [-0.0, -0.0, -1.0],
-        [2.5, -0.0, -0.0],
-        [0.0, -3.0, 0.0],
-    ];
-    Vec3::from_array(DIRS[k % DIRS.len()])
-}
-
-/// A random ray for `bounds`: origins inside (and on the faces of) the bounds or
-/// outside them, directions uniform, axis-aligned, or aimed at a given point;
-/// mostly unbounded, sometimes a finite `[t_min, t_max]`.
-pub fn random_ray(rng: &mut Sampler, bounds: &Aabb, targets: &[Vec3]) -> Ray {
-    let size = bounds.diagonal().max(Vec3::splat(1e-3));
-    let lerp = |u: Vec3| bounds.min + u * size;
-    let u3 = |rng: &mut Sampler| Vec3::new(rng.next_f32(), rng.next_f32(), rng.next_f32());
-    let o = match (rng.next_f32() * 4.0) as u32 {
-        0 => lerp(u3(rng)),
-        // On a face: origin coordinates equal to a box bound.
-        1 => {
-            let mut p = lerp(u3(rng));
-            let axis = (rng.next_f32() * 3.0) as usize % 3;
-            p[axis] = if rng.next_f32() < 0.5 {
-                bounds.min[axis]
-            } else {
-                bounds.max[axis]
-            };
-            p
-        }
-        2 => lerp(u3(rng) * 1.6 - Vec3::splat(0.3)),
-        _ => bounds.centre() + size.length() * 1.5 * uniform_sphere(rng.next_2d()),
-    };
-    let d = match (rng.next_f32() * 3.0) as u32 {
-        0 => uniform_sphere(rng.next_2d()),
-        1 => axis_direction((rng.next_f32() * 8.0) as usize),
-        _ if !targets.is_empty() => {
-            let t =
-                targets[((rng.next_f32() * targets.len() as f32) as usize).min(targets.len() - 1)];
-            let d = t - o;
-            if d == Vec3::ZERO {
-                Vec3::X
-            } else {
-                d
-            }
-        }
-        _ => uniform_sphere(rng.next_2d()),
-    };
-    let mut ray = Ray::new(o, d);
-    if rng.next_f32() < 0.2 {
-        ray.t_max = rng.next_f32() * 2.0 * size.length() / d.length();
-        if rng.next_f32() < 0.5 {
-            ray.t_min = ray.t_max * rng.next_f32() * 0.5;
-        }
-    }
-    ray
-}
-
-/// Runs `rays` through BruteForce and both BVH builders; panics on the first
-/// disagreement. The oracle's answers are computed in parallel.
-pub fn check_against_brute(scene: &Scene, rays: &[Ray]) {
-    use rayon::prelude::*;
-    let brute = BruteForce::new(scene);
-    let want: Vec<Option<PrimHit>> = rays.par_iter().map(|r| brute.intersect(r)).collect();
-    for builder in builders() {
-        let bvh = Bvh::build(scene, builder);
-        let failures: Vec<String> = rays
-            .par_iter()
-            .zip(&want)
-            .filter_map(|(ray, &w)| {
-                let nearest = compare_nearest(scene, ray, bvh.intersect(ray), w);
-                let occluded = compare_occluded(ray, bvh.occluded(ray), w);
-                nearest.and(occluded).err()
-            })
-            .collect();
-        assert!(
-            failures.is_empty(),
-            "{}: {} of {} rays disagree with brute force; first: {}",
-            bvh.name(),
-            failures.len(),
-            rays.len(),
-            failures[0]
-        );
-    }
+/// The template's quad, bound to its grey material.
+pub fn quad_instance() -> String {
+    geometry_instance("quad", "grey-sym", "grey")
 }

@@ -1,0 +1,376 @@
+//! XML plumbing shared by the COLLADA readers: `#id` resolution, element
+//! labels for error messages, and number lists parsed without a per-number
+//! allocation.
+
+use super::LoadError;
+use roxmltree::{Document, Node};
+use std::collections::{HashMap, HashSet};
+use std::fmt::Display;
+use std::str::FromStr;
+
+/// Profiles whose `<extra><technique>` carries the CGL extension data (spec §1).
+const EXTENSION_PROFILES: [&str; 2] = ["CGL", "CMU462"];
+
+/// The parsed document plus what every reader needs: the file label for
+/// messages, the id table, and the warnings gathered so far.
+pub(crate) struct Ctx<'a, 'i> {
+    pub file: &'a str,
+    ids: HashMap<&'a str, Node<'a, 'i>>,
+    warnings: Vec<String>,
+    seen_warnings: HashSet<String>,
+}
+
+impl<'a, 'i> Ctx<'a, 'i> {
+    pub fn new(file: &'a str, doc: &'a Document<'i>) -> Self {
+        let mut ids = HashMap::new();
+        for n in doc.descendants().filter(Node::is_element) {
+            if let Some(id) = n.attribute("id") {
+                // COLLADA ids are unique; on a duplicate the first one wins.
+                ids.entry(id).or_insert(n);
+            }
+        }
+        Ctx {
+            file,
+            ids,
+            warnings: Vec::new(),
+            seen_warnings: HashSet::new(),
+        }
+    }
+
+    /// An error about `node`, in the one-line form `FILE: <element>: what`.
+    pub fn err(&self, node: Node, what: impl Display) -> LoadError {
+        LoadError::Invalid {
+            file: self.file.to_string(),
+            msg: format!("{}: {what}", describe(node)),
+        }
+    }
+
+    /// A non-fatal problem about `node`. Repeats are kept once so that a
+    /// large mesh cannot flood the list.
+    pub fn warn(&mut self, node: Node, what: impl Display) {
+        let w = format!("{}: {what}", describe(node));
+        if self.seen_warnings.insert(w.clone()) {
+            self.warnings.push(w);
+        }
+    }
+
+    pub fn into_warnings(self) -> Vec<String> {
+        self.warnings
+    }
+
+    /// The element named by `node@attr` (a `#id` URL), which must be a `<tag>`.
+    pub fn resolve(
+        &self,
+        node: Node<'a, 'i>,
+        attr: &str,
+        tag: &str,
+    ) -> Result<Node<'a, 'i>, LoadError> {
+        self.resolve_if_present(node, attr, tag)?.ok_or_else(|| {
+            let url = node.attribute(attr).unwrap_or_default();
+            self.err(node, format!("{attr}=\"{}\" names nothing", clip(url)))
+        })
+    }
+
+    /// Like `resolve`, but `None` when the URL names no element at all.
+    pub fn resolve_if_present(
+        &self,
+        node: Node<'a, 'i>,
+        attr: &str,
+        tag: &str,
+    ) -> Result<Option<Node<'a, 'i>>, LoadError> {
+        let url = node
+            .attribute(attr)
+            .ok_or_else(|| self.err(node, format!("missing attribute {attr}")))?;
+        let id = url.strip_prefix('#').ok_or_else(|| {
+            let msg = format!("{attr}=\"{}\" is not a local #id reference", clip(url));
+            self.err(node, msg)
+        })?;
+        let Some(&target) = self.ids.get(id) else {
+            return Ok(None);
+        };
+        if target.tag_name().name() != tag {
+            let msg = format!(
+                "{attr}=\"{}\" names a <{}>, expected a <{tag}>",
+                clip(url),
+                target.tag_name().name()
+            );
+            return Err(self.err(node, msg));
+        }
+        Ok(Some(target))
+    }
+
+    /// Appends the whitespace-separated numbers of `node`'s text to `out`.
+    /// Non-finite or unparsable entries are errors; nothing is sized from attributes.
+    pub fn numbers_into<T: Number>(&self, node: Node, out: &mut Vec<T>) -> Result<(), LoadError> {
+        let text = node.text().unwrap_or("");
+        // At most one number per two bytes ("1 "), so this bound is safe to reserve.
+        out.reserve(text.len() / 2 + 1);
+        for (k, word) in text.split_ascii_whitespace().enumerate() {
+            match word.parse::<T>() {
+                Ok(v) if v.is_finite() => out.push(v),
+                _ => {
+                    return Err(self.err(
+                        node,
+                        format!("entry {k} \"{}\" is not {}", clip(word), T::WHAT),
+                    ))
+                }
+            }
+        }
+        Ok(())
+    }
+
+    pub fn numbers<T: Number>(&self, node: Node) -> Result<Vec<T>, LoadError> {
+        let mut v = Vec::new();
+        self.numbers_into(node, &mut v)?;
+        Ok(v)
+    }
+
+    /// Exactly `N` numbers.
+    pub fn exact<const N: usize>(&self, node: Node) -> Result<[f64; N], LoadError> {
+        let v = self.numbers::<f64>(node)?;
+        v.as_slice()
+            .try_into()
+            .map_err(|_| self.err(node, format!("expected {N} numbers, found {}", v.len())))
+    }
+
+    /// The first `N` numbers; more are allowed (e.g. RGBA colours read as RGB).
+    pub fn leading<const N: usize>(&self, node: Node) -> Result<[f32; N], LoadError> {
+        let v = self.numbers::<f32>(node)?;
+        if v.len() < N {
+            return Err(self.err(
+                node,
+                format!("expected at least {N} numbers, found {}", v.len()),
+            ));
+        }
+        let mut a = [0.0; N];
+        a.copy_from_slice(&v[..N]);
+        Ok(a)
+    }
+
+    /// A single number from the text of `node`'s child `<name>`, if present.
+    pub fn child_scalar(&self, node: Node, name: &str) -> Result<Option<f32>, LoadError> {
+        child(node, name)
+            .map(|c| self.leading::<1>(c).map(|[v]| v))
+            .transpose()
+    }
+
+    /// Three numbers (a colour or vector) from child `<name>`, if present.
+    pub fn child_rgb(&self, node: Node, name: &str) -> Result<Option<[f32; 3]>, LoadError> {
+        child(node, name).map(|c| self.leading::<3>(c)).transpose()
+    }
+
+    /// A non-negative integer attribute, if present.
+    pub fn uint_attr(&self, node: Node, attr: &str) -> Result<Option<u64>, LoadError> {
+        node.attribute(attr)
+            .map(|s| {
+                s.trim().parse::<u64>().map_err(|_| {
+                    self.err(
+                        node,
+                        format!("{attr}=\"{}\" is not a non-negative integer", clip(s)),
+                    )
+                })
+            })
+            .transpose()
+    }
+}
+
+/// Numbers a COLLADA list may hold.
+pub(crate) trait Number: FromStr + Copy {
+    const WHAT: &'static str;
+    fn is_finite(self) -> bool;
+}
+
+impl Number for f32 {
+    const WHAT: &'static str = "a finite number";
+    fn is_finite(self) -> bool {
+        f32::is_finite(self)
+    }
+}
+
+impl Number for f64 {
+    const WHAT: &'static str = "a finite number";
+    fn is_finite(self) -> bool {
+        f64::is_finite(self)
+    }
+}
+
+impl Number for u32 {
+    const WHAT: &'static str = "a non-negative integer";
+    fn is_finite(self) -> bool {
+        true
+    }
+}
+
+/// First element child of `node` with local name `name`.
+pub(crate) fn child<'a, 'i>(node: Node<'a, 'i>, name: &str) -> Option<Node<'a, 'i>> {
+    node.children()
+        .find(|c| c.is_element() && c.tag_name().name() == name)
+}
+
+/// All element children of `node` with local name `name`.
+pub(crate) fn children<'a, 'i: 'a>(
+    node: Node<'a, 'i>,
+    name: &'a str,
+) -> impl Iterator<Item = Node<'a, 'i>> + 'a {
+    node.children()
+        .filter(move |c| c.is_element() && c.tag_name().name() == name)
+}
+
+/// Follows a path of child names from `node`.
+pub(crate) fn path<'a, 'i>(node: Node<'a, 'i>, names: &[&str]) -> Option<Node<'a, 'i>> {
+    names.iter().try_fold(node, |n, name| child(n, name))
+}
+
+/// The first `<extra><technique>` with the CGL or CMU462 profile (spec §1).
+pub(crate) fn extension_technique<'a, 'i>(node: Node<'a, 'i>) -> Option<Node<'a, 'i>> {
+    children(node, "extra")
+        .flat_map(|e| children(e, "technique"))
+        .find(|t| {
+            t.attribute("profile")
+                .is_some_and(|p| EXTENSION_PROFILES.contains(&p))
+        })
+}
+
+/// Label of an element for messages: the nearest ancestor-or-self with an id,
+/// then the tag path below it, e.g. `<geometry id="g">/mesh/polylist[1]/p`.
+/// Long paths keep their anchor and last few steps: `<visual_scene id="s">/…/node/node`.
+pub(crate) fn describe(node: Node) -> String {
+    const KEEP: usize = 6;
+    let mut steps = Vec::new();
+    let mut elided = false;
+    let mut anchor = String::new();
+    let mut cur = Some(node);
+    while let Some(n) = cur.filter(|n| n.is_element()) {
+        let name = n.tag_name().name();
+        if let Some(id) = n.attribute("id") {
+            anchor = format!("<{name} id=\"{}\">", clip(id));
+            break;
+        }
+        let parent = n.parent_element();
+        if parent.is_none() {
+            anchor = format!("<{name}>");
+            break;
+        }
+        if steps.len() < KEEP {
+            steps.push(step_name(n));
+        } else {
+            elided = true;
+        }
+        cur = parent;
+    }
+    if elided {
+        steps.push("…".to_string());
+    }
+    steps.push(anchor);
+    steps.reverse();
+    steps.join("/")
+}
+
+/// `name`, or `name[k]` when the parent has several children of that name.
+fn step_name(n: Node) -> String {
+    let name = n.tag_name().name();
+    let same = |s: &Node| s.tag_name().name() == name;
+    let before = std::iter::successors(n.prev_sibling_element(), |s| s.prev_sibling_element())
+        .filter(same)
+        .count();
+    let after = std::iter::successors(n.next_sibling_element(), |s| s.next_sibling_element())
+        .any(|s| same(&s));
+    if before > 0 || after {
+        format!("{name}[{before}]")
+    } else {
+        name.to_string()
+    }
+}
+
+/// Shortens untrusted text quoted in a message so a message stays one short line.
+pub(crate) fn clip(s: &str) -> String {
+    let one_line: String = s
+        .chars()
+        .map(|c| if c.is_control() { ' ' } else { c })
+        .collect();
+    if one_line.chars().count() > 40 {
+        format!("{}…", one_line.chars().take(40).collect::<String>())
+    } else {
+        one_line
+    }
+}
+
+/// Deepest element nesting handed to roxmltree, whose tokenizer recurses once
+/// per open element: far deeper input would overflow the stack.
+pub(crate) const MAX_XML_DEPTH: usize = 1024;
+
+/// Byte offset of the first element opened deeper than `limit`, found by a
+/// linear scan that follows the XML grammar far enough to count elements
+/// (comments, CDATA, processing instructions, quoted attribute values).
+/// Where the text is malformed the XML parser rejects it before reaching the
+/// point at which this count could be wrong.
+pub(crate) fn too_deep_at(text: &str, limit: usize) -> Option<usize> {
+    let b = text.as_bytes();
+    let find = |from: usize, pat: &[u8]| {
+        b.get(from..)?
+            .windows(pat.len())
+            .position(|w| w == pat)
+            .map(|k| from + k + pat.len())
+    };
+    let mut depth = 0usize;
+    let mut i = 0;
+    while i < b.len() {
+        if b[i] != b'<' {
+            i = b[i..]
+                .iter()
+                .position(|&c| c == b'<')
+                .map_or(b.len(), |k| i + k);
+            continue;
+        }
+        let rest = &b[i..];
+        let next = if rest.starts_with(b"<!--") {
+            find(i + 4, b"-->")
+        } else if rest.starts_with(b"<![CDATA[") {
+            find(i + 9, b"]]>")
+        } else if rest.starts_with(b"<?") {
+            find(i + 2, b"?>")
+        } else if rest.starts_with(b"<!") || rest.starts_with(b"</") {
+            if rest[1] == b'/' {
+                depth = depth.saturating_sub(1);
+            }
+            find(i + 2, b">")
+        } else {
+            let end = open_tag_end(b, i + 1)?;
+            if b[end - 2] != b'/' {
+                depth += 1;
+                if depth > limit {
+                    return Some(i);
+                }
+            }
+            Some(end)
+        };
+        i = next?;
+    }
+    None
+}
+
+/// Index just past the `>` closing a start tag that begins before `from`,
+/// skipping quoted attribute values (which may contain `>`).
+fn open_tag_end(b: &[u8], mut from: usize) -> Option<usize> {
+    let mut quote = None;
+    while from < b.len() {
+        let c = b[from];
+        match quote {
+            Some(q) if c == q => quote = None,
+            Some(_) => {}
+            None if c == b'"' || c == b'\'' => quote = Some(c),
+            None if c == b'>' => return Some(from + 1),
+            None => {}
+        }
+        from += 1;
+    }
+    None
+}
+
+/// 1-based line and column of byte `offset`, for messages about raw text.
+pub(crate) fn line_col(text: &str, offset: usize) -> (usize, usize) {
+    let before = &text[..offset.min(text.len())];
+    let line = before.matches('\n').count() + 1;
+    let col = before.len() - before.rfind('\n').map_or(0, |k| k + 1) + 1;
+    (line, col)
+}
