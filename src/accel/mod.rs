@@ -1,7 +1,12 @@
 //! Acceleration structures behind one trait: the native BVH and (feature
 //! `embree`) Embree. Integrators only ever see `dyn Accel`.
 
+pub mod brute;
 pub mod bvh;
+mod prims;
+
+pub use brute::BruteForce;
+pub use bvh::{Bvh, BvhStats};
 
 use crate::geometry::Ray;
 use crate::scene::{PrimHit, Scene};
