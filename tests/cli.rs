@@ -31,14 +31,14 @@ fn exr_output_and_adaptive_rate_map() {
     let dir = tempfile::tempdir().unwrap();
     let out = dir.path().join("x.exr");
     let st = ember()
-        .args(["-s", "64", "-a", "8", "0.1", "-m", "1", "-r", "24", "18", "-f"])
+        .args(["-s", "64", "-a", "8", "0.1", "-m", "1", "-r", "64", "48", "-f"])
         .arg(&out)
         .arg(shared("scenes/cs184/sky/CBspheres_lambertian.dae"))
         .output()
         .unwrap();
     assert!(st.status.success(), "{}", String::from_utf8_lossy(&st.stderr));
     let img = ember::image_io::read_image(&out).unwrap();
-    assert_eq!((img.width, img.height), (24, 18));
+    assert_eq!((img.width, img.height), (64, 48));
     // The light is seen directly at radiance 10: EXR keeps linear values above 1.
     assert!(img.pixels.iter().any(|p| p.x > 5.0));
     assert!(dir.path().join("x_rate.png").exists());

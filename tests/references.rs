@@ -38,8 +38,52 @@ fn clamp01(img: &Image) -> Image {
     Image { pixels: img.pixels.iter().map(|p| p.clamp(ember::Color::ZERO, ember::Color::ONE)).collect(), ..img.clone() }
 }
 
+/// How the image means are compared.
+#[derive(Clone, Copy, PartialEq)]
+enum MeanOf {
+    /// Plain linear mean.
+    All,
+    /// Mean after clamping to [0, 1] (the manifest's `mean_rgb_clamped`); unbiased only
+    /// where our render is nearly converged, i.e. for direct lighting.
+    Clamped,
+    /// Linear mean over the pixels whose reference value is below the threshold: drops
+    /// CBempty's two ceiling hot-spot pixels (~480), whose path-traced estimate is too noisy
+    /// to compare, without the bias that clamping a noisy image has.
+    ExcludingHotSpot(f32),
+}
+
+fn masked_mean(img: &Image, reference: &Image, limit: f32) -> ([f64; 3], usize) {
+    let mut s = [0f64; 3];
+    let mut n = 0;
+    for (p, r) in img.pixels.iter().zip(&reference.pixels) {
+        if r.max_element() < limit {
+            for c in 0..3 {
+                s[c] += p[c] as f64;
+            }
+            n += 1;
+        }
+    }
+    (s.map(|v| v / n as f64), n)
+}
+
+/// `img` with the pixels where `reference` reaches `limit` set to zero.
+fn mask(img: &Image, reference: &Image, limit: f32) -> Image {
+    let pixels = img.pixels.iter().zip(&reference.pixels).map(|(p, r)| if r.max_element() < limit { *p } else { ember::Color::ZERO }).collect();
+    Image { pixels, ..img.clone() }
+}
+
+trait Masked {
+    fn masked(&self, reference: &Image, limit: f32) -> Self;
+}
+
+impl Masked for common::HalfRenders {
+    fn masked(&self, reference: &Image, limit: f32) -> Self {
+        common::HalfRenders { a: mask(&self.a, reference, limit), b: mask(&self.b, reference, limit), avg: mask(&self.avg, reference, limit) }
+    }
+}
+
 /// Renders `scene` at 160×120 with max depth `m` and checks it against `file`.
-fn check(scene_rel: &str, file: &str, m: u32, spp: u32, clamped_mean: bool) {
+fn check(scene_rel: &str, file: &str, m: u32, spp: u32, mean_of: MeanOf) {
     let r = reference(file);
     let scene = load(scene_rel);
     let settings = RenderSettings {
@@ -57,53 +101,82 @@ fn check(scene_rel: &str, file: &str, m: u32, spp: u32, clamped_mean: bool) {
     assert_eq!((r.image.width, r.image.height), (160, 120));
 
     // 1. Image mean: 1.5 % of the reference plus 4 standard errors of our own mean.
-    let (ours, want) = if clamped_mean { (clamp01(&h.avg).mean(), r.mean_clamped) } else { (h.avg.mean(), r.mean) };
-    let (ca, cb) = (clamp01(&h.a), clamp01(&h.b));
-    let se_mean = if clamped_mean { ca.rmse(&cb) / 2.0 / (ca.pixels.len() as f64).sqrt() } else { h.noise_of_mean() };
+    let (ours, want, se_mean) = match mean_of {
+        MeanOf::All => (h.avg.mean().to_array().map(f64::from), r.mean, h.noise_of_mean()),
+        MeanOf::Clamped => {
+            let (ca, cb) = (clamp01(&h.a), clamp01(&h.b));
+            let se = ca.rmse(&cb) / 2.0 / (ca.pixels.len() as f64).sqrt();
+            (clamp01(&h.avg).mean().to_array().map(f64::from), r.mean_clamped, se)
+        }
+        MeanOf::ExcludingHotSpot(limit) => {
+            let (ours, n) = masked_mean(&h.avg, &r.image, limit);
+            let (want, _) = masked_mean(&r.image, &r.image, limit);
+            assert!(n + 8 >= r.image.pixels.len(), "{file}: the mask drops more than the hot spot");
+            (ours, want, h.noise_per_pixel() / (n as f64).sqrt())
+        }
+    };
     for c in 0..3 {
         let tol = 0.015 * want[c] + 4.0 * se_mean;
-        assert!((ours[c] as f64 - want[c]).abs() <= tol, "{file}: mean[{c}] = {} vs reference {} (tol {tol})", ours[c], want[c]);
+        assert!((ours[c] - want[c]).abs() <= tol, "{file}: mean[{c}] = {} vs reference {} (tol {tol})", ours[c], want[c]);
     }
 
     // 2. Block RMSE at the noise floor: up to 3× the expected value plus 0.002 for edges.
-    let rmse8 = h.avg.block_average(8).rmse(&r.image.block_average(8));
+    let (h, reference) = match mean_of {
+        MeanOf::ExcludingHotSpot(limit) => (h.masked(&r.image, limit), mask(&r.image, &r.image, limit)),
+        _ => (h, r.image.clone()),
+    };
+    let rmse8 = h.avg.block_average(8).rmse(&reference.block_average(8));
     let expected = (r.noise_box8.powi(2) + h.noise_box8().powi(2)).sqrt();
     let tol = 3.0 * expected + 0.002;
-    eprintln!("{file}: box8 RMSE {rmse8:.5}, expected noise {expected:.5}, tol {tol:.5}; mean {ours} vs {want:?}");
+    eprintln!("{file}: box8 RMSE {rmse8:.5}, expected noise {expected:.5}, tol {tol:.5}; mean {ours:?} vs {want:?}");
     assert!(rmse8 <= tol, "{file}: 8x8-block RMSE {rmse8} exceeds {tol} (noise floor {expected})");
 }
 
 #[test]
 fn cbspheres_lambertian_m1() {
-    check("scenes/cs184/sky/CBspheres_lambertian.dae", "CBspheres_lambertian_m1.exr", 1, 64, false);
+    check("scenes/cs184/sky/CBspheres_lambertian.dae", "CBspheres_lambertian_m1.exr", 1, 64, MeanOf::All);
 }
 
 #[test]
 fn cbspheres_lambertian_m5() {
-    check("scenes/cs184/sky/CBspheres_lambertian.dae", "CBspheres_lambertian_m5.exr", 5, 64, false);
+    check("scenes/cs184/sky/CBspheres_lambertian.dae", "CBspheres_lambertian_m5.exr", 5, 64, MeanOf::All);
 }
 
 #[test]
 fn cbbunny_m1() {
-    check("scenes/cs184/sky/CBbunny.dae", "CBbunny_m1.exr", 1, 64, false);
+    check("scenes/cs184/sky/CBbunny.dae", "CBbunny_m1.exr", 1, 64, MeanOf::All);
 }
 
 #[test]
 fn cbbunny_m5() {
-    check("scenes/cs184/sky/CBbunny.dae", "CBbunny_m5.exr", 5, 64, false);
+    check("scenes/cs184/sky/CBbunny.dae", "CBbunny_m5.exr", 5, 64, MeanOf::All);
 }
 
 #[test]
 fn cbempty_m1() {
-    check("scenes/cs184/sky/CBempty.dae", "CBempty_m1.exr", 1, 64, true);
+    check("scenes/cs184/sky/CBempty.dae", "CBempty_m1.exr", 1, 64, MeanOf::Clamped);
 }
 
 #[test]
 fn cbempty_m5() {
-    check("scenes/cs184/sky/CBempty.dae", "CBempty_m5.exr", 5, 128, true);
+    check("scenes/cs184/sky/CBempty.dae", "CBempty_m5.exr", 5, 128, MeanOf::ExcludingHotSpot(20.0));
 }
 
 #[test]
 fn cbspheres_glass_mirror_m8() {
-    check("scenes/cs184/sky/CBspheres.dae", "CBspheres_m8.exr", 8, 128, false);
+    check("scenes/cs184/sky/CBspheres.dae", "CBspheres_m8.exr", 8, 128, MeanOf::All);
+}
+
+/// Not a test: prints the masked CBempty m5 mean at high spp (EMBER_SPP), to check for bias by hand.
+#[test]
+#[ignore]
+fn cbempty_m5_high_spp_probe() {
+    let spp: u32 = std::env::var("EMBER_SPP").ok().and_then(|s| s.parse().ok()).unwrap_or(2048);
+    let r = reference("CBempty_m5.exr");
+    let scene = load("scenes/cs184/sky/CBempty.dae");
+    let s = RenderSettings { width: 160, height: 120, spp, max_depth: 5, strategy: DirectStrategy::Mis, seed: 99, ..Default::default() };
+    let h = render_halves(&scene, &s, AccelKind::Native(BvhBuilder::Sah));
+    let (ours, n) = masked_mean(&h.avg, &r.image, 20.0);
+    let (want, _) = masked_mean(&r.image, &r.image, 20.0);
+    eprintln!("spp {spp}: masked mean {ours:?} vs {want:?} over {n} px; se {}", h.noise_per_pixel() / (n as f64).sqrt());
 }
