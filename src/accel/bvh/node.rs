@@ -75,17 +75,59 @@ pub(crate) struct RayBox {
     /// All-ones lanes where the direction is negative.
     neg: [u32; 4],
     t_min: f32,
+    /// The same in registers (building them per node would cost loads that debug
+    /// builds also bounds-check).
+    #[cfg(target_arch = "x86_64")]
+    simd: SimdRay,
+}
+
+#[cfg(target_arch = "x86_64")]
+#[derive(Clone, Copy, Debug)]
+struct SimdRay {
+    o: std::arch::x86_64::__m128,
+    inv: std::arch::x86_64::__m128,
+    neg: std::arch::x86_64::__m128,
+    t_min: std::arch::x86_64::__m128,
+    xyz: std::arch::x86_64::__m128,
+}
+
+#[cfg(target_arch = "x86_64")]
+impl SimdRay {
+    fn new(o: [f32; 4], inv: [f32; 4], neg: [u32; 4], t_min: f32) -> Self {
+        use std::arch::x86_64::*;
+        let bits = |v: u32| v as i32;
+        // SAFETY: SSE2 is part of the x86_64 baseline; these only build registers.
+        unsafe {
+            SimdRay {
+                o: _mm_set_ps(o[3], o[2], o[1], o[0]),
+                inv: _mm_set_ps(inv[3], inv[2], inv[1], inv[0]),
+                neg: _mm_castsi128_ps(_mm_set_epi32(
+                    bits(neg[3]),
+                    bits(neg[2]),
+                    bits(neg[1]),
+                    bits(neg[0]),
+                )),
+                t_min: _mm_set1_ps(t_min),
+                xyz: _mm_castsi128_ps(_mm_set_epi32(0, -1, -1, -1)),
+            }
+        }
+    }
 }
 
 impl RayBox {
     pub fn new(ray: &Ray) -> Self {
         let inv = ray.d.recip();
         let neg = |v: f32| if v.is_sign_negative() { u32::MAX } else { 0 };
+        let o = [ray.o.x, ray.o.y, ray.o.z, 0.0];
+        let inv = [inv.x, inv.y, inv.z, 0.0];
+        let neg = [neg(ray.d.x), neg(ray.d.y), neg(ray.d.z), 0];
         RayBox {
-            o: [ray.o.x, ray.o.y, ray.o.z, 0.0],
-            inv: [inv.x, inv.y, inv.z, 0.0],
-            neg: [neg(ray.d.x), neg(ray.d.y), neg(ray.d.z), 0],
+            o,
+            inv,
+            neg,
             t_min: ray.t_min,
+            #[cfg(target_arch = "x86_64")]
+            simd: SimdRay::new(o, inv, neg, ray.t_min),
         }
     }
 
@@ -132,22 +174,28 @@ impl RayBox {
     #[inline(always)]
     pub fn hits_sse(&self, node: &BvhNode, t_max: f32) -> bool {
         use std::arch::x86_64::*;
+        let SimdRay {
+            o,
+            inv,
+            neg,
+            t_min,
+            xyz,
+        } = self.simd;
         // SAFETY: BvhNode is repr(C, align(32)) with `min`+`offset` and
-        // `max`+`count_axis` as two 16-byte halves; the ray arrays are 4 floats.
-        // SSE2 is part of the x86_64 baseline.
+        // `max`+`count_axis` as two aligned 16-byte halves. SSE2 is part of the
+        // x86_64 baseline.
         unsafe {
-            let p = node as *const BvhNode as *const f32;
-            let lo = _mm_load_ps(p);
-            let hi = _mm_load_ps(p.add(4));
-            let o = _mm_loadu_ps(self.o.as_ptr());
-            let inv = _mm_loadu_ps(self.inv.as_ptr());
-            let neg = _mm_loadu_ps(self.neg.as_ptr() as *const f32);
+            let p = node as *const BvhNode as *const __m128;
+            // The fourth lanes hold small integers, i.e. denormals as floats, which
+            // cost a microcode assist per multiply on some CPUs: clear them.
+            let lo = _mm_and_ps(*p, xyz);
+            let hi = _mm_and_ps(*p.add(1), xyz);
             let swap = _mm_and_ps(_mm_xor_ps(lo, hi), neg);
             let near = _mm_xor_ps(lo, swap);
             let far = _mm_xor_ps(hi, swap);
             let tn = _mm_mul_ps(_mm_sub_ps(near, o), inv);
             let tf = _mm_mul_ps(_mm_sub_ps(far, o), inv);
-            let tn = _mm_max_ps(tn, _mm_set1_ps(self.t_min));
+            let tn = _mm_max_ps(tn, t_min);
             let tf = _mm_min_ps(tf, _mm_set1_ps(t_max));
             let entry = _mm_max_ps(
                 _mm_max_ps(tn, _mm_shuffle_ps(tn, tn, 0x55)),
