@@ -45,6 +45,42 @@ pub enum Command {
 
 #[derive(Subcommand, Debug)]
 pub enum BenchCommand {
+    /// Error against render time for each method (direct: hemisphere / light / MIS; GI: roulette, -l, adaptive, backends).
+    /// Writes <out>/<scene>_m<M>.csv and error-vs-time charts (PNG and SVG), prints the time each method needs to reach an error.
+    Converge {
+        /// The .dae scene.
+        scene: PathBuf,
+        /// Reference image (linear EXR at the render resolution). Default: ember's own high-spp render, cached under <out>/cache.
+        #[arg(long)]
+        reference: Option<PathBuf>,
+        /// Per-pixel RMS noise of --reference, if known (e.g. noise_rmse_per_pixel from the references' manifest); subtracted from every MSE.
+        #[arg(long)]
+        reference_noise: Option<f64>,
+        /// Max ray depth.
+        #[arg(short = 'm', default_value_t = 1)]
+        max_depth: u32,
+        /// Resolution.
+        #[arg(short = 'r', num_args = 2, value_names = ["WIDTH", "HEIGHT"], default_values_t = [160, 120])]
+        resolution: Vec<u32>,
+        /// Largest spp of the doubling sequence 1, 2, 4, ...
+        #[arg(long, default_value_t = 1024)]
+        max_spp: u32,
+        /// Stop doubling a method once one render takes longer than this (seconds).
+        #[arg(long, default_value_t = 8.0)]
+        max_seconds: f64,
+        /// spp of ember's own reference.
+        #[arg(long, default_value_t = 8192)]
+        reference_spp: u32,
+        /// RMSE whose time-to-reach is tabulated (default: the largest final RMSE among the methods).
+        #[arg(long)]
+        target_rmse: Option<f64>,
+        /// Output folder.
+        #[arg(long, default_value = "bench-out")]
+        out: PathBuf,
+        /// Random seed.
+        #[arg(long, default_value_t = 0)]
+        seed: u64,
+    },
     /// Samples per second for CBspheres_lambertian and CBbunny at 480x360, 64 spp, -m 5.
     Render {
         /// Scenes to render (default: the two CS184 scenes from ../shared).
@@ -403,6 +439,46 @@ fn rate_path(out: &Path) -> PathBuf {
 
 fn bench(which: BenchCommand) -> Result<()> {
     match which {
+        BenchCommand::Converge {
+            scene,
+            reference,
+            reference_noise,
+            max_depth,
+            resolution,
+            max_spp,
+            max_seconds,
+            reference_spp,
+            target_rmse,
+            out,
+            seed,
+        } => {
+            check_resolution(resolution[0], resolution[1])?;
+            std::fs::create_dir_all(&out).with_context(|| format!("{}: cannot create", out.display()))?;
+            let opts = ember::bench::converge::ConvergeOptions {
+                scene: scene.clone(),
+                reference,
+                reference_noise,
+                width: resolution[0],
+                height: resolution[1],
+                max_depth,
+                max_spp,
+                max_seconds_per_point: max_seconds,
+                reference_spp,
+                out_dir: out.clone(),
+                target_rmse,
+                seed,
+                compare_backends: true,
+            };
+            let report = ember::bench::converge::run(&opts, &mut |m| eprintln!("ember: {m}"))?;
+            let stem_name = scene.file_stem().map(|s| s.to_string_lossy().into_owned()).unwrap_or_default();
+            let stem = out.join(format!("{stem_name}_m{max_depth}"));
+            let title = format!("{stem_name}, -m {max_depth}, {}x{}: error vs time", resolution[0], resolution[1]);
+            report.write(&stem, &stem_name, &title)?;
+            println!("{}", report.reference_note);
+            println!("{}", report.efficiency_table());
+            println!("wrote {}.csv and {}_rmse.png/.svg, {}_relmse.png/.svg", stem.display(), stem.display(), stem.display());
+            Ok(())
+        }
         BenchCommand::Render { scenes, spp, max_depth, repeat, accel: a } => {
             let scenes = if scenes.is_empty() {
                 let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("../shared/scenes/cs184/sky");

@@ -5,7 +5,7 @@ use crate::accel::Accel;
 use crate::camera::Camera;
 use crate::color::{is_finite, luminance};
 use crate::film::{heat_map, Image};
-use crate::integrators::{debug, DirectStrategy, PathIntegrator, Roulette};
+use crate::integrators::{debug, DirectStrategy, PathIntegrator, PathSettings, Roulette};
 use crate::sampling::Sampler;
 use crate::scene::Scene;
 use crate::Color;
@@ -52,6 +52,18 @@ pub struct RenderSettings {
     pub adaptive: Option<Adaptive>,
     pub shading: Shading,
     pub seed: u64,
+}
+
+impl RenderSettings {
+    pub fn path_settings(&self) -> PathSettings {
+        PathSettings {
+            max_depth: self.max_depth,
+            accumulate: self.accumulate,
+            light_samples: self.light_samples,
+            strategy: self.strategy,
+            roulette: self.roulette,
+        }
+    }
 }
 
 impl Default for RenderSettings {
@@ -108,15 +120,7 @@ pub fn render(
 ) -> RenderOutput {
     let (w, h) = (settings.width, settings.height);
     let tiles: Vec<(u32, u32)> = (0..h.div_ceil(TILE)).flat_map(|ty| (0..w.div_ceil(TILE)).map(move |tx| (tx, ty))).collect();
-    let integrator = PathIntegrator {
-        scene,
-        accel,
-        max_depth: settings.max_depth,
-        accumulate: settings.accumulate,
-        light_samples: settings.light_samples,
-        strategy: settings.strategy,
-        roulette: settings.roulette,
-    };
+    let integrator = PathIntegrator::new(scene, accel, settings.path_settings());
     let results: Vec<Vec<PixelResult>> = tiles
         .par_iter()
         .map(|&(tx, ty)| {

@@ -4,7 +4,7 @@
 use ember::accel::{self, AccelKind, BvhBuilder};
 use ember::camera::Camera;
 use ember::geometry::{Aabb, Ray};
-use ember::integrators::{DirectStrategy, PathIntegrator, Roulette};
+use ember::integrators::{DirectStrategy, PathIntegrator, PathSettings, Roulette};
 use ember::lights::Light;
 use ember::materials::Material;
 use ember::render::{render, RenderSettings};
@@ -166,15 +166,8 @@ fn area_light_irradiance_matches_closed_form() {
     let accel = accel::build(&scene, AccelKind::Native(BvhBuilder::Sah)).unwrap();
     let points = [Vec3::new(0.0, 0.0, 0.0), Vec3::new(0.3, 0.0, 0.2), Vec3::new(1.5, 0.0, -0.7), Vec3::new(-2.0, 0.0, 3.0)];
     for strategy in [DirectStrategy::Light, DirectStrategy::Hemisphere, DirectStrategy::Mis] {
-        let integ = PathIntegrator {
-            scene: &scene,
-            accel: accel.as_ref(),
-            max_depth: 1,
-            accumulate: true,
-            light_samples: 4,
-            strategy,
-            roulette: Roulette::Off,
-        };
+        let settings = PathSettings { max_depth: 1, accumulate: true, light_samples: 4, strategy, roulette: Roulette::Off };
+        let integ = PathIntegrator::new(&scene, accel.as_ref(), settings);
         for (k, &x) in points.iter().enumerate() {
             let want = albedo / std::f32::consts::PI * polygon_irradiance(x, Vec3::Y, &quad, le);
             let eye = x + Vec3::new(0.05, 0.1, 0.08);

@@ -5,7 +5,7 @@
 pub mod debug;
 pub mod path;
 
-pub use path::PathIntegrator;
+pub use path::{PathIntegrator, PathSettings};
 
 /// How light arriving directly from emitters is estimated at each scattering vertex.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]

@@ -19,14 +19,25 @@ use glam::Vec3;
 /// surface does not occlude it; relative, so it works at every scene scale.
 const SHADOW_EPSILON: f32 = 1e-4;
 
-pub struct PathIntegrator<'a> {
-    pub scene: &'a Scene,
-    pub accel: &'a dyn Accel,
+/// The parameters of spec §7 that shape the estimator.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct PathSettings {
     pub max_depth: u32,
     pub accumulate: bool,
     pub light_samples: u32,
     pub strategy: DirectStrategy,
     pub roulette: Roulette,
+}
+
+pub struct PathIntegrator<'a> {
+    scene: &'a Scene,
+    accel: &'a dyn Accel,
+    max_depth: u32,
+    accumulate: bool,
+    light_samples: u32,
+    strategy: DirectStrategy,
+    roulette: Roulette,
+    unsampled_emitters: bool,
 }
 
 /// State of the vertex a ray just left, needed to weight emission it finds.
@@ -37,7 +48,20 @@ struct PrevVertex {
     delta: bool,
 }
 
-impl PathIntegrator<'_> {
+impl<'a> PathIntegrator<'a> {
+    pub fn new(scene: &'a Scene, accel: &'a dyn Accel, s: PathSettings) -> Self {
+        PathIntegrator {
+            scene,
+            accel,
+            max_depth: s.max_depth,
+            accumulate: s.accumulate,
+            light_samples: s.light_samples.max(1),
+            strategy: s.strategy,
+            roulette: s.roulette,
+            unsampled_emitters: scene.has_unsampled_emitters(),
+        }
+    }
+
     #[inline]
     fn counts(&self, bounces: u32) -> bool {
         if self.accumulate {
@@ -76,6 +100,10 @@ impl PathIntegrator<'_> {
                 l += beta * self.direct(&si, &frame, material, wo, sampler);
             }
             let Some(bs) = material.sample(wo, sampler.next_f32(), sampler.next_2d()) else { break };
+            if bounces >= self.max_depth && !bs.delta && !self.bsdf_rays_find_light() {
+                // The ray could only find emission that this strategy gives weight 0.
+                break;
+            }
             let wi_world = frame.to_world(bs.wi);
             if !geometrically_consistent(&si, wo_world, wi_world, bs.wi.z * wo.z > 0.0) {
                 break;
@@ -95,6 +123,16 @@ impl PathIntegrator<'_> {
             ray = Ray::new(offset_ray_origin(si.p, si.p_error, si.ng, wi_world), wi_world);
         }
         l
+    }
+
+    /// Whether a BSDF-sampled ray leaving a non-delta vertex can add light: with MIS,
+    /// or when the scene has emitters that light sampling cannot pick.
+    fn bsdf_rays_find_light(&self) -> bool {
+        match self.strategy {
+            DirectStrategy::Mis => true,
+            DirectStrategy::Hemisphere => false,
+            DirectStrategy::Light => self.unsampled_emitters,
+        }
     }
 
     /// MIS weight of emission found by a BSDF-sampled ray leaving `prev`. `light` is

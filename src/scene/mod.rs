@@ -114,6 +114,14 @@ impl Scene {
         le
     }
 
+    /// Emitters that no `Light` represents (emission materials outside area lights,
+    /// attached surface emission): only BSDF sampling can find them.
+    pub fn has_unsampled_emitters(&self) -> bool {
+        !self.surface_emission.is_empty()
+            || self.triangles.iter().any(|t| t.light == NO_LIGHT && matches!(self.materials[t.material as usize], Material::Emission { .. }))
+            || self.spheres.iter().any(|s| matches!(self.materials[s.material as usize], Material::Emission { .. }))
+    }
+
     pub fn num_prims(&self) -> usize {
         self.triangles.len() + self.spheres.len()
     }
