@@ -8,6 +8,7 @@ pub mod bench;
 pub mod camera;
 pub mod color;
 pub mod geometry;
+pub mod info;
 pub mod lights;
 pub mod materials;
 pub mod sampling;

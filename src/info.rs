@@ -1,0 +1,156 @@
+//! The text of `ember info`: what the loader made of a scene file, so a user
+//! can check counts, lights, materials and the derived camera at a glance.
+
+use crate::camera::Camera;
+use crate::lights::Light;
+use crate::materials::Material;
+use crate::scene::{Scene, NO_LIGHT};
+use glam::Vec3;
+use std::fmt::Write;
+
+/// Human-readable summary of `scene` as rendered at `width × height`.
+pub fn scene_info(scene: &Scene, width: u32, height: u32) -> String {
+    let mut out = String::new();
+    // Writing into a String cannot fail.
+    let _ = write_info(&mut out, scene, width, height);
+    out
+}
+
+fn write_info(out: &mut String, scene: &Scene, width: u32, height: u32) -> std::fmt::Result {
+    let light_tris = scene
+        .triangles
+        .iter()
+        .filter(|t| t.light != NO_LIGHT)
+        .count();
+    writeln!(
+        out,
+        "triangles: {} ({} mesh, {} area-light)",
+        scene.triangles.len(),
+        scene.triangles.len() - light_tris,
+        light_tris
+    )?;
+    writeln!(out, "spheres: {}", scene.spheres.len())?;
+    writeln!(out, "lights: {}", scene.lights.len())?;
+    for (i, l) in scene.lights.iter().enumerate() {
+        writeln!(out, "  [{i}] {}", describe_light(l))?;
+    }
+    writeln!(out, "materials: {}", scene.materials.len())?;
+    for (i, m) in scene.materials.iter().enumerate() {
+        writeln!(out, "  [{i}] {}", describe_material(m))?;
+    }
+    write_camera(out, scene, width, height)?;
+    if scene.bounds.is_empty() {
+        writeln!(out, "bounds: empty")?;
+    } else {
+        writeln!(
+            out,
+            "bounds: min {} max {} (diagonal {:.6})",
+            v(scene.bounds.min),
+            v(scene.bounds.max),
+            scene.bounds.diagonal().length()
+        )?;
+    }
+    writeln!(out, "warnings: {}", scene.warnings.len())?;
+    for w in &scene.warnings {
+        writeln!(out, "  {w}")?;
+    }
+    Ok(())
+}
+
+fn write_camera(out: &mut String, scene: &Scene, width: u32, height: u32) -> std::fmt::Result {
+    let cam = Camera::new(&scene.camera, &scene.bounds, width.max(1), height.max(1));
+    let (hfov, vfov) = cam.fov_degrees();
+    writeln!(out, "camera ({width}x{height}):")?;
+    writeln!(out, "  eye {}", v(cam.eye))?;
+    writeln!(out, "  forward {}", v(cam.forward))?;
+    writeln!(out, "  up {}", v(cam.up))?;
+    writeln!(out, "  hfov {hfov:.5} deg, vfov {vfov:.5} deg")
+}
+
+fn describe_light(l: &Light) -> String {
+    match *l {
+        Light::Area {
+            centre,
+            ex,
+            ey,
+            normal,
+            area,
+            radiance,
+        } => format!(
+            "area: radiance {}, centre {}, size {:.6} x {:.6} (area {area:.6}), normal {}",
+            v(radiance),
+            v(centre),
+            ex.length(),
+            ey.length(),
+            v(normal)
+        ),
+        Light::Point {
+            position,
+            intensity,
+        } => format!(
+            "point: intensity {}, position {}",
+            v(intensity),
+            v(position)
+        ),
+        Light::Directional {
+            direction,
+            irradiance,
+        } => format!(
+            "directional: irradiance {}, direction {}",
+            v(irradiance),
+            v(direction)
+        ),
+        Light::Ambient { radiance } => {
+            format!("ambient (upper hemisphere): radiance {}", v(radiance))
+        }
+    }
+}
+
+fn describe_material(m: &Material) -> String {
+    match *m {
+        Material::Lambertian { albedo } => format!("lambertian: albedo {}", v(albedo)),
+        Material::Mirror { reflectance } => format!("mirror: reflectance {}", v(reflectance)),
+        Material::Glass {
+            ior,
+            reflectance,
+            transmittance,
+        } => format!(
+            "glass: ior {ior}, reflectance {}, transmittance {}",
+            v(reflectance),
+            v(transmittance)
+        ),
+        Material::Refraction { ior, transmittance } => {
+            format!("refraction: ior {ior}, transmittance {}", v(transmittance))
+        }
+        Material::Microfacet { alpha, eta, k } => {
+            format!("microfacet: alpha {alpha}, eta {}, k {}", v(eta), v(k))
+        }
+        Material::Emission { radiance } => format!("emission: radiance {}", v(radiance)),
+    }
+}
+
+/// A vector with trailing zeros trimmed: `(0, 0.75, 4.802344)`.
+fn v(x: Vec3) -> String {
+    let f = |c: f32| {
+        let s = format!("{c:.6}");
+        let s = s.trim_end_matches('0').trim_end_matches('.');
+        // Tiny negatives such as −1e-8 would print as "-0".
+        if s == "-0" {
+            "0".to_string()
+        } else {
+            s.to_string()
+        }
+    };
+    format!("({}, {}, {})", f(x.x), f(x.y), f(x.z))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn vectors_print_compactly() {
+        assert_eq!(v(Vec3::new(-0.0, 0.75, 4.8023443)), "(0, 0.75, 4.802344)");
+        assert_eq!(v(Vec3::new(10.0, -1.5, 100.0)), "(10, -1.5, 100)");
+    }
+}

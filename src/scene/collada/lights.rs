@@ -1,0 +1,125 @@
+//! `<light>` → `Light` (spec §5).
+
+use super::transform::{linear, point};
+use super::xml::{child, extension_technique, Ctx};
+use super::LoadError;
+use crate::lights::Light;
+use crate::Color;
+use glam::{DMat4, DVec3, Vec3};
+use roxmltree::Node;
+
+const TYPES: [&str; 4] = ["area", "point", "directional", "ambient"];
+
+/// The light placed by world matrix `w`, or `None` (with a warning) for an
+/// unsupported or degenerate one.
+pub(crate) fn read_light(
+    ctx: &mut Ctx,
+    light: Node,
+    w: &DMat4,
+) -> Result<Option<Light>, LoadError> {
+    let extension = extension_technique(light)
+        .and_then(|t| t.first_element_child())
+        .filter(|e| TYPES.contains(&e.tag_name().name()));
+    let common = child(light, "technique_common").and_then(|t| t.first_element_child());
+    let Some(kind) = extension.or(common) else {
+        ctx.warn(light, "light has no type; skipped");
+        return Ok(None);
+    };
+    let name = kind.tag_name().name();
+    if !TYPES.contains(&name) {
+        ctx.warn(kind, format!("{name} lights are not supported; skipped"));
+        return Ok(None);
+    }
+    let c = Color::from(
+        ctx.child_rgb(kind, "color")?
+            .ok_or_else(|| ctx.err(kind, "missing <color>"))?,
+    );
+    let light = match name {
+        "area" => return area(ctx, kind, w, c),
+        "point" => Light::Point {
+            position: finite(ctx, kind, point(w, DVec3::ZERO))?,
+            intensity: c,
+        },
+        "directional" => {
+            let t = linear(w) * DVec3::NEG_Z;
+            if t.length_squared() == 0.0 {
+                return Err(ctx.err(kind, "the node transform has no −Z direction"));
+            }
+            Light::Directional {
+                direction: finite(ctx, kind, t.normalize())?,
+                irradiance: c,
+            }
+        }
+        // The hemisphere is about world up whatever the node transform says.
+        _ => Light::Ambient { radiance: c },
+    };
+    Ok(Some(light))
+}
+
+/// Rectangle `centre + s·ex + t·ey`, `s,t ∈ [−½,½]`, facing the node's local −Z.
+fn area(ctx: &mut Ctx, kind: Node, w: &DMat4, c: Color) -> Result<Option<Light>, LoadError> {
+    let w3 = linear(w);
+    let centre = finite(ctx, kind, point(w, DVec3::ZERO))?;
+    let ex = finite(ctx, kind, w3 * DVec3::X)?;
+    let ey = finite(ctx, kind, w3 * DVec3::Y)?;
+    let cross = ex.cross(ey);
+    let area = cross.length();
+    let usable = area.is_finite() && area > 0.0;
+    if !usable {
+        ctx.warn(kind, "area light has zero area; skipped");
+        return Ok(None);
+    }
+    let plane_normal = cross / area;
+    let local_neg_z = (w3 * DVec3::NEG_Z).as_vec3();
+    // A −Z lying in the plane says nothing; then −(ex × ey), the local −Z of a rotation.
+    let normal = if plane_normal.dot(local_neg_z) > 0.0 {
+        plane_normal
+    } else {
+        -plane_normal
+    };
+    Ok(Some(Light::Area {
+        centre,
+        ex,
+        ey,
+        normal,
+        area,
+        radiance: c,
+    }))
+}
+
+fn finite(ctx: &Ctx, node: Node, v: DVec3) -> Result<Vec3, LoadError> {
+    let v = v.as_vec3();
+    if v.is_finite() {
+        Ok(v)
+    } else {
+        Err(ctx.err(
+            node,
+            "the node transform gives a non-finite light position or axis",
+        ))
+    }
+}
+
+/// The two triangles of an area light's surface, wound so that their
+/// geometric normal `(p1−p0)×(p2−p0)` is the emitting normal.
+pub(crate) fn area_quad(light: &Light) -> Option<[[Vec3; 3]; 2]> {
+    let Light::Area {
+        centre,
+        ex,
+        ey,
+        normal,
+        ..
+    } = *light
+    else {
+        return None;
+    };
+    let (hx, hy) = (0.5 * ex, 0.5 * ey);
+    let p00 = centre - hx - hy;
+    let p10 = centre + hx - hy;
+    let p11 = centre + hx + hy;
+    let p01 = centre - hx + hy;
+    Some(if ex.cross(ey).dot(normal) > 0.0 {
+        [[p00, p10, p11], [p00, p11, p01]]
+    } else {
+        [[p00, p11, p10], [p00, p01, p11]]
+    })
+}

@@ -1,0 +1,131 @@
+//! Node transforms and the up-axis conversion (spec §2). Matrices are composed
+//! in f64 so long chains of nested nodes do not accumulate f32 error.
+
+use super::xml::{child, Ctx};
+use super::LoadError;
+use glam::{DMat3, DMat4, DVec3, DVec4};
+use roxmltree::{Document, Node};
+
+/// `U`: maps the file's up axis to the renderer's +Y-up world.
+pub(crate) fn up_axis_matrix(ctx: &mut Ctx, doc: &Document) -> DMat4 {
+    let Some(node) = child(doc.root_element(), "asset").and_then(|a| child(a, "up_axis")) else {
+        return DMat4::IDENTITY;
+    };
+    let rows: [[f64; 3]; 3] = match node.text().unwrap_or("").trim() {
+        "Y_UP" => return DMat4::IDENTITY,
+        // (x, y, z) → (−x, z, y)
+        "Z_UP" => [[-1.0, 0.0, 0.0], [0.0, 0.0, 1.0], [0.0, 1.0, 0.0]],
+        // (x, y, z) → (y, x, −z)
+        "X_UP" => [[0.0, 1.0, 0.0], [1.0, 0.0, 0.0], [0.0, 0.0, -1.0]],
+        other => {
+            let msg = format!(
+                "unknown up axis \"{}\"; using Y_UP",
+                super::xml::clip(other)
+            );
+            ctx.warn(node, msg);
+            return DMat4::IDENTITY;
+        }
+    };
+    DMat4::from_mat3(DMat3::from_cols_array_2d(&rows).transpose())
+}
+
+/// `L = T1·T2·…·Tn` over the transform children of a `<node>`, in document order.
+pub(crate) fn local_matrix(ctx: &mut Ctx, node: Node) -> Result<DMat4, LoadError> {
+    let mut m = DMat4::IDENTITY;
+    for t in node.children().filter(Node::is_element) {
+        let step = match t.tag_name().name() {
+            "matrix" => matrix(ctx, t)?,
+            "translate" => DMat4::from_translation(DVec3::from(ctx.exact::<3>(t)?)),
+            "scale" => DMat4::from_scale(DVec3::from(ctx.exact::<3>(t)?)),
+            "rotate" => rotation(ctx, t)?,
+            "lookat" | "skew" => {
+                ctx.warn(t, "transform is not supported; ignored");
+                continue;
+            }
+            _ => continue,
+        };
+        m *= step;
+    }
+    Ok(m)
+}
+
+/// A row-major `<matrix>`; missing trailing entries are 0 (spec §2).
+fn matrix(ctx: &mut Ctx, node: Node) -> Result<DMat4, LoadError> {
+    let v = ctx.numbers::<f64>(node)?;
+    match v.len() {
+        0 => return Err(ctx.err(node, "matrix has no numbers")),
+        1..=15 => ctx.warn(
+            node,
+            format!(
+                "matrix has {} numbers instead of 16; the missing entries are taken as 0",
+                v.len()
+            ),
+        ),
+        16 => {}
+        n => return Err(ctx.err(node, format!("matrix has {n} numbers, expected 16"))),
+    }
+    let mut a = [0.0; 16];
+    a[..v.len()].copy_from_slice(&v);
+    // glam is column-major; the file is row-major.
+    Ok(DMat4::from_cols_array(&a).transpose())
+}
+
+/// `<rotate> ax ay az deg`: right-handed rotation about the axis.
+fn rotation(ctx: &Ctx, node: Node) -> Result<DMat4, LoadError> {
+    let [x, y, z, deg] = ctx.exact::<4>(node)?;
+    let axis = DVec3::new(x, y, z);
+    if axis.length_squared() == 0.0 {
+        return Err(ctx.err(node, "rotation axis is zero"));
+    }
+    Ok(DMat4::from_axis_angle(axis.normalize(), deg.to_radians()))
+}
+
+/// The linear part `W3` of a transform.
+pub(crate) fn linear(m: &DMat4) -> DMat3 {
+    DMat3::from_mat4(*m)
+}
+
+/// `W·p` for a point.
+pub(crate) fn point(m: &DMat4, p: DVec3) -> DVec3 {
+    let h = *m * DVec4::new(p.x, p.y, p.z, 1.0);
+    // A non-affine bottom row is honoured; w = 0 yields a non-finite point the caller rejects.
+    h.truncate() / h.w
+}
+
+/// The matrix taking normals: `W3^{-T}` up to a positive scale (normals are
+/// normalized afterwards). The cofactor form stays defined for singular `W3`.
+pub(crate) fn normal_matrix(m: &DMat4) -> DMat3 {
+    let w = linear(m);
+    let cofactor = DMat3::from_cols(
+        w.y_axis.cross(w.z_axis),
+        w.z_axis.cross(w.x_axis),
+        w.x_axis.cross(w.y_axis),
+    );
+    if w.determinant() < 0.0 {
+        -cofactor
+    } else {
+        cofactor
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn normal_matrix_is_inverse_transpose_direction() {
+        let m = DMat4::from_cols_array_2d(&[
+            [2.0, 0.0, 0.0, 0.0],
+            [1.0, 3.0, 0.0, 0.0],
+            [0.0, 0.5, -1.0, 0.0],
+            [4.0, 5.0, 6.0, 1.0],
+        ]);
+        let expected = linear(&m).inverse().transpose();
+        let n = normal_matrix(&m);
+        for v in [DVec3::X, DVec3::Y, DVec3::new(0.3, -0.7, 0.2)] {
+            let a = (expected * v).normalize();
+            let b = (n * v).normalize();
+            assert!((a - b).length() < 1e-12, "{a} vs {b}");
+        }
+    }
+}

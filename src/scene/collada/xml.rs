@@ -1,0 +1,283 @@
+//! XML plumbing shared by the COLLADA readers: `#id` resolution, element
+//! labels for error messages, and number lists parsed without a per-number
+//! allocation.
+
+use super::LoadError;
+use roxmltree::{Document, Node};
+use std::collections::{HashMap, HashSet};
+use std::fmt::Display;
+use std::str::FromStr;
+
+/// Profiles whose `<extra><technique>` carries the CGL extension data (spec §1).
+const EXTENSION_PROFILES: [&str; 2] = ["CGL", "CMU462"];
+
+/// The parsed document plus what every reader needs: the file label for
+/// messages, the id table, and the warnings gathered so far.
+pub(crate) struct Ctx<'a, 'i> {
+    pub file: &'a str,
+    ids: HashMap<&'a str, Node<'a, 'i>>,
+    warnings: Vec<String>,
+    seen_warnings: HashSet<String>,
+}
+
+impl<'a, 'i> Ctx<'a, 'i> {
+    pub fn new(file: &'a str, doc: &'a Document<'i>) -> Self {
+        let mut ids = HashMap::new();
+        for n in doc.descendants().filter(Node::is_element) {
+            if let Some(id) = n.attribute("id") {
+                // COLLADA ids are unique; on a duplicate the first one wins.
+                ids.entry(id).or_insert(n);
+            }
+        }
+        Ctx {
+            file,
+            ids,
+            warnings: Vec::new(),
+            seen_warnings: HashSet::new(),
+        }
+    }
+
+    /// An error about `node`, in the one-line form `FILE: <element>: what`.
+    pub fn err(&self, node: Node, what: impl Display) -> LoadError {
+        LoadError::Invalid {
+            file: self.file.to_string(),
+            msg: format!("{}: {what}", describe(node)),
+        }
+    }
+
+    /// A non-fatal problem about `node`. Repeats are kept once so that a
+    /// large mesh cannot flood the list.
+    pub fn warn(&mut self, node: Node, what: impl Display) {
+        let w = format!("{}: {what}", describe(node));
+        if self.seen_warnings.insert(w.clone()) {
+            self.warnings.push(w);
+        }
+    }
+
+    pub fn into_warnings(self) -> Vec<String> {
+        self.warnings
+    }
+
+    /// The element named by `node@attr` (a `#id` URL), which must be a `<tag>`.
+    pub fn resolve(
+        &self,
+        node: Node<'a, 'i>,
+        attr: &str,
+        tag: &str,
+    ) -> Result<Node<'a, 'i>, LoadError> {
+        self.resolve_if_present(node, attr, tag)?.ok_or_else(|| {
+            let url = node.attribute(attr).unwrap_or_default();
+            self.err(node, format!("{attr}=\"{}\" names nothing", clip(url)))
+        })
+    }
+
+    /// Like `resolve`, but `None` when the URL names no element at all.
+    pub fn resolve_if_present(
+        &self,
+        node: Node<'a, 'i>,
+        attr: &str,
+        tag: &str,
+    ) -> Result<Option<Node<'a, 'i>>, LoadError> {
+        let url = node
+            .attribute(attr)
+            .ok_or_else(|| self.err(node, format!("missing attribute {attr}")))?;
+        let id = url.strip_prefix('#').ok_or_else(|| {
+            let msg = format!("{attr}=\"{}\" is not a local #id reference", clip(url));
+            self.err(node, msg)
+        })?;
+        let Some(&target) = self.ids.get(id) else {
+            return Ok(None);
+        };
+        if target.tag_name().name() != tag {
+            let msg = format!(
+                "{attr}=\"{}\" names a <{}>, expected a <{tag}>",
+                clip(url),
+                target.tag_name().name()
+            );
+            return Err(self.err(node, msg));
+        }
+        Ok(Some(target))
+    }
+
+    /// Appends the whitespace-separated numbers of `node`'s text to `out`.
+    /// Non-finite or unparsable entries are errors; nothing is sized from attributes.
+    pub fn numbers_into<T: Number>(&self, node: Node, out: &mut Vec<T>) -> Result<(), LoadError> {
+        let text = node.text().unwrap_or("");
+        // At most one number per two bytes ("1 "), so this bound is safe to reserve.
+        out.reserve(text.len() / 2 + 1);
+        for (k, word) in text.split_ascii_whitespace().enumerate() {
+            match word.parse::<T>() {
+                Ok(v) if v.is_finite() => out.push(v),
+                _ => {
+                    return Err(self.err(
+                        node,
+                        format!("entry {k} \"{}\" is not {}", clip(word), T::WHAT),
+                    ))
+                }
+            }
+        }
+        Ok(())
+    }
+
+    pub fn numbers<T: Number>(&self, node: Node) -> Result<Vec<T>, LoadError> {
+        let mut v = Vec::new();
+        self.numbers_into(node, &mut v)?;
+        Ok(v)
+    }
+
+    /// Exactly `N` numbers.
+    pub fn exact<const N: usize>(&self, node: Node) -> Result<[f64; N], LoadError> {
+        let v = self.numbers::<f64>(node)?;
+        v.as_slice()
+            .try_into()
+            .map_err(|_| self.err(node, format!("expected {N} numbers, found {}", v.len())))
+    }
+
+    /// The first `N` numbers; more are allowed (e.g. RGBA colours read as RGB).
+    pub fn leading<const N: usize>(&self, node: Node) -> Result<[f32; N], LoadError> {
+        let v = self.numbers::<f32>(node)?;
+        if v.len() < N {
+            return Err(self.err(
+                node,
+                format!("expected at least {N} numbers, found {}", v.len()),
+            ));
+        }
+        let mut a = [0.0; N];
+        a.copy_from_slice(&v[..N]);
+        Ok(a)
+    }
+
+    /// A single number from the text of `node`'s child `<name>`, if present.
+    pub fn child_scalar(&self, node: Node, name: &str) -> Result<Option<f32>, LoadError> {
+        child(node, name)
+            .map(|c| self.leading::<1>(c).map(|[v]| v))
+            .transpose()
+    }
+
+    /// Three numbers (a colour or vector) from child `<name>`, if present.
+    pub fn child_rgb(&self, node: Node, name: &str) -> Result<Option<[f32; 3]>, LoadError> {
+        child(node, name).map(|c| self.leading::<3>(c)).transpose()
+    }
+
+    /// A non-negative integer attribute, if present.
+    pub fn uint_attr(&self, node: Node, attr: &str) -> Result<Option<u64>, LoadError> {
+        node.attribute(attr)
+            .map(|s| {
+                s.trim().parse::<u64>().map_err(|_| {
+                    self.err(
+                        node,
+                        format!("{attr}=\"{}\" is not a non-negative integer", clip(s)),
+                    )
+                })
+            })
+            .transpose()
+    }
+}
+
+/// Numbers a COLLADA list may hold.
+pub(crate) trait Number: FromStr + Copy {
+    const WHAT: &'static str;
+    fn is_finite(self) -> bool;
+}
+
+impl Number for f32 {
+    const WHAT: &'static str = "a finite number";
+    fn is_finite(self) -> bool {
+        f32::is_finite(self)
+    }
+}
+
+impl Number for f64 {
+    const WHAT: &'static str = "a finite number";
+    fn is_finite(self) -> bool {
+        f64::is_finite(self)
+    }
+}
+
+impl Number for u32 {
+    const WHAT: &'static str = "a non-negative integer";
+    fn is_finite(self) -> bool {
+        true
+    }
+}
+
+/// First element child of `node` with local name `name`.
+pub(crate) fn child<'a, 'i>(node: Node<'a, 'i>, name: &str) -> Option<Node<'a, 'i>> {
+    node.children()
+        .find(|c| c.is_element() && c.tag_name().name() == name)
+}
+
+/// All element children of `node` with local name `name`.
+pub(crate) fn children<'a, 'i: 'a>(
+    node: Node<'a, 'i>,
+    name: &'a str,
+) -> impl Iterator<Item = Node<'a, 'i>> + 'a {
+    node.children()
+        .filter(move |c| c.is_element() && c.tag_name().name() == name)
+}
+
+/// Follows a path of child names from `node`.
+pub(crate) fn path<'a, 'i>(node: Node<'a, 'i>, names: &[&str]) -> Option<Node<'a, 'i>> {
+    names.iter().try_fold(node, |n, name| child(n, name))
+}
+
+/// The first `<extra><technique>` with the CGL or CMU462 profile (spec §1).
+pub(crate) fn extension_technique<'a, 'i>(node: Node<'a, 'i>) -> Option<Node<'a, 'i>> {
+    children(node, "extra")
+        .flat_map(|e| children(e, "technique"))
+        .find(|t| {
+            t.attribute("profile")
+                .is_some_and(|p| EXTENSION_PROFILES.contains(&p))
+        })
+}
+
+/// Label of an element for messages: the nearest ancestor-or-self with an id,
+/// then the tag path below it, e.g. `<geometry id="g">/mesh/polylist[1]/p`.
+pub(crate) fn describe(node: Node) -> String {
+    let mut parts = Vec::new();
+    let mut cur = Some(node);
+    while let Some(n) = cur.filter(|n| n.is_element()) {
+        let name = n.tag_name().name();
+        if let Some(id) = n.attribute("id") {
+            parts.push(format!("<{name} id=\"{}\">", clip(id)));
+            break;
+        }
+        let parent = n.parent_element();
+        if parent.is_none() {
+            parts.push(format!("<{name}>"));
+            break;
+        }
+        let index = n
+            .prev_sibling_element()
+            .into_iter()
+            .flat_map(|s| std::iter::successors(Some(s), |s| s.prev_sibling_element()))
+            .filter(|s| s.tag_name().name() == name)
+            .count();
+        let many = index > 0
+            || n.next_sibling_element().is_some_and(|_| {
+                std::iter::successors(n.next_sibling_element(), |s| s.next_sibling_element())
+                    .any(|s| s.tag_name().name() == name)
+            });
+        parts.push(if many {
+            format!("{name}[{index}]")
+        } else {
+            name.to_string()
+        });
+        cur = parent;
+    }
+    parts.reverse();
+    parts.join("/")
+}
+
+/// Shortens untrusted text quoted in a message so a message stays one short line.
+pub(crate) fn clip(s: &str) -> String {
+    let one_line: String = s
+        .chars()
+        .map(|c| if c.is_control() { ' ' } else { c })
+        .collect();
+    if one_line.chars().count() > 40 {
+        format!("{}…", one_line.chars().take(40).collect::<String>())
+    } else {
+        one_line
+    }
+}
