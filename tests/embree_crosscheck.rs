@@ -9,8 +9,9 @@
 //! is printed with the full ray, float bits included, so it can be replayed.
 #![cfg(feature = "embree")]
 
+use ember::accel::bvh::Bvh;
 use ember::accel::embree::EmbreeAccel;
-use ember::accel::{Accel, EmbreeQuality};
+use ember::accel::{Accel, BvhBuilder, EmbreeQuality};
 use ember::bench::meshes;
 use ember::camera::Camera;
 use ember::geometry::{offset_ray_origin, Ray};
@@ -474,4 +475,95 @@ fn embree_matches_f64_brute_force_on_generated_meshes() {
     }
     let rate = total.excused_total() as f64 / total.rays as f64;
     assert!(rate < 1e-3, "boundary cases at rate {rate}");
+}
+
+// ---------------------------------------------------------------- native BVH
+
+/// Rays per scene against the native BVH.
+const NATIVE_RAYS: usize = 1_000_000;
+
+/// Embree against both native builders over one ray set: Embree traces each ray once.
+fn crosscheck_native(label: &str, scene: &Scene) -> Tally {
+    let embree = EmbreeAccel::build(scene, EmbreeQuality::Medium).expect("Embree builds");
+    let natives = [BvhBuilder::Midpoint, BvhBuilder::Sah].map(|b| Bvh::build(scene, b));
+    let cam = Camera::new(&scene.camera, &scene.bounds, 640, 480);
+    let tallies = (0..NATIVE_RAYS)
+        .into_par_iter()
+        .map(|i| {
+            let ray = make_ray(scene, &cam, &natives[1], 0xc0ffee, i);
+            let tally = |native: &Bvh| compare_ray(scene, &ray, &embree, native);
+            [tally(&natives[0]), tally(&natives[1])]
+        })
+        .reduce(
+            || [Tally::default(), Tally::default()],
+            |[a0, a1], [b0, b1]| [a0.merge(b0), a1.merge(b1)],
+        );
+    for (native, tally) in natives.iter().zip(&tallies) {
+        eprintln!("{label}: Embree vs {}: {}", native.name(), tally.summary());
+        for e in &tally.examples {
+            eprintln!("  {e}");
+        }
+    }
+    let [a, b] = tallies;
+    a.merge(b)
+}
+
+fn course_scenes() -> Vec<std::path::PathBuf> {
+    let root = concat!(env!("CARGO_MANIFEST_DIR"), "/../shared/scenes/cs184");
+    let mut files: Vec<_> = ["sky", "meshedit", "keenan"]
+        .iter()
+        .flat_map(|dir| std::fs::read_dir(format!("{root}/{dir}")).expect("cs184 scenes present"))
+        .map(|e| e.expect("readable dir entry").path())
+        .filter(|p| p.extension().is_some_and(|e| e == "dae"))
+        .collect();
+    files.sort();
+    files
+}
+
+/// Every course scene and larger generated meshes, 1M rays each. Excused differences
+/// must stay below 1e-4 of the comparisons (two per ray: one per native builder).
+/// On the course scenes the observed rate is far lower; the generated meshes are
+/// built to sit on boundaries (shared edges, slivers, bounce rays leaving spheres).
+#[test]
+fn embree_matches_native_bvh_on_course_and_generated_scenes() {
+    let mut scenes: Vec<(String, Scene)> = course_scenes()
+        .into_iter()
+        .map(|p| {
+            let scene = ember::scene::collada::load(&p).expect("course scene loads");
+            (p.file_stem().unwrap().to_string_lossy().into_owned(), scene)
+        })
+        .collect();
+    scenes.extend([
+        ("grid 200x200".to_string(), meshes::shared_edge_grid(200)),
+        (
+            "degenerate soup 20k".to_string(),
+            meshes::degenerate_soup(20_000, 11),
+        ),
+        (
+            "sphere cluster 400".to_string(),
+            meshes::sphere_cluster(400, 13),
+        ),
+        (
+            "displaced sphere 100k".to_string(),
+            meshes::displaced_sphere(100_000),
+        ),
+    ]);
+    assert!(
+        scenes.len() >= 20,
+        "expected the course scenes, found {}",
+        scenes.len()
+    );
+    let mut failures = Vec::new();
+    for (label, scene) in &scenes {
+        let t = crosscheck_native(label, scene);
+        let rate = t.excused_total() as f64 / t.rays as f64;
+        if t.mismatches > 0 || rate >= 1e-4 {
+            failures.push(format!("{label}: {}", t.summary()));
+        }
+    }
+    assert!(
+        failures.is_empty(),
+        "disagreements (rays printed above):\n{}",
+        failures.join("\n")
+    );
 }
