@@ -8,6 +8,7 @@
 #include <embree3/rtcore.h>
 #endif
 
+#include <float.h>
 #include <math.h>
 #include <stdatomic.h>
 #include <stdio.h>
@@ -222,8 +223,11 @@ static void fill_ray(struct RTCRay *r, const ember_ray *in) {
   r->org_x = in->org[0];
   r->org_y = in->org[1];
   r->org_z = in->org[2];
-  /* Embree requires tnear >= 0. */
-  r->tnear = in->tnear > 0.0f ? in->tnear : 0.0f;
+  /* Embree requires tnear >= 0. A hit at exactly t = 0 means the origin lies on the
+   * surface (a bounce ray off an axis-aligned plane at coordinate 0 gets no offset from
+   * its zero error bound); ember never means such a hit and the native test rejects it
+   * by its error bound, so the interval starts at the smallest positive float. */
+  r->tnear = in->tnear > FLT_MIN ? in->tnear : FLT_MIN;
   r->dir_x = in->dir[0];
   r->dir_y = in->dir[1];
   r->dir_z = in->dir[2];
