@@ -1,9 +1,14 @@
 //! Acceleration structures behind one trait: the native BVH and (feature
 //! `embree`) Embree. Integrators only ever see `dyn Accel`.
 
+pub mod brute;
 pub mod bvh;
 #[cfg(feature = "embree")]
 pub mod embree;
+mod prims;
+
+pub use brute::BruteForce;
+pub use bvh::{Bvh, BvhStats};
 
 use crate::geometry::Ray;
 use crate::scene::{PrimHit, Scene};

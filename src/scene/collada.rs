@@ -70,6 +70,16 @@ pub fn parse(text: &str, file_label: &str) -> Result<Scene, LoadError> {
     if text.trim().is_empty() {
         return Err(LoadError::invalid(file_label, "file is empty"));
     }
+    if let Some(at) = xml::too_deep_at(text, xml::MAX_XML_DEPTH) {
+        let (line, col) = xml::line_col(text, at);
+        return Err(LoadError::invalid(
+            file_label,
+            format!(
+                "line {line}, column {col}: elements are nested deeper than {} levels",
+                xml::MAX_XML_DEPTH
+            ),
+        ));
+    }
     let options = roxmltree::ParsingOptions {
         allow_dtd: false,
         ..Default::default()

@@ -233,40 +233,53 @@ pub(crate) fn extension_technique<'a, 'i>(node: Node<'a, 'i>) -> Option<Node<'a,
 
 /// Label of an element for messages: the nearest ancestor-or-self with an id,
 /// then the tag path below it, e.g. `<geometry id="g">/mesh/polylist[1]/p`.
+/// Long paths keep their anchor and last few steps: `<visual_scene id="s">/…/node/node`.
 pub(crate) fn describe(node: Node) -> String {
-    let mut parts = Vec::new();
+    const KEEP: usize = 6;
+    let mut steps = Vec::new();
+    let mut elided = false;
+    let mut anchor = String::new();
     let mut cur = Some(node);
     while let Some(n) = cur.filter(|n| n.is_element()) {
         let name = n.tag_name().name();
         if let Some(id) = n.attribute("id") {
-            parts.push(format!("<{name} id=\"{}\">", clip(id)));
+            anchor = format!("<{name} id=\"{}\">", clip(id));
             break;
         }
         let parent = n.parent_element();
         if parent.is_none() {
-            parts.push(format!("<{name}>"));
+            anchor = format!("<{name}>");
             break;
         }
-        let index = n
-            .prev_sibling_element()
-            .into_iter()
-            .flat_map(|s| std::iter::successors(Some(s), |s| s.prev_sibling_element()))
-            .filter(|s| s.tag_name().name() == name)
-            .count();
-        let many = index > 0
-            || n.next_sibling_element().is_some_and(|_| {
-                std::iter::successors(n.next_sibling_element(), |s| s.next_sibling_element())
-                    .any(|s| s.tag_name().name() == name)
-            });
-        parts.push(if many {
-            format!("{name}[{index}]")
+        if steps.len() < KEEP {
+            steps.push(step_name(n));
         } else {
-            name.to_string()
-        });
+            elided = true;
+        }
         cur = parent;
     }
-    parts.reverse();
-    parts.join("/")
+    if elided {
+        steps.push("…".to_string());
+    }
+    steps.push(anchor);
+    steps.reverse();
+    steps.join("/")
+}
+
+/// `name`, or `name[k]` when the parent has several children of that name.
+fn step_name(n: Node) -> String {
+    let name = n.tag_name().name();
+    let same = |s: &Node| s.tag_name().name() == name;
+    let before = std::iter::successors(n.prev_sibling_element(), |s| s.prev_sibling_element())
+        .filter(same)
+        .count();
+    let after = std::iter::successors(n.next_sibling_element(), |s| s.next_sibling_element())
+        .any(|s| same(&s));
+    if before > 0 || after {
+        format!("{name}[{before}]")
+    } else {
+        name.to_string()
+    }
 }
 
 /// Shortens untrusted text quoted in a message so a message stays one short line.
@@ -280,4 +293,84 @@ pub(crate) fn clip(s: &str) -> String {
     } else {
         one_line
     }
+}
+
+/// Deepest element nesting handed to roxmltree, whose tokenizer recurses once
+/// per open element: far deeper input would overflow the stack.
+pub(crate) const MAX_XML_DEPTH: usize = 1024;
+
+/// Byte offset of the first element opened deeper than `limit`, found by a
+/// linear scan that follows the XML grammar far enough to count elements
+/// (comments, CDATA, processing instructions, quoted attribute values).
+/// Where the text is malformed the XML parser rejects it before reaching the
+/// point at which this count could be wrong.
+pub(crate) fn too_deep_at(text: &str, limit: usize) -> Option<usize> {
+    let b = text.as_bytes();
+    let find = |from: usize, pat: &[u8]| {
+        b.get(from..)?
+            .windows(pat.len())
+            .position(|w| w == pat)
+            .map(|k| from + k + pat.len())
+    };
+    let mut depth = 0usize;
+    let mut i = 0;
+    while i < b.len() {
+        if b[i] != b'<' {
+            i = b[i..]
+                .iter()
+                .position(|&c| c == b'<')
+                .map_or(b.len(), |k| i + k);
+            continue;
+        }
+        let rest = &b[i..];
+        let next = if rest.starts_with(b"<!--") {
+            find(i + 4, b"-->")
+        } else if rest.starts_with(b"<![CDATA[") {
+            find(i + 9, b"]]>")
+        } else if rest.starts_with(b"<?") {
+            find(i + 2, b"?>")
+        } else if rest.starts_with(b"<!") || rest.starts_with(b"</") {
+            if rest[1] == b'/' {
+                depth = depth.saturating_sub(1);
+            }
+            find(i + 2, b">")
+        } else {
+            let end = open_tag_end(b, i + 1)?;
+            if b[end - 2] != b'/' {
+                depth += 1;
+                if depth > limit {
+                    return Some(i);
+                }
+            }
+            Some(end)
+        };
+        i = next?;
+    }
+    None
+}
+
+/// Index just past the `>` closing a start tag that begins before `from`,
+/// skipping quoted attribute values (which may contain `>`).
+fn open_tag_end(b: &[u8], mut from: usize) -> Option<usize> {
+    let mut quote = None;
+    while from < b.len() {
+        let c = b[from];
+        match quote {
+            Some(q) if c == q => quote = None,
+            Some(_) => {}
+            None if c == b'"' || c == b'\'' => quote = Some(c),
+            None if c == b'>' => return Some(from + 1),
+            None => {}
+        }
+        from += 1;
+    }
+    None
+}
+
+/// 1-based line and column of byte `offset`, for messages about raw text.
+pub(crate) fn line_col(text: &str, offset: usize) -> (usize, usize) {
+    let before = &text[..offset.min(text.len())];
+    let line = before.matches('\n').count() + 1;
+    let col = before.len() - before.rfind('\n').map_or(0, |k| k + 1) + 1;
+    (line, col)
 }

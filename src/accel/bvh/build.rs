@@ -1,0 +1,176 @@
+//! The builder skeleton shared by the split rules: top-down recursion over an
+//! in-place partitioned primitive array, emitting nodes depth first.
+//!
+//! Large subtrees are built in parallel with `rayon::join`, each into its own
+//! node vector that is appended in a fixed order, so the tree is the same
+//! whatever the thread count.
+
+use super::node::BvhNode;
+use crate::geometry::Aabb;
+use crate::scene::PrimId;
+use glam::Vec3;
+
+/// Subtrees with more primitives than this are built in parallel.
+const PARALLEL_THRESHOLD: usize = 4096;
+
+/// Past this depth every split is an object median, so the tree is at most
+/// `MEDIAN_DEPTH + 32` deep and fits the traversal stack.
+const MEDIAN_DEPTH: u32 = 30;
+
+/// Bound on the depth of any tree this module builds.
+pub(crate) const MAX_DEPTH: usize = MEDIAN_DEPTH as usize + 33;
+
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct BuildPrim {
+    pub bounds: Aabb,
+    pub centroid: Vec3,
+    pub id: PrimId,
+}
+
+impl BuildPrim {
+    pub fn new(id: PrimId, bounds: Aabb) -> Self {
+        BuildPrim {
+            bounds,
+            centroid: bounds.centre(),
+            id,
+        }
+    }
+}
+
+/// A split decision: the primitives are partitioned so that `[..mid]` goes to
+/// the first child, and `axis` is the split axis (for traversal order).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(crate) struct Split {
+    pub axis: usize,
+    pub mid: usize,
+}
+
+/// How a builder splits a node.
+pub(crate) trait SplitRule: Sync {
+    /// Largest leaf the rule may produce; bigger nodes are always split.
+    fn max_leaf(&self) -> usize;
+
+    /// Partitions `prims` and returns the split, or `None` for a leaf. A rule may
+    /// also return `None` when it finds no split (e.g. all centroids equal); the
+    /// skeleton then splits nodes above `max_leaf` in halves.
+    fn split(&self, prims: &mut [BuildPrim], bounds: &Aabb) -> Option<Split>;
+}
+
+/// Builds the flat node array over `prims`, reordering them into leaf order.
+pub(crate) fn build_nodes<R: SplitRule>(rule: &R, prims: &mut [BuildPrim]) -> Vec<BvhNode> {
+    let mut nodes = Vec::with_capacity(2 * prims.len() / rule.max_leaf().max(1) + 1);
+    if !prims.is_empty() {
+        build_into(rule, prims, 0, 0, &mut nodes);
+    }
+    nodes
+}
+
+fn build_into<R: SplitRule>(
+    rule: &R,
+    prims: &mut [BuildPrim],
+    first: u32,
+    depth: u32,
+    out: &mut Vec<BvhNode>,
+) {
+    let bounds = prims.iter().fold(Aabb::EMPTY, |b, p| b.union(&p.bounds));
+    let split = choose_split(rule, prims, &bounds, depth);
+    let Some(Split { axis, mid }) = split else {
+        out.push(BvhNode::leaf(&bounds, first, prims.len() as u32));
+        return;
+    };
+    let me = out.len();
+    out.push(BvhNode::default());
+    let n = prims.len();
+    let (left, right) = prims.split_at_mut(mid);
+    let right_first = first + mid as u32;
+    let second = if n > PARALLEL_THRESHOLD {
+        let (l, r) = rayon::join(
+            || subtree(rule, left, first, depth + 1),
+            || subtree(rule, right, right_first, depth + 1),
+        );
+        append_shifted(out, l);
+        let second = out.len();
+        append_shifted(out, r);
+        second
+    } else {
+        build_into(rule, left, first, depth + 1, out);
+        let second = out.len();
+        build_into(rule, right, right_first, depth + 1, out);
+        second
+    };
+    out[me] = BvhNode::inner(&bounds, second as u32, axis);
+}
+
+fn choose_split<R: SplitRule>(
+    rule: &R,
+    prims: &mut [BuildPrim],
+    bounds: &Aabb,
+    depth: u32,
+) -> Option<Split> {
+    let n = prims.len();
+    if n <= 1 {
+        return None;
+    }
+    if depth >= MEDIAN_DEPTH && n > rule.max_leaf() {
+        return Some(median_split(prims));
+    }
+    match rule.split(prims, bounds) {
+        Some(s) if s.mid > 0 && s.mid < n => Some(s),
+        _ if n > rule.max_leaf() => Some(median_split(prims)),
+        _ => None,
+    }
+}
+
+/// Subtree in its own vector, with child offsets relative to its start.
+fn subtree<R: SplitRule>(
+    rule: &R,
+    prims: &mut [BuildPrim],
+    first: u32,
+    depth: u32,
+) -> Vec<BvhNode> {
+    let mut v = Vec::new();
+    build_into(rule, prims, first, depth, &mut v);
+    v
+}
+
+fn append_shifted(out: &mut Vec<BvhNode>, sub: Vec<BvhNode>) {
+    let shift = out.len() as u32;
+    out.extend(sub.into_iter().map(|mut node| {
+        if node.count() == 0 {
+            node.offset += shift;
+        }
+        node
+    }));
+}
+
+/// Object median along the longest centroid axis: always halves the node (also
+/// when all centroids coincide), which bounds the depth.
+pub(crate) fn median_split(prims: &mut [BuildPrim]) -> Split {
+    let axis = centroid_bounds(prims).max_axis();
+    let mid = prims.len() / 2;
+    prims.select_nth_unstable_by(mid, |a, b| a.centroid[axis].total_cmp(&b.centroid[axis]));
+    Split { axis, mid }
+}
+
+pub(crate) fn centroid_bounds(prims: &[BuildPrim]) -> Aabb {
+    prims.iter().fold(Aabb::EMPTY, |mut b, p| {
+        b.grow(p.centroid);
+        b
+    })
+}
+
+/// Moves the primitives satisfying `left` to the front (deterministic, not
+/// stable) and returns how many there are.
+pub(crate) fn partition(prims: &mut [BuildPrim], left: impl Fn(&BuildPrim) -> bool) -> usize {
+    let mut i = 0;
+    let mut j = prims.len();
+    while i < j {
+        if left(&prims[i]) {
+            i += 1;
+        } else {
+            j -= 1;
+            prims.swap(i, j);
+        }
+    }
+    i
+}
