@@ -288,3 +288,60 @@ impl Drop for EmbreeAccel {
 pub fn info() -> Result<EmbreeInfo, AccelError> {
     Ok(EmbreeDevice::new(1)?.info())
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::bench::meshes::geometry_scene;
+    use glam::Vec3;
+
+    /// One triangle in z = 0 and one unit sphere at z = −5: ids 0 and 1.
+    fn scene() -> Scene {
+        let corners = vec![Vec3::ZERO, Vec3::X, Vec3::Y];
+        geometry_scene(corners, &[[0, 1, 2]], &[(Vec3::new(0.0, 0.0, -5.0), 1.0)])
+    }
+
+    #[test]
+    fn barycentrics_and_ids_follow_the_native_convention() {
+        let accel = EmbreeAccel::build(&scene(), EmbreeQuality::Medium).expect("builds");
+        let down = Ray::new(Vec3::new(0.25, 0.5, 2.0), Vec3::NEG_Z);
+        let h = accel.intersect(&down).expect("hits the triangle");
+        // p = (1−b1−b2)·p0 + b1·p1 + b2·p2 with p1 = X, p2 = Y.
+        assert_eq!(h.prim, 0);
+        assert!(
+            (h.t - 2.0).abs() < 1e-6 && (h.b1 - 0.25).abs() < 1e-6 && (h.b2 - 0.5).abs() < 1e-6
+        );
+        let to_sphere = Ray::new(Vec3::new(0.0, -3.0, -5.0), Vec3::Y);
+        let h = accel.intersect(&to_sphere).expect("hits the sphere");
+        assert_eq!(h.prim, 1);
+        assert!((h.t - 2.0).abs() < 1e-5, "t = {}", h.t);
+        assert!(accel.occluded(&to_sphere));
+        assert!(!accel.occluded(&Ray::segment(to_sphere.o, to_sphere.d, 1.5)));
+        assert!(accel.memory_bytes() > 0);
+    }
+
+    #[test]
+    fn an_origin_on_the_surface_does_not_hit_it_at_t_zero() {
+        let accel = EmbreeAccel::build(&scene(), EmbreeQuality::Low).expect("builds");
+        let leaving = Ray::new(Vec3::new(0.25, 0.25, 0.0), Vec3::new(0.3, 0.2, 1.0));
+        assert_eq!(accel.intersect(&leaving), None);
+        assert!(!accel.occluded(&leaving));
+    }
+
+    #[test]
+    fn bad_indices_are_an_error_not_a_crash() {
+        let mut s = scene();
+        s.triangles[0].v[2] = 99;
+        let err = EmbreeAccel::build(&s, EmbreeQuality::High)
+            .err()
+            .expect("rejected");
+        assert!(err.to_string().contains("out of range"), "{err}");
+    }
+
+    #[test]
+    fn info_reports_a_version() {
+        let i = info().expect("device");
+        assert!(i.version.0 >= 3, "{i}");
+        assert!(crate::accel::backends_info().contains("Embree"));
+    }
+}

@@ -333,13 +333,13 @@ impl AccelBenchReport {
             );
             let _ = writeln!(
                 s,
-                "| {} | {} | {} | {} | {:.1} | {:.1} | {:.2} | {:.2} | {:.2} | {} |",
+                "| {} | {} | {} | {} | {} | {} | {:.2} | {:.2} | {:.2} | {} |",
                 r.scene,
                 r.prims,
                 r.backend,
                 r.threads,
-                r.build_ms,
-                r.memory_mb,
+                three_digits(r.build_ms),
+                three_digits(r.memory_mb),
                 r.camera_mrays,
                 r.incoherent_mrays,
                 r.shadow_mrays,
@@ -353,5 +353,50 @@ impl AccelBenchReport {
         self.rows
             .iter()
             .find(|e| e.is_embree && e.scene == r.scene && e.threads == r.threads)
+    }
+}
+
+/// Three significant digits: build times and sizes span 0.01 ms to seconds.
+fn three_digits(x: f64) -> String {
+    let decimals = if x == 0.0 {
+        0
+    } else {
+        (2 - x.abs().log10().floor() as i32).clamp(0, 6) as usize
+    };
+    format!("{x:.decimals$}")
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn three_significant_digits() {
+        assert_eq!(three_digits(1305.5), "1306");
+        assert_eq!(three_digits(25.81), "25.8");
+        assert_eq!(three_digits(0.01234), "0.0123");
+        assert_eq!(three_digits(0.0), "0");
+    }
+
+    #[test]
+    fn markdown_ratio_is_native_over_embree() {
+        let row = |backend: &str, is_embree, mrays| AccelBenchRow {
+            scene: "s".into(),
+            prims: 1,
+            backend: backend.into(),
+            is_embree,
+            threads: 1,
+            build_ms: 1.0,
+            memory_mb: 1.0,
+            camera_mrays: mrays,
+            incoherent_mrays: mrays,
+            shadow_mrays: mrays,
+        };
+        let report = AccelBenchReport {
+            rows: vec![row("native SAH", false, 5.0), row("Embree", true, 10.0)],
+        };
+        let md = report.to_markdown();
+        assert!(md.contains("| 0.50 / 0.50 / 0.50 |"), "{md}");
+        assert_eq!(md.lines().count(), 4);
     }
 }
