@@ -43,7 +43,8 @@ mod embree {
             let dir = PathBuf::from(dir);
             let major = header_major(&dir).ok_or_else(|| {
                 format!(
-                    "EMBREE_INCLUDE_DIR={} holds neither embree4/rtcore.h nor embree3/rtcore.h",
+                    "EMBREE_INCLUDE_DIR={} holds neither embree4/rtcore.h nor embree3/rtcore.h \
+                     (unset it to search /usr/include); {PACKAGE_HINT}",
                     dir.display()
                 )
             })?;
