@@ -3,6 +3,8 @@
 
 pub mod brute;
 pub mod bvh;
+#[cfg(feature = "embree")]
+pub mod embree;
 mod prims;
 
 pub use brute::BruteForce;
@@ -75,6 +77,43 @@ pub enum AccelError {
 pub fn build(scene: &Scene, kind: AccelKind) -> Result<Box<dyn Accel>, AccelError> {
     match kind {
         AccelKind::Native(b) => Ok(Box::new(bvh::Bvh::build(scene, b))),
+        #[cfg(feature = "embree")]
+        AccelKind::Embree(q) => Ok(Box::new(embree::EmbreeAccel::build(scene, q)?)),
+        #[cfg(not(feature = "embree"))]
         AccelKind::Embree(_) => Err(AccelError::EmbreeUnavailable),
+    }
+}
+
+/// The backends this build can use, for `ember info`.
+pub fn backends_info() -> String {
+    let native = "native BVH (midpoint, binned SAH)";
+    #[cfg(feature = "embree")]
+    let embree = match embree::info() {
+        Ok(info) => info.to_string(),
+        Err(e) => format!("Embree compiled in but unusable: {e}"),
+    };
+    #[cfg(not(feature = "embree"))]
+    let embree = "Embree not compiled in (rebuild with --features embree)".to_string();
+    format!("{native}; {embree}")
+}
+
+/// Sets flush-to-zero and denormals-are-zero on the calling thread, as Embree
+/// recommends for tracing threads (call it from rayon's `start_handler`). Denormals
+/// only arise in results below 1e-38, far beneath anything a pixel can show, while
+/// their microcode assists can stall traversal. No-op off x86-64.
+pub fn set_flush_denormals() {
+    #[cfg(target_arch = "x86_64")]
+    {
+        const FTZ: u32 = 1 << 15;
+        const DAZ: u32 = 1 << 6;
+        let mut csr: u32 = 0;
+        // SAFETY: stmxcsr/ldmxcsr exist on every x86-64 CPU and touch only `csr` and
+        // MXCSR. FTZ/DAZ change only results that would be subnormal, which no caller
+        // here relies on (the reason `_mm_setcsr` is deprecated is code relying on them).
+        unsafe {
+            std::arch::asm!("stmxcsr [{}]", in(reg) &mut csr, options(nostack, preserves_flags));
+            csr |= FTZ | DAZ;
+            std::arch::asm!("ldmxcsr [{}]", in(reg) &csr, options(nostack, preserves_flags));
+        }
     }
 }

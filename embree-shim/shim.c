@@ -1,0 +1,291 @@
+/* Embree 3 / 4 implementation of shim.h. build.rs defines EMBER_EMBREE_MAJOR (3 or 4)
+ * to pick the header; the API differences are switched on RTC_VERSION_MAJOR. */
+#include "shim.h"
+
+#if defined(EMBER_EMBREE_MAJOR) && EMBER_EMBREE_MAJOR >= 4
+#include <embree4/rtcore.h>
+#else
+#include <embree3/rtcore.h>
+#endif
+
+#include <float.h>
+#include <math.h>
+#include <stdatomic.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#define EMBER_TRI_GEOM_ID 0u
+#define EMBER_SPH_GEOM_ID 1u
+
+struct ember_device {
+  RTCDevice device;
+  /* Guards last_error: the error callback may fire on Embree's worker threads. */
+  atomic_flag lock;
+  char last_error[512];
+  size_t last_error_len;
+  /* Net bytes allocated, from the memory monitor (also called on worker threads). */
+  _Atomic int64_t memory;
+};
+
+struct ember_scene {
+  RTCScene scene;
+  uint32_t ntri;
+};
+
+static void lock_device(ember_device *d) {
+  while (atomic_flag_test_and_set_explicit(&d->lock, memory_order_acquire)) {
+  }
+}
+
+static void unlock_device(ember_device *d) {
+  atomic_flag_clear_explicit(&d->lock, memory_order_release);
+}
+
+static const char *error_name(enum RTCError code) {
+  switch (code) {
+  case RTC_ERROR_NONE: return "none";
+  case RTC_ERROR_UNKNOWN: return "unknown error";
+  case RTC_ERROR_INVALID_ARGUMENT: return "invalid argument";
+  case RTC_ERROR_INVALID_OPERATION: return "invalid operation";
+  case RTC_ERROR_OUT_OF_MEMORY: return "out of memory";
+  case RTC_ERROR_UNSUPPORTED_CPU: return "unsupported CPU";
+  case RTC_ERROR_CANCELLED: return "cancelled";
+  default: return "error";
+  }
+}
+
+static void on_error(void *user, enum RTCError code, const char *str) {
+  ember_device *d = (ember_device *)user;
+  lock_device(d);
+  int n = snprintf(d->last_error, sizeof d->last_error, "%s: %s", error_name(code),
+                   str ? str : "");
+  d->last_error_len = n < 0 ? 0 : ((size_t)n < sizeof d->last_error ? (size_t)n : sizeof d->last_error - 1);
+  unlock_device(d);
+}
+
+static bool on_memory(void *user, ssize_t bytes, bool post) {
+  (void)post;
+  ember_device *d = (ember_device *)user;
+  atomic_fetch_add_explicit(&d->memory, (int64_t)bytes, memory_order_relaxed);
+  return true;
+}
+
+static void copy_message(char *dst, size_t len, const char *src) {
+  if (dst && len > 0) {
+    strncpy(dst, src, len - 1);
+    dst[len - 1] = '\0';
+  }
+}
+
+ember_device *ember_device_new(const char *config, char *err, size_t err_len) {
+  ember_device *d = (ember_device *)calloc(1, sizeof *d);
+  if (!d) {
+    copy_message(err, err_len, "out of memory");
+    return NULL;
+  }
+  atomic_flag_clear(&d->lock);
+  atomic_init(&d->memory, 0);
+  d->device = rtcNewDevice(config);
+  if (!d->device) {
+    enum RTCError code = rtcGetDeviceError(NULL);
+    char msg[256];
+    snprintf(msg, sizeof msg, "rtcNewDevice(\"%s\") failed: %s", config ? config : "",
+             error_name(code));
+    copy_message(err, err_len, msg);
+    free(d);
+    return NULL;
+  }
+  rtcSetDeviceErrorFunction(d->device, on_error, d);
+  rtcSetDeviceMemoryMonitorFunction(d->device, on_memory, d);
+  return d;
+}
+
+void ember_device_release(ember_device *d) {
+  if (!d) return;
+  rtcReleaseDevice(d->device);
+  free(d);
+}
+
+size_t ember_device_take_error(ember_device *d, char *buf, size_t len) {
+  lock_device(d);
+  size_t n = d->last_error_len;
+  if (n > 0) copy_message(buf, len, d->last_error);
+  d->last_error_len = 0;
+  d->last_error[0] = '\0';
+  unlock_device(d);
+  return n;
+}
+
+int64_t ember_device_memory_bytes(const ember_device *d) {
+  return atomic_load_explicit(&((ember_device *)d)->memory, memory_order_relaxed);
+}
+
+void ember_device_get_info(const ember_device *d, ember_device_info *info) {
+  RTCDevice dev = d->device;
+  info->version_major = (int)rtcGetDeviceProperty(dev, RTC_DEVICE_PROPERTY_VERSION_MAJOR);
+  info->version_minor = (int)rtcGetDeviceProperty(dev, RTC_DEVICE_PROPERTY_VERSION_MINOR);
+  info->version_patch = (int)rtcGetDeviceProperty(dev, RTC_DEVICE_PROPERTY_VERSION_PATCH);
+  int width = 1;
+  if (rtcGetDeviceProperty(dev, RTC_DEVICE_PROPERTY_NATIVE_RAY4_SUPPORTED)) width = 4;
+  if (rtcGetDeviceProperty(dev, RTC_DEVICE_PROPERTY_NATIVE_RAY8_SUPPORTED)) width = 8;
+  if (rtcGetDeviceProperty(dev, RTC_DEVICE_PROPERTY_NATIVE_RAY16_SUPPORTED)) width = 16;
+  info->native_packet_width = width;
+  info->backface_culling =
+      (int)rtcGetDeviceProperty(dev, RTC_DEVICE_PROPERTY_BACKFACE_CULLING_ENABLED);
+  info->ray_mask_supported =
+      (int)rtcGetDeviceProperty(dev, RTC_DEVICE_PROPERTY_RAY_MASK_SUPPORTED);
+}
+
+/* Copies into buffers Embree allocates, which it pads as its SIMD loads need. */
+static int attach_triangles(RTCDevice dev, RTCScene scene, const float *vertices,
+                            size_t nvert, const uint32_t *indices, size_t ntri) {
+  RTCGeometry g = rtcNewGeometry(dev, RTC_GEOMETRY_TYPE_TRIANGLE);
+  if (!g) return 0;
+  float *vb = (float *)rtcSetNewGeometryBuffer(g, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3,
+                                               3 * sizeof(float), nvert);
+  uint32_t *ib = (uint32_t *)rtcSetNewGeometryBuffer(g, RTC_BUFFER_TYPE_INDEX, 0,
+                                                     RTC_FORMAT_UINT3, 3 * sizeof(uint32_t), ntri);
+  if (!vb || !ib) {
+    rtcReleaseGeometry(g);
+    return 0;
+  }
+  memcpy(vb, vertices, nvert * 3 * sizeof(float));
+  memcpy(ib, indices, ntri * 3 * sizeof(uint32_t));
+  rtcCommitGeometry(g);
+  rtcAttachGeometryByID(scene, g, EMBER_TRI_GEOM_ID);
+  rtcReleaseGeometry(g);
+  return 1;
+}
+
+static int attach_spheres(RTCDevice dev, RTCScene scene, const float *spheres, size_t nsph) {
+  RTCGeometry g = rtcNewGeometry(dev, RTC_GEOMETRY_TYPE_SPHERE_POINT);
+  if (!g) return 0;
+  float *vb = (float *)rtcSetNewGeometryBuffer(g, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT4,
+                                               4 * sizeof(float), nsph);
+  if (!vb) {
+    rtcReleaseGeometry(g);
+    return 0;
+  }
+  memcpy(vb, spheres, nsph * 4 * sizeof(float));
+  rtcCommitGeometry(g);
+  rtcAttachGeometryByID(scene, g, EMBER_SPH_GEOM_ID);
+  rtcReleaseGeometry(g);
+  return 1;
+}
+
+static enum RTCBuildQuality to_quality(int q) {
+  switch (q) {
+  case EMBER_QUALITY_LOW: return RTC_BUILD_QUALITY_LOW;
+  case EMBER_QUALITY_HIGH: return RTC_BUILD_QUALITY_HIGH;
+  default: return RTC_BUILD_QUALITY_MEDIUM;
+  }
+}
+
+ember_scene *ember_scene_new(ember_device *d, const float *vertices, size_t nvert,
+                             const uint32_t *indices, size_t ntri, const float *spheres,
+                             size_t nsph, int quality, int robust) {
+  if (ntri > 0xFFFFFFF0u || nsph > 0xFFFFFFF0u - ntri) {
+    on_error(d, RTC_ERROR_INVALID_ARGUMENT, "too many primitives for 32-bit ids");
+    return NULL;
+  }
+  RTCDevice dev = d->device;
+  RTCScene scene = rtcNewScene(dev);
+  if (!scene) return NULL;
+  rtcSetSceneBuildQuality(scene, to_quality(quality));
+  rtcSetSceneFlags(scene, robust ? RTC_SCENE_FLAG_ROBUST : RTC_SCENE_FLAG_NONE);
+  int ok = 1;
+  if (ntri > 0 && nvert > 0) ok = ok && attach_triangles(dev, scene, vertices, nvert, indices, ntri);
+  if (nsph > 0) ok = ok && attach_spheres(dev, scene, spheres, nsph);
+  if (ok) rtcCommitScene(scene);
+  if (!ok || rtcGetDeviceError(dev) != RTC_ERROR_NONE) {
+    rtcReleaseScene(scene);
+    return NULL;
+  }
+  ember_scene *s = (ember_scene *)calloc(1, sizeof *s);
+  if (!s) {
+    rtcReleaseScene(scene);
+    on_error(d, RTC_ERROR_OUT_OF_MEMORY, "scene handle");
+    return NULL;
+  }
+  s->scene = scene;
+  s->ntri = (uint32_t)ntri;
+  return s;
+}
+
+void ember_scene_release(ember_scene *s) {
+  if (!s) return;
+  rtcReleaseScene(s->scene);
+  free(s);
+}
+
+static void fill_ray(struct RTCRay *r, const ember_ray *in) {
+  r->org_x = in->org[0];
+  r->org_y = in->org[1];
+  r->org_z = in->org[2];
+  /* Embree requires tnear >= 0. A hit at exactly t = 0 means the origin lies on the
+   * surface (a bounce ray off an axis-aligned plane at coordinate 0 gets no offset from
+   * its zero error bound); ember never means such a hit and the native test rejects it
+   * by its error bound, so the interval starts at the smallest positive float. */
+  r->tnear = in->tnear > FLT_MIN ? in->tnear : FLT_MIN;
+  r->dir_x = in->dir[0];
+  r->dir_y = in->dir[1];
+  r->dir_z = in->dir[2];
+  r->time = 0.0f;
+  r->tfar = in->tfar;
+  /* Debian builds Embree with ray masks: mask 0 would silently miss everything. */
+  r->mask = 0xFFFFFFFFu;
+  r->id = 0;
+  r->flags = 0;
+}
+
+int ember_intersect1(const ember_scene *s, const ember_ray *ray, ember_hit *hit) {
+  struct RTCRayHit rh;
+  fill_ray(&rh.ray, ray);
+  rh.hit.geomID = RTC_INVALID_GEOMETRY_ID;
+  rh.hit.primID = RTC_INVALID_GEOMETRY_ID;
+  rh.hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
+#if RTC_VERSION_MAJOR >= 4
+  struct RTCIntersectArguments args;
+  rtcInitIntersectArguments(&args);
+  rtcIntersect1(s->scene, &rh, &args);
+#else
+  struct RTCIntersectContext ctx;
+  rtcInitIntersectContext(&ctx);
+  rtcIntersect1(s->scene, &ctx, &rh);
+#endif
+  if (rh.hit.geomID == RTC_INVALID_GEOMETRY_ID) {
+    hit->prim = EMBER_NO_PRIM;
+    return 0;
+  }
+  hit->t = rh.ray.tfar;
+  hit->ng[0] = rh.hit.Ng_x;
+  hit->ng[1] = rh.hit.Ng_y;
+  hit->ng[2] = rh.hit.Ng_z;
+  if (rh.hit.geomID == EMBER_TRI_GEOM_ID) {
+    hit->prim = rh.hit.primID;
+    hit->u = rh.hit.u;
+    hit->v = rh.hit.v;
+  } else {
+    hit->prim = s->ntri + rh.hit.primID;
+    hit->u = 0.0f;
+    hit->v = 0.0f;
+  }
+  return 1;
+}
+
+int ember_occluded1(const ember_scene *s, const ember_ray *ray) {
+  struct RTCRay r;
+  fill_ray(&r, ray);
+#if RTC_VERSION_MAJOR >= 4
+  struct RTCOccludedArguments args;
+  rtcInitOccludedArguments(&args);
+  rtcOccluded1(s->scene, &r, &args);
+#else
+  struct RTCIntersectContext ctx;
+  rtcInitIntersectContext(&ctx);
+  rtcOccluded1(s->scene, &ctx, &r);
+#endif
+  /* A hit is reported by tfar = -inf; no hit data is filled. */
+  return r.tfar == -INFINITY;
+}
