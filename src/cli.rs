@@ -45,6 +45,27 @@ pub enum Command {
 
 #[derive(Subcommand, Debug)]
 pub enum BenchCommand {
+    /// Build time, memory and Mrays/s (camera, incoherent, shadow rays) of every backend this build has,
+    /// at each thread count, with the native/Embree ratio. Default scenes: CBbunny, CBspheres_lambertian, a ~1M-triangle displaced sphere.
+    Accel {
+        /// Scenes to measure instead of the defaults.
+        scenes: Vec<PathBuf>,
+        /// Incoherent and shadow rays per measurement (camera rays are 480x360).
+        #[arg(long, default_value_t = 500_000)]
+        rays: usize,
+        /// Thread counts to measure.
+        #[arg(long, value_delimiter = ',', default_values_t = [1, 2])]
+        threads: Vec<usize>,
+        /// Each figure is the median of this many runs.
+        #[arg(long, default_value_t = 5)]
+        repeats: usize,
+        /// Embree's build quality.
+        #[arg(long, value_enum, default_value_t = QualityArg::Medium)]
+        quality: QualityArg,
+        /// Triangle count of the generated displaced sphere (0 leaves it out).
+        #[arg(long, default_value_t = 1_000_000)]
+        mesh_triangles: usize,
+    },
     /// Error against render time for each method (direct: hemisphere / light / MIS; GI: roulette, -l, adaptive, backends).
     /// Writes <out>/<scene>_m<M>.csv and error-vs-time charts (PNG and SVG), prints the time each method needs to reach an error.
     Converge {
@@ -243,6 +264,7 @@ fn info(path: &Path, w: u32, h: u32) -> Result<()> {
     let scene = load_scene(path)?;
     println!("{}", path.display());
     print!("{}", ember::info::scene_info(&scene, w, h));
+    println!("{}", accel::backends_info());
     Ok(())
 }
 
@@ -270,11 +292,19 @@ fn accel_kind(a: AccelArg, b: BvhArg, q: QualityArg) -> AccelKind {
 fn parse_adaptive(a: &Option<Vec<String>>) -> Result<Option<Adaptive>> {
     let Some(v) = a else { return Ok(None) };
     let batch: u32 = match v.first() {
-        Some(s) => s.parse().ok().filter(|&b| b > 0).with_context(|| format!("-a: BATCH must be a positive integer, got {s:?}"))?,
+        Some(s) => s
+            .parse()
+            .ok()
+            .filter(|&b| b > 0)
+            .with_context(|| format!("-a: BATCH must be a positive integer, got {s:?}"))?,
         None => 32,
     };
     let tol: f32 = match v.get(1) {
-        Some(s) => s.parse().ok().filter(|t: &f32| t.is_finite() && *t > 0.0).with_context(|| format!("-a: TOL must be a positive number, got {s:?}"))?,
+        Some(s) => s
+            .parse()
+            .ok()
+            .filter(|t: &f32| t.is_finite() && *t > 0.0)
+            .with_context(|| format!("-a: TOL must be a positive number, got {s:?}"))?,
         None => 0.05,
     };
     Ok(Some(Adaptive::new(batch, tol)))
@@ -283,9 +313,18 @@ fn parse_adaptive(a: &Option<Vec<String>>) -> Result<Option<Adaptive>> {
 fn parse_roulette(s: &str, start: u32) -> Result<Roulette> {
     Ok(match s {
         "off" => Roulette::Off,
-        "throughput" => Roulette::Throughput { start, min_prob: 0.05 },
+        "throughput" => Roulette::Throughput {
+            start,
+            min_prob: 0.05,
+        },
         p => {
-            let prob: f32 = p.parse().ok().filter(|q: &f32| *q > 0.0 && *q <= 1.0).with_context(|| format!("--rr: expected off, throughput or a probability in (0, 1], got {p:?}"))?;
+            let prob: f32 = p
+                .parse()
+                .ok()
+                .filter(|q: &f32| *q > 0.0 && *q <= 1.0)
+                .with_context(|| {
+                    format!("--rr: expected off, throughput or a probability in (0, 1], got {p:?}")
+                })?;
             Roulette::Fixed { start, prob }
         }
     })
@@ -332,14 +371,22 @@ fn settings_from(args: &RenderArgs) -> Result<RenderSettings> {
 fn output_path(args: &RenderArgs, scene: &Path) -> Result<PathBuf> {
     let out = match &args.output {
         Some(p) => p.clone(),
-        None => PathBuf::from(format!("{}.png", scene.file_stem().map(|s| s.to_string_lossy()).unwrap_or("ember".into()))),
+        None => PathBuf::from(format!(
+            "{}.png",
+            scene
+                .file_stem()
+                .map(|s| s.to_string_lossy())
+                .unwrap_or("ember".into())
+        )),
     };
     ember::image_io::OutputFormat::from_path(&out)?;
     Ok(out)
 }
 
 fn thread_pool(threads: Option<usize>) -> Result<rayon::ThreadPool> {
-    let mut b = rayon::ThreadPoolBuilder::new();
+    // Flush-to-zero on every tracing thread, as Embree recommends; the native BVH
+    // gives the same image either way (tested).
+    let mut b = rayon::ThreadPoolBuilder::new().start_handler(|_| accel::set_flush_denormals());
     if let Some(t) = threads {
         if t == 0 {
             bail!("-t: thread count must be at least 1");
@@ -355,8 +402,10 @@ fn progress_bar(total: u64, quiet: bool) -> ProgressBar {
     }
     let pb = ProgressBar::new(total);
     pb.set_style(
-        ProgressStyle::with_template("{spinner} [{elapsed_precise}] {wide_bar} {percent:>3}% ETA {eta}")
-            .expect("valid template"),
+        ProgressStyle::with_template(
+            "{spinner} [{elapsed_precise}] {wide_bar} {percent:>3}% ETA {eta}",
+        )
+        .expect("valid template"),
     );
     pb
 }
@@ -379,13 +428,19 @@ fn render_command(mut args: RenderArgs) -> Result<()> {
     let t1 = Instant::now();
     let accel = pool.install(|| accel::build(&scene, kind))?;
     let t_build = t1.elapsed();
-    let camera = Camera::new(&scene.camera, &scene.bounds, settings.width, settings.height);
+    let camera = Camera::new(
+        &scene.camera,
+        &scene.bounds,
+        settings.width,
+        settings.height,
+    );
     for w in render::render_warnings(&scene, &settings) {
         eprintln!("ember: warning: {w}");
     }
     let pb = progress_bar((settings.width * settings.height) as u64, args.quiet);
     let t2 = Instant::now();
-    let output = pool.install(|| render::render(&scene, accel.as_ref(), &camera, &settings, &|n| pb.inc(n)));
+    let output =
+        pool.install(|| render::render(&scene, accel.as_ref(), &camera, &settings, &|n| pb.inc(n)));
     let t_render = t2.elapsed();
     pb.finish_and_clear();
     ember::image_io::write_image(&output.image, &out)?;
@@ -397,7 +452,10 @@ fn render_command(mut args: RenderArgs) -> Result<()> {
         }
     }
     if output.nonfinite_samples > 0 {
-        eprintln!("ember: warning: {} samples were NaN or infinite and were counted as black", output.nonfinite_samples);
+        eprintln!(
+            "ember: warning: {} samples were NaN or infinite and were counted as black",
+            output.nonfinite_samples
+        );
     }
     if !args.quiet {
         let samples = output.total_samples();
@@ -432,13 +490,54 @@ fn adopt_scene_from_adaptive(args: &mut RenderArgs) {
     }
 }
 
+fn threads_invalid(t: &[usize]) -> bool {
+    t.is_empty() || t.contains(&0)
+}
+
 fn rate_path(out: &Path) -> PathBuf {
-    let stem = out.file_stem().map(|s| s.to_string_lossy().into_owned()).unwrap_or_default();
+    let stem = out
+        .file_stem()
+        .map(|s| s.to_string_lossy().into_owned())
+        .unwrap_or_default();
     out.with_file_name(format!("{stem}_rate.png"))
 }
 
 fn bench(which: BenchCommand) -> Result<()> {
     match which {
+        BenchCommand::Accel {
+            scenes,
+            rays,
+            threads,
+            repeats,
+            quality,
+            mesh_triangles,
+        } => {
+            use ember::bench::accel::{run, AccelBenchOptions, BenchScene};
+            let mut opts = AccelBenchOptions {
+                rays,
+                threads,
+                repeats: repeats.max(1),
+                ..Default::default()
+            };
+            if threads_invalid(&opts.threads) {
+                bail!("--threads: each count must be at least 1");
+            }
+            if !scenes.is_empty() {
+                opts.scenes = scenes.into_iter().map(BenchScene::File).collect();
+            }
+            opts.scenes
+                .retain(|s| !matches!(s, BenchScene::DisplacedSphere(_)));
+            if mesh_triangles > 0 {
+                opts.scenes
+                    .push(BenchScene::DisplacedSphere(mesh_triangles));
+            }
+            if let AccelKind::Embree(q) = accel_kind(AccelArg::Embree, BvhArg::Sah, quality) {
+                opts.embree_quality = q;
+            }
+            let report = run(&opts, |line| eprintln!("ember: {line}"))?;
+            println!("{}", report.to_markdown());
+            Ok(())
+        }
         BenchCommand::Converge {
             scene,
             reference,
@@ -453,7 +552,8 @@ fn bench(which: BenchCommand) -> Result<()> {
             seed,
         } => {
             check_resolution(resolution[0], resolution[1])?;
-            std::fs::create_dir_all(&out).with_context(|| format!("{}: cannot create", out.display()))?;
+            std::fs::create_dir_all(&out)
+                .with_context(|| format!("{}: cannot create", out.display()))?;
             let opts = ember::bench::converge::ConvergeOptions {
                 scene: scene.clone(),
                 reference,
@@ -470,19 +570,39 @@ fn bench(which: BenchCommand) -> Result<()> {
                 compare_backends: true,
             };
             let report = ember::bench::converge::run(&opts, &mut |m| eprintln!("ember: {m}"))?;
-            let stem_name = scene.file_stem().map(|s| s.to_string_lossy().into_owned()).unwrap_or_default();
+            let stem_name = scene
+                .file_stem()
+                .map(|s| s.to_string_lossy().into_owned())
+                .unwrap_or_default();
             let stem = out.join(format!("{stem_name}_m{max_depth}"));
-            let title = format!("{stem_name}, -m {max_depth}, {}x{}: error vs time", resolution[0], resolution[1]);
+            let title = format!(
+                "{stem_name}, -m {max_depth}, {}x{}: error vs time",
+                resolution[0], resolution[1]
+            );
             report.write(&stem, &stem_name, &title)?;
             println!("{}", report.reference_note);
             println!("{}", report.efficiency_table());
-            println!("wrote {}.csv and {}_rmse.png/.svg, {}_relmse.png/.svg", stem.display(), stem.display(), stem.display());
+            println!(
+                "wrote {}.csv and {}_rmse.png/.svg, {}_relmse.png/.svg",
+                stem.display(),
+                stem.display(),
+                stem.display()
+            );
             Ok(())
         }
-        BenchCommand::Render { scenes, spp, max_depth, repeat, accel: a } => {
+        BenchCommand::Render {
+            scenes,
+            spp,
+            max_depth,
+            repeat,
+            accel: a,
+        } => {
             let scenes = if scenes.is_empty() {
                 let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("../shared/scenes/cs184/sky");
-                vec![root.join("CBspheres_lambertian.dae"), root.join("CBbunny.dae")]
+                vec![
+                    root.join("CBspheres_lambertian.dae"),
+                    root.join("CBbunny.dae"),
+                ]
             } else {
                 scenes
             };
@@ -498,7 +618,18 @@ fn bench(which: BenchCommand) -> Result<()> {
 }
 
 fn bench_render_one(path: &Path, spp: u32, m: u32, repeat: u32, a: AccelArg) -> Result<String> {
-    let settings = RenderSettings { width: 480, height: 360, spp, max_depth: m, strategy: if m > 1 { DirectStrategy::Mis } else { DirectStrategy::Light }, ..Default::default() };
+    let settings = RenderSettings {
+        width: 480,
+        height: 360,
+        spp,
+        max_depth: m,
+        strategy: if m > 1 {
+            DirectStrategy::Mis
+        } else {
+            DirectStrategy::Light
+        },
+        ..Default::default()
+    };
     let mut runs = Vec::new();
     for _ in 0..repeat {
         let t0 = Instant::now();
@@ -515,7 +646,10 @@ fn bench_render_one(path: &Path, spp: u32, m: u32, repeat: u32, a: AccelArg) -> 
     }
     runs.sort_by(|a, b| a.0.total_cmp(&b.0));
     let (tr, tl, tb, n) = runs[runs.len() / 2];
-    let name = path.file_name().map(|s| s.to_string_lossy().into_owned()).unwrap_or_default();
+    let name = path
+        .file_name()
+        .map(|s| s.to_string_lossy().into_owned())
+        .unwrap_or_default();
     Ok(format!(
         "| {name} | {spp} | {m} | {:.2} | {:.2} | {:.3} | {:.1} | {:.1} |",
         n as f64 / tr / 1e6,

@@ -99,7 +99,9 @@ impl<'a> PathIntegrator<'a> {
             if !material.is_delta() && self.counts(bounces) {
                 l += beta * self.direct(&si, &frame, material, wo, sampler);
             }
-            let Some(bs) = material.sample(wo, sampler.next_f32(), sampler.next_2d()) else { break };
+            let Some(bs) = material.sample(wo, sampler.next_f32(), sampler.next_2d()) else {
+                break;
+            };
             if bounces >= self.max_depth && !bs.delta && !self.bsdf_rays_find_light() {
                 // The ray could only find emission that this strategy gives weight 0.
                 break;
@@ -119,8 +121,15 @@ impl<'a> PathIntegrator<'a> {
             if !is_finite(beta) || beta == Color::ZERO {
                 break;
             }
-            prev = Some(PrevVertex { p: si.p, bsdf_pdf: bs.pdf, delta: bs.delta });
-            ray = Ray::new(offset_ray_origin(si.p, si.p_error, si.ng, wi_world), wi_world);
+            prev = Some(PrevVertex {
+                p: si.p,
+                bsdf_pdf: bs.pdf,
+                delta: bs.delta,
+            });
+            ray = Ray::new(
+                offset_ray_origin(si.p, si.p_error, si.ng, wi_world),
+                wi_world,
+            );
         }
         l
     }
@@ -146,9 +155,12 @@ impl<'a> PathIntegrator<'a> {
                 (DirectStrategy::Hemisphere, _) => 0.0,
                 (_, None) => 1.0,
                 (DirectStrategy::Light, Some(_)) => 0.0,
-                (DirectStrategy::Mis, Some(l)) => {
-                    power_heuristic(1.0, v.bsdf_pdf, self.light_samples as f32, l.pdf_li(v.p, dir))
-                }
+                (DirectStrategy::Mis, Some(l)) => power_heuristic(
+                    1.0,
+                    v.bsdf_pdf,
+                    self.light_samples as f32,
+                    l.pdf_li(v.p, dir),
+                ),
             },
         }
     }
@@ -175,13 +187,24 @@ impl<'a> PathIntegrator<'a> {
     }
 
     /// Direct light at a non-delta vertex by the chosen strategy.
-    fn direct(&self, si: &SurfaceInteraction, frame: &Frame, m: &Material, wo: Vec3, s: &mut Sampler) -> Color {
+    fn direct(
+        &self,
+        si: &SurfaceInteraction,
+        frame: &Frame,
+        m: &Material,
+        wo: Vec3,
+        s: &mut Sampler,
+    ) -> Color {
         match self.strategy {
             DirectStrategy::Hemisphere => self.direct_hemisphere(si, frame, m, wo, s),
             DirectStrategy::Light | DirectStrategy::Mis => {
                 let mut l = Color::ZERO;
                 for light in &self.scene.lights {
-                    let n = if light.is_delta() { 1 } else { self.light_samples.max(1) };
+                    let n = if light.is_delta() {
+                        1
+                    } else {
+                        self.light_samples.max(1)
+                    };
                     for _ in 0..n {
                         l += self.light_sample(si, frame, m, wo, light, n, s) / n as f32;
                     }
@@ -203,7 +226,9 @@ impl<'a> PathIntegrator<'a> {
         n: u32,
         s: &mut Sampler,
     ) -> Color {
-        let Some(ls) = light.sample_li(si.p, s.next_2d()) else { return Color::ZERO };
+        let Some(ls) = light.sample_li(si.p, s.next_2d()) else {
+            return Color::ZERO;
+        };
         if !(ls.pdf > 0.0) || ls.li == Color::ZERO {
             return Color::ZERO;
         }
@@ -238,7 +263,14 @@ impl<'a> PathIntegrator<'a> {
     }
 
     /// `-H`: `l` uniform directions on the hemisphere of `wo`, counting whatever emission they find.
-    fn direct_hemisphere(&self, si: &SurfaceInteraction, frame: &Frame, m: &Material, wo: Vec3, s: &mut Sampler) -> Color {
+    fn direct_hemisphere(
+        &self,
+        si: &SurfaceInteraction,
+        frame: &Frame,
+        m: &Material,
+        wo: Vec3,
+        s: &mut Sampler,
+    ) -> Color {
         let n = self.light_samples.max(1);
         let mut l = Color::ZERO;
         for _ in 0..n {
@@ -248,13 +280,24 @@ impl<'a> PathIntegrator<'a> {
             }
             let wi_world = frame.to_world(wi);
             let f = m.eval(wo, wi);
-            if f == Color::ZERO || !geometrically_consistent(si, frame.to_world(wo), wi_world, true) {
+            if f == Color::ZERO || !geometrically_consistent(si, frame.to_world(wo), wi_world, true)
+            {
                 continue;
             }
-            let ray = Ray::new(offset_ray_origin(si.p, si.p_error, si.ng, wi_world), wi_world);
+            let ray = Ray::new(
+                offset_ray_origin(si.p, si.p_error, si.ng, wi_world),
+                wi_world,
+            );
             let le = match self.accel.intersect(&ray) {
-                Some(h) => self.scene.emission(&self.scene.interaction(&ray, &h), -wi_world),
-                None => self.scene.lights.iter().map(|lt| lt.le_escaped(wi_world)).sum(),
+                Some(h) => self
+                    .scene
+                    .emission(&self.scene.interaction(&ray, &h), -wi_world),
+                None => self
+                    .scene
+                    .lights
+                    .iter()
+                    .map(|lt| lt.le_escaped(wi_world))
+                    .sum(),
             };
             l += f * le * (wi.z.abs() / uniform_hemisphere_pdf());
         }

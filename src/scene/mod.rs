@@ -107,9 +107,15 @@ pub struct SurfaceInteraction {
 impl Scene {
     /// Radiance leaving the surface of `si` toward world direction `wo`.
     pub fn emission(&self, si: &SurfaceInteraction, wo: Vec3) -> Color {
-        let mut le = self.materials[si.material as usize].emitted(Vec3::new(0.0, 0.0, wo.dot(si.ng)));
+        let mut le =
+            self.materials[si.material as usize].emitted(Vec3::new(0.0, 0.0, wo.dot(si.ng)));
         if !self.surface_emission.is_empty() {
-            le += self.surface_emission.iter().filter(|(p, _)| *p == si.prim).map(|(_, c)| *c).sum::<Color>();
+            le += self
+                .surface_emission
+                .iter()
+                .filter(|(p, _)| *p == si.prim)
+                .map(|(_, c)| *c)
+                .sum::<Color>();
         }
         le
     }
@@ -118,8 +124,19 @@ impl Scene {
     /// attached surface emission): only BSDF sampling can find them.
     pub fn has_unsampled_emitters(&self) -> bool {
         !self.surface_emission.is_empty()
-            || self.triangles.iter().any(|t| t.light == NO_LIGHT && matches!(self.materials[t.material as usize], Material::Emission { .. }))
-            || self.spheres.iter().any(|s| matches!(self.materials[s.material as usize], Material::Emission { .. }))
+            || self.triangles.iter().any(|t| {
+                t.light == NO_LIGHT
+                    && matches!(
+                        self.materials[t.material as usize],
+                        Material::Emission { .. }
+                    )
+            })
+            || self.spheres.iter().any(|s| {
+                matches!(
+                    self.materials[s.material as usize],
+                    Material::Emission { .. }
+                )
+            })
     }
 
     pub fn num_prims(&self) -> usize {
