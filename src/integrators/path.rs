@@ -229,7 +229,7 @@ impl<'a> PathIntegrator<'a> {
         let Some(ls) = light.sample_li(si.p, s.next_2d()) else {
             return Color::ZERO;
         };
-        if !(ls.pdf > 0.0) || ls.li == Color::ZERO {
+        if ls.pdf.is_nan() || ls.pdf <= 0.0 || ls.li == Color::ZERO {
             return Color::ZERO;
         }
         let wi = frame.to_local(ls.wi);
