@@ -92,7 +92,7 @@ pub enum BenchCommand {
         /// spp of ember's own reference.
         #[arg(long, default_value_t = 8192)]
         reference_spp: u32,
-        /// RMSE whose time-to-reach is tabulated (default: the largest final RMSE among the methods).
+        /// RMSE whose time-to-reach is tabulated (default: the median of the methods' final RMSEs).
         #[arg(long)]
         target_rmse: Option<f64>,
         /// Output folder.
@@ -178,7 +178,7 @@ pub struct RenderArgs {
     #[arg(long, value_enum, default_value_t = ShadingArg::Radiance)]
     pub shading: ShadingArg,
 
-    /// Direct-lighting estimator. auto: light sampling for -m ≤ 1, MIS (light + BSDF sampling) beyond. -H forces hemisphere.
+    /// Direct-lighting estimator. auto: MIS (light + BSDF sampling) when the scene has glossy surfaces or an ambient light, light sampling otherwise (see BENCHMARKS.md). -H forces hemisphere.
     #[arg(long, value_enum, default_value_t = IntegratorArg::Auto)]
     pub integrator: IntegratorArg,
 
@@ -330,16 +330,16 @@ fn parse_roulette(s: &str, start: u32) -> Result<Roulette> {
     })
 }
 
-fn strategy(args: &RenderArgs) -> DirectStrategy {
+/// The requested estimator; `None` for auto, which depends on the scene.
+fn strategy(args: &RenderArgs) -> Option<DirectStrategy> {
     if args.hemisphere {
-        return DirectStrategy::Hemisphere;
+        return Some(DirectStrategy::Hemisphere);
     }
     match args.integrator {
-        IntegratorArg::Light => DirectStrategy::Light,
-        IntegratorArg::Mis => DirectStrategy::Mis,
-        IntegratorArg::Hemisphere => DirectStrategy::Hemisphere,
-        IntegratorArg::Auto if args.max_depth > 1 => DirectStrategy::Mis,
-        IntegratorArg::Auto => DirectStrategy::Light,
+        IntegratorArg::Light => Some(DirectStrategy::Light),
+        IntegratorArg::Mis => Some(DirectStrategy::Mis),
+        IntegratorArg::Hemisphere => Some(DirectStrategy::Hemisphere),
+        IntegratorArg::Auto => None,
     }
 }
 
@@ -356,7 +356,7 @@ fn settings_from(args: &RenderArgs) -> Result<RenderSettings> {
         light_samples: args.light_samples.max(1),
         max_depth: args.max_depth,
         accumulate: args.accumulate == 1,
-        strategy: strategy(args),
+        strategy: strategy(args).unwrap_or(DirectStrategy::Light),
         roulette: parse_roulette(&args.rr, args.rr_start)?,
         adaptive: parse_adaptive(&args.adaptive)?,
         shading: match args.shading {
@@ -425,6 +425,7 @@ fn render_command(mut args: RenderArgs) -> Result<()> {
     let t0 = Instant::now();
     let scene = load_scene(&scene_path)?;
     let t_load = t0.elapsed();
+    let settings = RenderSettings { strategy: strategy(&args).unwrap_or_else(|| DirectStrategy::auto_for(&scene)), ..settings };
     let t1 = Instant::now();
     let accel = pool.install(|| accel::build(&scene, kind))?;
     let t_build = t1.elapsed();
@@ -639,6 +640,7 @@ fn bench_render_one(path: &Path, spp: u32, m: u32, repeat: u32, a: AccelArg) -> 
         let acc = accel::build(&scene, accel_kind(a, BvhArg::Sah, QualityArg::Medium))?;
         let t_build = t1.elapsed().as_secs_f64();
         let cam = Camera::new(&scene.camera, &scene.bounds, 480, 360);
+        let settings = RenderSettings { strategy: DirectStrategy::auto_for(&scene), ..settings.clone() };
         let t2 = Instant::now();
         let out = render::render(&scene, acc.as_ref(), &cam, &settings, &|_| {});
         let t_render = t2.elapsed().as_secs_f64();

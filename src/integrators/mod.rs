@@ -18,6 +18,23 @@ pub enum DirectStrategy {
     Mis,
 }
 
+impl DirectStrategy {
+    /// The better default for `scene`, from `ember bench converge`: light sampling is
+    /// about 1.3× more efficient on purely diffuse scenes (MIS pays for BSDF-sampled
+    /// emission that carries little weight), while MIS is several times better as soon
+    /// as glossy surfaces reflect a light, or an environment (ambient) light is sampled
+    /// by a cosine about +Y that is poor near the horizon.
+    pub fn auto_for(scene: &crate::scene::Scene) -> DirectStrategy {
+        let glossy = scene.materials.iter().any(|m| matches!(m, crate::materials::Material::Microfacet { .. }));
+        let ambient = scene.lights.iter().any(|l| matches!(l, crate::lights::Light::Ambient { .. }));
+        if glossy || ambient {
+            DirectStrategy::Mis
+        } else {
+            DirectStrategy::Light
+        }
+    }
+}
+
 /// Russian roulette policy. The depth cap `-m` is never a roulette decision.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum Roulette {
