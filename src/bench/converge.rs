@@ -81,11 +81,7 @@ pub fn methods(base: &RenderSettings, scene: &Scene, compare_backends: bool) -> 
         accel: native,
     };
     let mut v = Vec::new();
-    let default_strategy = if base.max_depth > 1 {
-        DirectStrategy::Mis
-    } else {
-        DirectStrategy::Light
-    };
+    let default_strategy = DirectStrategy::auto_for(scene);
     if base.max_depth <= 1 {
         v.push(m(
             "hemisphere",
