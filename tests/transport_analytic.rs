@@ -273,3 +273,48 @@ fn area_light_irradiance_matches_closed_form() {
         }
     }
 }
+
+/// A floor whose shading normals lean 78° off its geometric normal, with an area light
+/// *below* it facing up and the camera above: every camera ray sees the floor's top,
+/// which no light can reach. Any radiance there is light leaking through the surface.
+#[test]
+fn tilted_shading_normals_do_not_leak_light() {
+    let f = 5.0;
+    let c = Vec3::new(0.0, -0.3, 0.0);
+    let (ex, ey) = (Vec3::new(0.0, 0.0, 1.0), Vec3::new(1.0, 0.0, 0.0)); // ex × ey = +Y: faces up
+    let q = [c - 0.5 * ex - 0.5 * ey, c + 0.5 * ex - 0.5 * ey, c + 0.5 * ex + 0.5 * ey, c - 0.5 * ex + 0.5 * ey];
+    let mut positions = vec![Vec3::new(-f, 0.0, -f), Vec3::new(f, 0.0, -f), Vec3::new(f, 0.0, f), Vec3::new(-f, 0.0, f)];
+    positions.extend_from_slice(&q);
+    let tilted = Vec3::new(1.0, 0.2, 0.3).normalize();
+    let tri = |v: [u32; 3], n: Option<[u32; 3]>, material, light| Triangle { v, n, material, light };
+    let scene = Scene {
+        positions,
+        normals: vec![tilted],
+        triangles: vec![
+            tri([0, 2, 1], Some([0, 0, 0]), 0, NO_LIGHT),
+            tri([0, 3, 2], Some([0, 0, 0]), 0, NO_LIGHT),
+            tri([4, 5, 6], None, 1, 0),
+            tri([4, 6, 7], None, 1, 0),
+        ],
+        materials: vec![Material::Lambertian { albedo: Color::splat(0.9) }, Material::Emission { radiance: Color::splat(50.0) }],
+        lights: vec![Light::Area { centre: c, ex, ey, normal: Vec3::Y, area: 1.0, radiance: Color::splat(50.0) }],
+        bounds: Aabb::new(Vec3::new(-f, -0.3, -f), Vec3::new(f, 0.0, f)),
+        ..Default::default()
+    };
+    let [p0, p1, p2] = scene.triangle_positions(2);
+    assert!((p1 - p0).cross(p2 - p0).y > 0.0, "the light faces up, toward the floor's underside");
+    let accel = accel::build(&scene, AccelKind::Native(BvhBuilder::Sah)).unwrap();
+    let mut cam = Camera::new(&scene.camera, &scene.bounds, 24, 24);
+    cam.eye = Vec3::new(0.1, 1.0, 0.05);
+    cam.forward = Vec3::NEG_Y;
+    cam.up = Vec3::Z;
+    cam.right = cam.forward.cross(cam.up);
+    for strategy in [DirectStrategy::Light, DirectStrategy::Mis, DirectStrategy::Hemisphere] {
+        for m in [1, 5] {
+            let s = RenderSettings { width: 24, height: 24, spp: 16, max_depth: m, strategy, roulette: Roulette::Off, ..Default::default() };
+            let out = render(&scene, accel.as_ref(), &cam, &s, &|_| {});
+            let max = out.image.pixels.iter().map(|p| p.max_element()).fold(0.0, f32::max);
+            assert_eq!(max, 0.0, "{strategy:?} -m {m}: light leaked through the floor");
+        }
+    }
+}
