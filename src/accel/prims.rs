@@ -86,6 +86,37 @@ impl PrimStore {
         }
     }
 
+    /// Closest hit with `t ≤ t_max` among `count` slots from `first` (a leaf).
+    #[inline(always)]
+    pub fn intersect_closest(
+        &self,
+        first: usize,
+        count: usize,
+        r: &PrimRay,
+        mut t_max: f32,
+    ) -> Option<PrimHit> {
+        let mut best = None;
+        for i in first..first + count {
+            if let Some(hit) = self.intersect(i, r, t_max) {
+                t_max = hit.t;
+                best = Some(hit);
+            }
+        }
+        best
+    }
+
+    /// Some hit with `t ≤ t_max` among `count` slots from `first` (a leaf).
+    #[inline(always)]
+    pub fn intersect_any(
+        &self,
+        first: usize,
+        count: usize,
+        r: &PrimRay,
+        t_max: f32,
+    ) -> Option<PrimHit> {
+        (first..first + count).find_map(|i| self.intersect(i, r, t_max))
+    }
+
     #[inline(never)]
     fn intersect_sphere(&self, prim: PrimId, ray: &Ray, t_max: f32) -> Option<PrimHit> {
         let (centre, radius) = self.spheres[(prim - self.num_triangles) as usize];
