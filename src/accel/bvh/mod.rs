@@ -30,7 +30,7 @@ pub struct BvhStats {
     /// Longest root-to-leaf path, counted in nodes (a lone leaf has depth 1).
     pub max_depth: usize,
     /// Expected cost of a random ray that hits the root box, with the SAH
-    /// builder's cost constants (a node visit costs 1, a primitive test 0.4).
+    /// builder's cost constants (a node visit costs 1, a primitive test 0.8).
     pub sah_cost: f32,
 }
 
