@@ -72,9 +72,57 @@ impl PrimStore {
     /// Tests slot `i` for a hit with `t ≤ t_max`.
     #[inline(always)]
     pub fn intersect(&self, i: usize, r: &PrimRay, t_max: f32) -> Option<PrimHit> {
-        let prim = self.ids[i];
+        self.intersect_slot(&self.tris[i], self.ids[i], r, t_max)
+    }
+
+    /// Closest hit with `t ≤ t_max` among `count` slots from `first` (a leaf).
+    #[inline(always)]
+    pub fn intersect_closest(
+        &self,
+        first: usize,
+        count: usize,
+        r: &PrimRay,
+        mut t_max: f32,
+    ) -> Option<PrimHit> {
+        let mut best = None;
+        // One bounds check per leaf instead of two per primitive.
+        let ids = &self.ids[first..first + count];
+        let tris = &self.tris[first..first + count];
+        for (tri, &prim) in tris.iter().zip(ids) {
+            if let Some(hit) = self.intersect_slot(tri, prim, r, t_max) {
+                t_max = hit.t;
+                best = Some(hit);
+            }
+        }
+        best
+    }
+
+    /// Some hit with `t ≤ t_max` among `count` slots from `first` (a leaf).
+    #[inline(always)]
+    pub fn intersect_any(
+        &self,
+        first: usize,
+        count: usize,
+        r: &PrimRay,
+        t_max: f32,
+    ) -> Option<PrimHit> {
+        let ids = &self.ids[first..first + count];
+        let tris = &self.tris[first..first + count];
+        tris.iter()
+            .zip(ids)
+            .find_map(|(tri, &prim)| self.intersect_slot(tri, prim, r, t_max))
+    }
+
+    #[inline(always)]
+    fn intersect_slot(
+        &self,
+        tri: &PackedTriangle,
+        prim: PrimId,
+        r: &PrimRay,
+        t_max: f32,
+    ) -> Option<PrimHit> {
         if prim < self.num_triangles {
-            let h = self.tris[i].intersect(&r.tri, t_max)?;
+            let h = tri.intersect(&r.tri, t_max)?;
             Some(PrimHit {
                 t: h.t,
                 prim,

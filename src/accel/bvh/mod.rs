@@ -7,6 +7,7 @@ mod build;
 mod build_midpoint;
 mod build_sah;
 mod node;
+mod pair_node;
 mod traverse;
 
 use super::prims::{hittable_prims, PrimStore};
@@ -17,6 +18,7 @@ use build::{build_nodes, BuildPrim};
 use build_midpoint::MidpointBuilder;
 use build_sah::SahBinnedBuilder;
 use node::BvhNode;
+use pair_node::{pair_nodes, ChildRef, PairNode};
 
 /// Shape and quality of a built tree, for `ember info` and benchmarks.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
@@ -28,7 +30,7 @@ pub struct BvhStats {
     /// Longest root-to-leaf path, counted in nodes (a lone leaf has depth 1).
     pub max_depth: usize,
     /// Expected cost of a random ray that hits the root box, with the SAH
-    /// builder's cost constants (a node visit costs 1, a primitive test 0.4).
+    /// builder's cost constants (a node visit costs 1, a primitive test 0.8).
     pub sah_cost: f32,
 }
 
@@ -36,7 +38,11 @@ pub struct BvhStats {
 /// the same tree.
 #[derive(PartialEq)]
 pub struct Bvh {
+    /// The builder's nodes, kept for statistics.
     nodes: Vec<BvhNode>,
+    /// The same tree in traversal layout, and where traversal starts.
+    pairs: Vec<PairNode>,
+    root: ChildRef,
     prims: PrimStore,
     builder: BvhBuilder,
     stats: BvhStats,
@@ -57,8 +63,11 @@ impl Bvh {
         let order: Vec<PrimId> = build_prims.iter().map(|p| p.id).collect();
         let prims = PrimStore::new(scene, &order);
         let stats = tree_stats(&nodes);
+        let (pairs, root) = pair_nodes(&nodes);
         Bvh {
             nodes,
+            pairs,
+            root,
             prims,
             builder,
             stats,
@@ -121,6 +130,7 @@ impl Accel for Bvh {
     fn memory_bytes(&self) -> usize {
         std::mem::size_of::<Self>()
             + self.nodes.capacity() * std::mem::size_of::<BvhNode>()
+            + self.pairs.capacity() * std::mem::size_of::<PairNode>()
             + self.prims.memory_bytes()
     }
 }
