@@ -16,6 +16,10 @@ pub enum DirectStrategy {
     Light,
     /// Light sampling and BSDF sampling combined by the power heuristic.
     Mis,
+    /// BSDF sampling alone: no light sampling; emission found by the path's own
+    /// BSDF-sampled rays counts in full. Like `Hemisphere`, it cannot see delta lights;
+    /// it exists to show where BSDF sampling is the better half of MIS.
+    Bsdf,
 }
 
 /// Russian roulette policy. The depth cap `-m` is never a roulette decision.

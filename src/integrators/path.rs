@@ -106,6 +106,8 @@ impl PathIntegrator<'_> {
             Some(v) => match (self.strategy, light) {
                 // The hemisphere estimator already counted every emitter the direction finds.
                 (DirectStrategy::Hemisphere, _) => 0.0,
+                // Nothing else estimates direct light: the BSDF-sampled ray counts in full.
+                (DirectStrategy::Bsdf, _) => 1.0,
                 (_, None) => 1.0,
                 (DirectStrategy::Light, Some(_)) => 0.0,
                 (DirectStrategy::Mis, Some(l)) => {
@@ -140,6 +142,7 @@ impl PathIntegrator<'_> {
     fn direct(&self, si: &SurfaceInteraction, frame: &Frame, m: &Material, wo: Vec3, s: &mut Sampler) -> Color {
         match self.strategy {
             DirectStrategy::Hemisphere => self.direct_hemisphere(si, frame, m, wo, s),
+            DirectStrategy::Bsdf => Color::ZERO,
             DirectStrategy::Light | DirectStrategy::Mis => {
                 let mut l = Color::ZERO;
                 for light in &self.scene.lights {
