@@ -234,11 +234,19 @@ fn accel_kind(a: AccelArg, b: BvhArg, q: QualityArg) -> AccelKind {
 fn parse_adaptive(a: &Option<Vec<String>>) -> Result<Option<Adaptive>> {
     let Some(v) = a else { return Ok(None) };
     let batch: u32 = match v.first() {
-        Some(s) => s.parse().ok().filter(|&b| b > 0).with_context(|| format!("-a: BATCH must be a positive integer, got {s:?}"))?,
+        Some(s) => s
+            .parse()
+            .ok()
+            .filter(|&b| b > 0)
+            .with_context(|| format!("-a: BATCH must be a positive integer, got {s:?}"))?,
         None => 32,
     };
     let tol: f32 = match v.get(1) {
-        Some(s) => s.parse().ok().filter(|t: &f32| t.is_finite() && *t > 0.0).with_context(|| format!("-a: TOL must be a positive number, got {s:?}"))?,
+        Some(s) => s
+            .parse()
+            .ok()
+            .filter(|t: &f32| t.is_finite() && *t > 0.0)
+            .with_context(|| format!("-a: TOL must be a positive number, got {s:?}"))?,
         None => 0.05,
     };
     Ok(Some(Adaptive::new(batch, tol)))
@@ -247,9 +255,18 @@ fn parse_adaptive(a: &Option<Vec<String>>) -> Result<Option<Adaptive>> {
 fn parse_roulette(s: &str, start: u32) -> Result<Roulette> {
     Ok(match s {
         "off" => Roulette::Off,
-        "throughput" => Roulette::Throughput { start, min_prob: 0.05 },
+        "throughput" => Roulette::Throughput {
+            start,
+            min_prob: 0.05,
+        },
         p => {
-            let prob: f32 = p.parse().ok().filter(|q: &f32| *q > 0.0 && *q <= 1.0).with_context(|| format!("--rr: expected off, throughput or a probability in (0, 1], got {p:?}"))?;
+            let prob: f32 = p
+                .parse()
+                .ok()
+                .filter(|q: &f32| *q > 0.0 && *q <= 1.0)
+                .with_context(|| {
+                    format!("--rr: expected off, throughput or a probability in (0, 1], got {p:?}")
+                })?;
             Roulette::Fixed { start, prob }
         }
     })
@@ -296,7 +313,13 @@ fn settings_from(args: &RenderArgs) -> Result<RenderSettings> {
 fn output_path(args: &RenderArgs, scene: &Path) -> Result<PathBuf> {
     let out = match &args.output {
         Some(p) => p.clone(),
-        None => PathBuf::from(format!("{}.png", scene.file_stem().map(|s| s.to_string_lossy()).unwrap_or("ember".into()))),
+        None => PathBuf::from(format!(
+            "{}.png",
+            scene
+                .file_stem()
+                .map(|s| s.to_string_lossy())
+                .unwrap_or("ember".into())
+        )),
     };
     ember::image_io::OutputFormat::from_path(&out)?;
     Ok(out)
@@ -319,8 +342,10 @@ fn progress_bar(total: u64, quiet: bool) -> ProgressBar {
     }
     let pb = ProgressBar::new(total);
     pb.set_style(
-        ProgressStyle::with_template("{spinner} [{elapsed_precise}] {wide_bar} {percent:>3}% ETA {eta}")
-            .expect("valid template"),
+        ProgressStyle::with_template(
+            "{spinner} [{elapsed_precise}] {wide_bar} {percent:>3}% ETA {eta}",
+        )
+        .expect("valid template"),
     );
     pb
 }
@@ -343,13 +368,19 @@ fn render_command(mut args: RenderArgs) -> Result<()> {
     let t1 = Instant::now();
     let accel = pool.install(|| accel::build(&scene, kind))?;
     let t_build = t1.elapsed();
-    let camera = Camera::new(&scene.camera, &scene.bounds, settings.width, settings.height);
+    let camera = Camera::new(
+        &scene.camera,
+        &scene.bounds,
+        settings.width,
+        settings.height,
+    );
     for w in render::render_warnings(&scene, &settings) {
         eprintln!("ember: warning: {w}");
     }
     let pb = progress_bar((settings.width * settings.height) as u64, args.quiet);
     let t2 = Instant::now();
-    let output = pool.install(|| render::render(&scene, accel.as_ref(), &camera, &settings, &|n| pb.inc(n)));
+    let output =
+        pool.install(|| render::render(&scene, accel.as_ref(), &camera, &settings, &|n| pb.inc(n)));
     let t_render = t2.elapsed();
     pb.finish_and_clear();
     ember::image_io::write_image(&output.image, &out)?;
@@ -361,7 +392,10 @@ fn render_command(mut args: RenderArgs) -> Result<()> {
         }
     }
     if output.nonfinite_samples > 0 {
-        eprintln!("ember: warning: {} samples were NaN or infinite and were counted as black", output.nonfinite_samples);
+        eprintln!(
+            "ember: warning: {} samples were NaN or infinite and were counted as black",
+            output.nonfinite_samples
+        );
     }
     if !args.quiet {
         let samples = output.total_samples();
@@ -397,16 +431,28 @@ fn adopt_scene_from_adaptive(args: &mut RenderArgs) {
 }
 
 fn rate_path(out: &Path) -> PathBuf {
-    let stem = out.file_stem().map(|s| s.to_string_lossy().into_owned()).unwrap_or_default();
+    let stem = out
+        .file_stem()
+        .map(|s| s.to_string_lossy().into_owned())
+        .unwrap_or_default();
     out.with_file_name(format!("{stem}_rate.png"))
 }
 
 fn bench(which: BenchCommand) -> Result<()> {
     match which {
-        BenchCommand::Render { scenes, spp, max_depth, repeat, accel: a } => {
+        BenchCommand::Render {
+            scenes,
+            spp,
+            max_depth,
+            repeat,
+            accel: a,
+        } => {
             let scenes = if scenes.is_empty() {
                 let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("../shared/scenes/cs184/sky");
-                vec![root.join("CBspheres_lambertian.dae"), root.join("CBbunny.dae")]
+                vec![
+                    root.join("CBspheres_lambertian.dae"),
+                    root.join("CBbunny.dae"),
+                ]
             } else {
                 scenes
             };
@@ -422,7 +468,18 @@ fn bench(which: BenchCommand) -> Result<()> {
 }
 
 fn bench_render_one(path: &Path, spp: u32, m: u32, repeat: u32, a: AccelArg) -> Result<String> {
-    let settings = RenderSettings { width: 480, height: 360, spp, max_depth: m, strategy: if m > 1 { DirectStrategy::Mis } else { DirectStrategy::Light }, ..Default::default() };
+    let settings = RenderSettings {
+        width: 480,
+        height: 360,
+        spp,
+        max_depth: m,
+        strategy: if m > 1 {
+            DirectStrategy::Mis
+        } else {
+            DirectStrategy::Light
+        },
+        ..Default::default()
+    };
     let mut runs = Vec::new();
     for _ in 0..repeat {
         let t0 = Instant::now();
@@ -439,7 +496,10 @@ fn bench_render_one(path: &Path, spp: u32, m: u32, repeat: u32, a: AccelArg) -> 
     }
     runs.sort_by(|a, b| a.0.total_cmp(&b.0));
     let (tr, tl, tb, n) = runs[runs.len() / 2];
-    let name = path.file_name().map(|s| s.to_string_lossy().into_owned()).unwrap_or_default();
+    let name = path
+        .file_name()
+        .map(|s| s.to_string_lossy().into_owned())
+        .unwrap_or_default();
     Ok(format!(
         "| {name} | {spp} | {m} | {:.2} | {:.2} | {:.3} | {:.1} | {:.1} |",
         n as f64 / tr / 1e6,

@@ -13,7 +13,11 @@ pub struct Image {
 
 impl Image {
     pub fn new(width: u32, height: u32) -> Self {
-        Image { width, height, pixels: vec![Color::ZERO; (width as usize) * (height as usize)] }
+        Image {
+            width,
+            height,
+            pixels: vec![Color::ZERO; (width as usize) * (height as usize)],
+        }
     }
 
     #[inline]
@@ -24,13 +28,22 @@ impl Image {
     /// Per-channel image mean.
     pub fn mean(&self) -> Color {
         let n = self.pixels.len().max(1) as f64;
-        let s = self.pixels.iter().fold([0f64; 3], |a, p| [a[0] + p.x as f64, a[1] + p.y as f64, a[2] + p.z as f64]);
+        let s = self.pixels.iter().fold([0f64; 3], |a, p| {
+            [a[0] + p.x as f64, a[1] + p.y as f64, a[2] + p.z as f64]
+        });
         Color::new((s[0] / n) as f32, (s[1] / n) as f32, (s[2] / n) as f32)
     }
 
     /// Mean after clamping every channel to [0, 1] (what a PNG can show).
     pub fn mean_clamped(&self) -> Color {
-        let clamped = Image { pixels: self.pixels.iter().map(|p| p.clamp(Color::ZERO, Color::ONE)).collect(), ..*self };
+        let clamped = Image {
+            pixels: self
+                .pixels
+                .iter()
+                .map(|p| p.clamp(Color::ZERO, Color::ONE))
+                .collect(),
+            ..*self
+        };
         clamped.mean()
     }
 
@@ -59,7 +72,11 @@ impl Image {
 
     /// RMSE over all channels against `other` (same size).
     pub fn rmse(&self, other: &Image) -> f64 {
-        assert_eq!((self.width, self.height), (other.width, other.height), "rmse of images of different sizes");
+        assert_eq!(
+            (self.width, self.height),
+            (other.width, other.height),
+            "rmse of images of different sizes"
+        );
         let se: f64 = self
             .pixels
             .iter()
@@ -94,7 +111,11 @@ impl Image {
 
 /// A blue → cyan → green → yellow → red ramp for `t ∈ [0, 1]` (the course's "jet"-like map).
 pub fn heat_color(t: f32) -> Color {
-    let t = if t.is_finite() { t.clamp(0.0, 1.0) } else { 0.0 };
+    let t = if t.is_finite() {
+        t.clamp(0.0, 1.0)
+    } else {
+        0.0
+    };
     let r = (1.5 - (4.0 * t - 3.0).abs()).clamp(0.0, 1.0);
     let g = (1.5 - (4.0 * t - 2.0).abs()).clamp(0.0, 1.0);
     let b = (1.5 - (4.0 * t - 1.0).abs()).clamp(0.0, 1.0);
@@ -104,5 +125,9 @@ pub fn heat_color(t: f32) -> Color {
 /// False-colour image of per-pixel counts scaled so that `scale` maps to red.
 pub fn heat_map(width: u32, height: u32, counts: &[f32], scale: f32) -> Image {
     let s = if scale > 0.0 { scale } else { 1.0 };
-    Image { width, height, pixels: counts.iter().map(|&c| heat_color(c / s)).collect() }
+    Image {
+        width,
+        height,
+        pixels: counts.iter().map(|&c| heat_color(c / s)).collect(),
+    }
 }

@@ -12,7 +12,10 @@ pub enum ImageIoError {
     #[error("{path}: unsupported image extension (use .png or .exr)")]
     UnknownFormat { path: String },
     #[error("{path}: cannot write: {source}")]
-    Write { path: String, source: std::io::Error },
+    Write {
+        path: String,
+        source: std::io::Error,
+    },
     #[error("{path}: cannot encode: {msg}")]
     Encode { path: String, msg: String },
     #[error("{path}: cannot read image: {msg}")]
@@ -28,18 +31,33 @@ pub enum OutputFormat {
 
 impl OutputFormat {
     pub fn from_path(path: &Path) -> Result<Self, ImageIoError> {
-        match path.extension().and_then(|e| e.to_str()).map(|e| e.to_ascii_lowercase()).as_deref() {
+        match path
+            .extension()
+            .and_then(|e| e.to_str())
+            .map(|e| e.to_ascii_lowercase())
+            .as_deref()
+        {
             Some("png") => Ok(OutputFormat::Png),
             Some("exr") => Ok(OutputFormat::Exr),
-            _ => Err(ImageIoError::UnknownFormat { path: path.display().to_string() }),
+            _ => Err(ImageIoError::UnknownFormat {
+                path: path.display().to_string(),
+            }),
         }
     }
 }
 
 /// The sRGB transfer function of spec §8 applied to a clamped linear value, rounded.
 pub fn srgb8(x: f32) -> u8 {
-    let x = if x.is_finite() { x.clamp(0.0, 1.0) } else { 0.0 };
-    let v = if x <= 0.003_130_8 { 12.92 * x } else { 1.055 * x.powf(1.0 / 2.4) - 0.055 };
+    let x = if x.is_finite() {
+        x.clamp(0.0, 1.0)
+    } else {
+        0.0
+    };
+    let v = if x <= 0.003_130_8 {
+        12.92 * x
+    } else {
+        1.055 * x.powf(1.0 / 2.4) - 0.055
+    };
     (v * 255.0).round().clamp(0.0, 255.0) as u8
 }
 
@@ -49,7 +67,12 @@ pub fn write_image(img: &Image, path: &Path) -> Result<(), ImageIoError> {
     let display = path.display().to_string();
     let tmp = temp_sibling(path);
     let result = write_to_file(img, &tmp, format, &display);
-    match result.and_then(|_| std::fs::rename(&tmp, path).map_err(|source| ImageIoError::Write { path: display.clone(), source })) {
+    match result.and_then(|_| {
+        std::fs::rename(&tmp, path).map_err(|source| ImageIoError::Write {
+            path: display.clone(),
+            source,
+        })
+    }) {
         Ok(()) => Ok(()),
         Err(e) => {
             let _ = std::fs::remove_file(&tmp);
@@ -59,24 +82,43 @@ pub fn write_image(img: &Image, path: &Path) -> Result<(), ImageIoError> {
 }
 
 fn temp_sibling(path: &Path) -> PathBuf {
-    let name = path.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default();
+    let name = path
+        .file_name()
+        .map(|n| n.to_string_lossy().into_owned())
+        .unwrap_or_default();
     path.with_file_name(format!(".{name}.{}.tmp", std::process::id()))
 }
 
-fn write_to_file(img: &Image, tmp: &Path, format: OutputFormat, display: &str) -> Result<(), ImageIoError> {
-    let werr = |source| ImageIoError::Write { path: display.to_string(), source };
+fn write_to_file(
+    img: &Image,
+    tmp: &Path,
+    format: OutputFormat,
+    display: &str,
+) -> Result<(), ImageIoError> {
+    let werr = |source| ImageIoError::Write {
+        path: display.to_string(),
+        source,
+    };
     let file = std::fs::File::create(tmp).map_err(werr)?;
     let mut out = BufWriter::new(file);
-    let enc = |e: image::ImageError| ImageIoError::Encode { path: display.to_string(), msg: e.to_string() };
+    let enc = |e: image::ImageError| ImageIoError::Encode {
+        path: display.to_string(),
+        msg: e.to_string(),
+    };
     match format {
         OutputFormat::Png => {
-            let buf: Vec<u8> = img.pixels.iter().flat_map(|p| [srgb8(p.x), srgb8(p.y), srgb8(p.z)]).collect();
+            let buf: Vec<u8> = img
+                .pixels
+                .iter()
+                .flat_map(|p| [srgb8(p.x), srgb8(p.y), srgb8(p.z)])
+                .collect();
             let rgb = RgbImage::from_raw(img.width, img.height, buf).expect("buffer size matches");
             rgb.write_to(&mut out, ImageFormat::Png).map_err(enc)?;
         }
         OutputFormat::Exr => {
             let buf: Vec<f32> = img.pixels.iter().flat_map(|p| [p.x, p.y, p.z]).collect();
-            let rgb = Rgb32FImage::from_raw(img.width, img.height, buf).expect("buffer size matches");
+            let rgb =
+                Rgb32FImage::from_raw(img.width, img.height, buf).expect("buffer size matches");
             rgb.write_to(&mut out, ImageFormat::OpenExr).map_err(enc)?;
         }
     }
@@ -88,7 +130,10 @@ fn write_to_file(img: &Image, tmp: &Path, format: OutputFormat, display: &str) -
 
 /// Reads a linear float image (EXR) or a PNG (decoded back to linear).
 pub fn read_image(path: &Path) -> Result<Image, ImageIoError> {
-    let err = |msg: String| ImageIoError::Read { path: path.display().to_string(), msg };
+    let err = |msg: String| ImageIoError::Read {
+        path: path.display().to_string(),
+        msg,
+    };
     let dynimg = image::open(path).map_err(|e| err(e.to_string()))?;
     let rgb = dynimg.to_rgb32f();
     let (w, h) = rgb.dimensions();
@@ -104,7 +149,11 @@ pub fn read_image(path: &Path) -> Result<Image, ImageIoError> {
             }
         })
         .collect();
-    Ok(Image { width: w, height: h, pixels })
+    Ok(Image {
+        width: w,
+        height: h,
+        pixels,
+    })
 }
 
 fn srgb_to_linear(v: f32) -> f32 {

@@ -35,7 +35,11 @@ pub struct Adaptive {
 
 impl Adaptive {
     pub fn new(batch: u32, tol: f32) -> Self {
-        Adaptive { batch: batch.max(1), tol, min_samples_if_constant: 4 * batch.max(1) }
+        Adaptive {
+            batch: batch.max(1),
+            tol,
+            min_samples_if_constant: 4 * batch.max(1),
+        }
     }
 }
 
@@ -107,7 +111,9 @@ pub fn render(
     progress: &(dyn Fn(u64) + Sync),
 ) -> RenderOutput {
     let (w, h) = (settings.width, settings.height);
-    let tiles: Vec<(u32, u32)> = (0..h.div_ceil(TILE)).flat_map(|ty| (0..w.div_ceil(TILE)).map(move |tx| (tx, ty))).collect();
+    let tiles: Vec<(u32, u32)> = (0..h.div_ceil(TILE))
+        .flat_map(|ty| (0..w.div_ceil(TILE)).map(move |tx| (tx, ty)))
+        .collect();
     let integrator = PathIntegrator {
         scene,
         accel,
@@ -123,7 +129,15 @@ pub fn render(
             let mut out = Vec::with_capacity((TILE * TILE) as usize);
             for y in ty * TILE..((ty + 1) * TILE).min(h) {
                 for x in tx * TILE..((tx + 1) * TILE).min(w) {
-                    out.push(render_pixel(scene, accel, camera, settings, &integrator, x, y));
+                    out.push(render_pixel(
+                        scene,
+                        accel,
+                        camera,
+                        settings,
+                        &integrator,
+                        x,
+                        y,
+                    ));
                 }
             }
             progress(out.len() as u64);
@@ -176,7 +190,11 @@ fn render_pixel(
             }
         }
     }
-    PixelResult { value: sum / n as f32, samples: n, nonfinite }
+    PixelResult {
+        value: sum / n as f32,
+        samples: n,
+        nonfinite,
+    }
 }
 
 /// The spec's stopping rule, plus a minimum count for pixels that look constant.
@@ -193,7 +211,12 @@ fn converged(a: Adaptive, n: u32, s1: f64, s2: f64) -> bool {
     1.96 * var.sqrt() / nf.sqrt() <= a.tol as f64 * mu
 }
 
-fn assemble(tiles: &[(u32, u32)], results: Vec<Vec<PixelResult>>, s: &RenderSettings, scene: &Scene) -> RenderOutput {
+fn assemble(
+    tiles: &[(u32, u32)],
+    results: Vec<Vec<PixelResult>>,
+    s: &RenderSettings,
+    scene: &Scene,
+) -> RenderOutput {
     let (w, h) = (s.width, s.height);
     let mut image = Image::new(w, h);
     let mut samples = vec![0u32; (w * h) as usize];
@@ -217,7 +240,13 @@ fn assemble(tiles: &[(u32, u32)], results: Vec<Vec<PixelResult>>, s: &RenderSett
         image = heat_map(w, h, &costs, scale);
         cost_scale = Some(scale);
     }
-    RenderOutput { image, samples, nonfinite_samples: nonfinite, cost_scale, warnings: render_warnings(scene, s) }
+    RenderOutput {
+        image,
+        samples,
+        nonfinite_samples: nonfinite,
+        cost_scale,
+        warnings: render_warnings(scene, s),
+    }
 }
 
 fn percentile(v: &[f32], q: f32) -> f32 {
@@ -246,7 +275,13 @@ pub fn render_warnings(scene: &Scene, s: &RenderSettings) -> Vec<String> {
             ));
         }
     }
-    if s.shading == Shading::Radiance && scene.lights.is_empty() && !scene.materials.iter().any(|m| matches!(m, crate::materials::Material::Emission { .. })) {
+    if s.shading == Shading::Radiance
+        && scene.lights.is_empty()
+        && !scene
+            .materials
+            .iter()
+            .any(|m| matches!(m, crate::materials::Material::Emission { .. }))
+    {
         w.push("the scene has no lights and no emissive surfaces: the image will be black".into());
     }
     w

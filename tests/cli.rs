@@ -8,7 +8,9 @@ fn ember() -> Command {
 }
 
 fn shared(rel: &str) -> PathBuf {
-    PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../shared").join(rel)
+    PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+        .join("../shared")
+        .join(rel)
 }
 
 #[test]
@@ -16,12 +18,18 @@ fn cs184_command_line_is_accepted_verbatim() {
     let dir = tempfile::tempdir().unwrap();
     let out = dir.path().join("out.png");
     let st = ember()
-        .args(["-t", "2", "-s", "2", "-l", "2", "-m", "2", "-r", "32", "24", "-f"])
+        .args([
+            "-t", "2", "-s", "2", "-l", "2", "-m", "2", "-r", "32", "24", "-f",
+        ])
         .arg(&out)
         .arg(shared("scenes/cs184/sky/CBspheres_lambertian.dae"))
         .output()
         .unwrap();
-    assert!(st.status.success(), "{}", String::from_utf8_lossy(&st.stderr));
+    assert!(
+        st.status.success(),
+        "{}",
+        String::from_utf8_lossy(&st.stderr)
+    );
     let img = image::open(&out).unwrap();
     assert_eq!((img.width(), img.height()), (32, 24));
 }
@@ -31,12 +39,18 @@ fn exr_output_and_adaptive_rate_map() {
     let dir = tempfile::tempdir().unwrap();
     let out = dir.path().join("x.exr");
     let st = ember()
-        .args(["-s", "64", "-a", "8", "0.1", "-m", "1", "-r", "64", "48", "-f"])
+        .args([
+            "-s", "64", "-a", "8", "0.1", "-m", "1", "-r", "64", "48", "-f",
+        ])
         .arg(&out)
         .arg(shared("scenes/cs184/sky/CBspheres_lambertian.dae"))
         .output()
         .unwrap();
-    assert!(st.status.success(), "{}", String::from_utf8_lossy(&st.stderr));
+    assert!(
+        st.status.success(),
+        "{}",
+        String::from_utf8_lossy(&st.stderr)
+    );
     let img = ember::image_io::read_image(&out).unwrap();
     assert_eq!((img.width, img.height), (64, 48));
     // The light is seen directly at radiance 10: EXR keeps linear values above 1.
@@ -48,7 +62,10 @@ fn fails_with(args: &[&str], needle: &str) {
     let st = ember().args(args).output().unwrap();
     let err = String::from_utf8_lossy(&st.stderr);
     assert!(!st.status.success(), "{args:?} succeeded");
-    assert!(err.contains(needle), "{args:?}: stderr {err:?} lacks {needle:?}");
+    assert!(
+        err.contains(needle),
+        "{args:?}: stderr {err:?} lacks {needle:?}"
+    );
     assert!(!err.contains("panicked"), "{args:?} panicked: {err}");
 }
 
@@ -82,17 +99,33 @@ fn unwritable_output_leaves_no_file() {
     // A directory in place of the file: the write fails and the temporary is cleaned up.
     let as_dir = dir.path().join("taken.png");
     std::fs::create_dir(&as_dir).unwrap();
-    let st = ember().args(["-s", "1", "-r", "8", "6", "-f"]).arg(&as_dir).arg(shared("scenes/cs184/sky/CBempty.dae")).output().unwrap();
+    let st = ember()
+        .args(["-s", "1", "-r", "8", "6", "-f"])
+        .arg(&as_dir)
+        .arg(shared("scenes/cs184/sky/CBempty.dae"))
+        .output()
+        .unwrap();
     assert!(!st.status.success());
-    let leftovers: Vec<_> = std::fs::read_dir(dir.path()).unwrap().map(|e| e.unwrap().file_name()).collect();
-    assert_eq!(leftovers, vec![std::ffi::OsString::from("taken.png")], "a temporary file was left behind");
+    let leftovers: Vec<_> = std::fs::read_dir(dir.path())
+        .unwrap()
+        .map(|e| e.unwrap().file_name())
+        .collect();
+    assert_eq!(
+        leftovers,
+        vec![std::ffi::OsString::from("taken.png")],
+        "a temporary file was left behind"
+    );
 }
 
 #[test]
 fn malformed_scene_is_an_error_naming_the_file() {
     let dir = tempfile::tempdir().unwrap();
     let bad = dir.path().join("broken.dae");
-    std::fs::write(&bad, "<COLLADA><library_geometries><geometry id=\"g\"><mesh>").unwrap();
+    std::fs::write(
+        &bad,
+        "<COLLADA><library_geometries><geometry id=\"g\"><mesh>",
+    )
+    .unwrap();
     let out = dir.path().join("o.png");
     let st = ember().arg("-f").arg(&out).arg(&bad).output().unwrap();
     assert!(!st.status.success());
@@ -105,7 +138,11 @@ fn embree_request_without_feature_says_how_to_get_it() {
     if cfg!(feature = "embree") {
         return;
     }
-    let st = ember().args(["--accel", "embree", "-r", "8", "6"]).arg(shared("scenes/cs184/sky/CBempty.dae")).output().unwrap();
+    let st = ember()
+        .args(["--accel", "embree", "-r", "8", "6"])
+        .arg(shared("scenes/cs184/sky/CBempty.dae"))
+        .output()
+        .unwrap();
     assert!(!st.status.success());
     assert!(String::from_utf8_lossy(&st.stderr).contains("rebuild with --features embree"));
 }

@@ -21,10 +21,19 @@ struct Reference {
 fn reference(file: &str) -> Reference {
     let text = std::fs::read_to_string(shared("references/manifest.json")).expect("manifest");
     let v: serde_json::Value = serde_json::from_str(&text).expect("manifest json");
-    let e = v["images"].as_array().unwrap().iter().find(|e| e["file"] == file).expect("manifest entry");
+    let e = v["images"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .find(|e| e["file"] == file)
+        .expect("manifest entry");
     let arr = |k: &str| -> [f64; 3] {
         let a = e[k].as_array().unwrap();
-        [a[0].as_f64().unwrap(), a[1].as_f64().unwrap(), a[2].as_f64().unwrap()]
+        [
+            a[0].as_f64().unwrap(),
+            a[1].as_f64().unwrap(),
+            a[2].as_f64().unwrap(),
+        ]
     };
     Reference {
         mean: arr("mean_rgb"),
@@ -35,7 +44,14 @@ fn reference(file: &str) -> Reference {
 }
 
 fn clamp01(img: &Image) -> Image {
-    Image { pixels: img.pixels.iter().map(|p| p.clamp(ember::Color::ZERO, ember::Color::ONE)).collect(), ..img.clone() }
+    Image {
+        pixels: img
+            .pixels
+            .iter()
+            .map(|p| p.clamp(ember::Color::ZERO, ember::Color::ONE))
+            .collect(),
+        ..img.clone()
+    }
 }
 
 /// How the image means are compared.
@@ -68,8 +84,22 @@ fn masked_mean(img: &Image, reference: &Image, limit: f32) -> ([f64; 3], usize) 
 
 /// `img` with the pixels where `reference` reaches `limit` set to zero.
 fn mask(img: &Image, reference: &Image, limit: f32) -> Image {
-    let pixels = img.pixels.iter().zip(&reference.pixels).map(|(p, r)| if r.max_element() < limit { *p } else { ember::Color::ZERO }).collect();
-    Image { pixels, ..img.clone() }
+    let pixels = img
+        .pixels
+        .iter()
+        .zip(&reference.pixels)
+        .map(|(p, r)| {
+            if r.max_element() < limit {
+                *p
+            } else {
+                ember::Color::ZERO
+            }
+        })
+        .collect();
+    Image {
+        pixels,
+        ..img.clone()
+    }
 }
 
 trait Masked {
@@ -78,7 +108,11 @@ trait Masked {
 
 impl Masked for common::HalfRenders {
     fn masked(&self, reference: &Image, limit: f32) -> Self {
-        common::HalfRenders { a: mask(&self.a, reference, limit), b: mask(&self.b, reference, limit), avg: mask(&self.avg, reference, limit) }
+        common::HalfRenders {
+            a: mask(&self.a, reference, limit),
+            b: mask(&self.b, reference, limit),
+            avg: mask(&self.avg, reference, limit),
+        }
     }
 }
 
@@ -91,7 +125,11 @@ fn check(scene_rel: &str, file: &str, m: u32, spp: u32, mean_of: MeanOf) {
         height: 120,
         spp,
         max_depth: m,
-        strategy: if m > 1 { DirectStrategy::Mis } else { DirectStrategy::Light },
+        strategy: if m > 1 {
+            DirectStrategy::Mis
+        } else {
+            DirectStrategy::Light
+        },
         roulette: Roulette::default(),
         seed: 1234,
         ..Default::default()
@@ -102,81 +140,158 @@ fn check(scene_rel: &str, file: &str, m: u32, spp: u32, mean_of: MeanOf) {
 
     // 1. Image mean: 1.5 % of the reference plus 4 standard errors of our own mean.
     let (ours, want, se_mean) = match mean_of {
-        MeanOf::All => (h.avg.mean().to_array().map(f64::from), r.mean, h.noise_of_mean()),
+        MeanOf::All => (
+            h.avg.mean().to_array().map(f64::from),
+            r.mean,
+            h.noise_of_mean(),
+        ),
         MeanOf::Clamped => {
             let (ca, cb) = (clamp01(&h.a), clamp01(&h.b));
             let se = ca.rmse(&cb) / 2.0 / (ca.pixels.len() as f64).sqrt();
-            (clamp01(&h.avg).mean().to_array().map(f64::from), r.mean_clamped, se)
+            (
+                clamp01(&h.avg).mean().to_array().map(f64::from),
+                r.mean_clamped,
+                se,
+            )
         }
         MeanOf::ExcludingHotSpot(limit) => {
             let (ours, n) = masked_mean(&h.avg, &r.image, limit);
             let (want, _) = masked_mean(&r.image, &r.image, limit);
-            assert!(n + 8 >= r.image.pixels.len(), "{file}: the mask drops more than the hot spot");
+            assert!(
+                n + 8 >= r.image.pixels.len(),
+                "{file}: the mask drops more than the hot spot"
+            );
             (ours, want, h.noise_per_pixel() / (n as f64).sqrt())
         }
     };
     for c in 0..3 {
         let tol = 0.015 * want[c] + 4.0 * se_mean;
-        assert!((ours[c] - want[c]).abs() <= tol, "{file}: mean[{c}] = {} vs reference {} (tol {tol})", ours[c], want[c]);
+        assert!(
+            (ours[c] - want[c]).abs() <= tol,
+            "{file}: mean[{c}] = {} vs reference {} (tol {tol})",
+            ours[c],
+            want[c]
+        );
     }
 
     // 2. Block RMSE at the noise floor: up to 3× the expected value plus 0.002 for edges.
     let (h, reference) = match mean_of {
-        MeanOf::ExcludingHotSpot(limit) => (h.masked(&r.image, limit), mask(&r.image, &r.image, limit)),
+        MeanOf::ExcludingHotSpot(limit) => {
+            (h.masked(&r.image, limit), mask(&r.image, &r.image, limit))
+        }
         _ => (h, r.image.clone()),
     };
     let rmse8 = h.avg.block_average(8).rmse(&reference.block_average(8));
     let expected = (r.noise_box8.powi(2) + h.noise_box8().powi(2)).sqrt();
     let tol = 3.0 * expected + 0.002;
     eprintln!("{file}: box8 RMSE {rmse8:.5}, expected noise {expected:.5}, tol {tol:.5}; mean {ours:?} vs {want:?}");
-    assert!(rmse8 <= tol, "{file}: 8x8-block RMSE {rmse8} exceeds {tol} (noise floor {expected})");
+    assert!(
+        rmse8 <= tol,
+        "{file}: 8x8-block RMSE {rmse8} exceeds {tol} (noise floor {expected})"
+    );
 }
 
 #[test]
 fn cbspheres_lambertian_m1() {
-    check("scenes/cs184/sky/CBspheres_lambertian.dae", "CBspheres_lambertian_m1.exr", 1, 64, MeanOf::All);
+    check(
+        "scenes/cs184/sky/CBspheres_lambertian.dae",
+        "CBspheres_lambertian_m1.exr",
+        1,
+        64,
+        MeanOf::All,
+    );
 }
 
 #[test]
 fn cbspheres_lambertian_m5() {
-    check("scenes/cs184/sky/CBspheres_lambertian.dae", "CBspheres_lambertian_m5.exr", 5, 64, MeanOf::All);
+    check(
+        "scenes/cs184/sky/CBspheres_lambertian.dae",
+        "CBspheres_lambertian_m5.exr",
+        5,
+        64,
+        MeanOf::All,
+    );
 }
 
 #[test]
 fn cbbunny_m1() {
-    check("scenes/cs184/sky/CBbunny.dae", "CBbunny_m1.exr", 1, 64, MeanOf::All);
+    check(
+        "scenes/cs184/sky/CBbunny.dae",
+        "CBbunny_m1.exr",
+        1,
+        64,
+        MeanOf::All,
+    );
 }
 
 #[test]
 fn cbbunny_m5() {
-    check("scenes/cs184/sky/CBbunny.dae", "CBbunny_m5.exr", 5, 64, MeanOf::All);
+    check(
+        "scenes/cs184/sky/CBbunny.dae",
+        "CBbunny_m5.exr",
+        5,
+        64,
+        MeanOf::All,
+    );
 }
 
 #[test]
 fn cbempty_m1() {
-    check("scenes/cs184/sky/CBempty.dae", "CBempty_m1.exr", 1, 64, MeanOf::Clamped);
+    check(
+        "scenes/cs184/sky/CBempty.dae",
+        "CBempty_m1.exr",
+        1,
+        64,
+        MeanOf::Clamped,
+    );
 }
 
 #[test]
 fn cbempty_m5() {
-    check("scenes/cs184/sky/CBempty.dae", "CBempty_m5.exr", 5, 128, MeanOf::ExcludingHotSpot(20.0));
+    check(
+        "scenes/cs184/sky/CBempty.dae",
+        "CBempty_m5.exr",
+        5,
+        128,
+        MeanOf::ExcludingHotSpot(20.0),
+    );
 }
 
 #[test]
 fn cbspheres_glass_mirror_m8() {
-    check("scenes/cs184/sky/CBspheres.dae", "CBspheres_m8.exr", 8, 128, MeanOf::All);
+    check(
+        "scenes/cs184/sky/CBspheres.dae",
+        "CBspheres_m8.exr",
+        8,
+        128,
+        MeanOf::All,
+    );
 }
 
 /// Not a test: prints the masked CBempty m5 mean at high spp (EMBER_SPP), to check for bias by hand.
 #[test]
 #[ignore]
 fn cbempty_m5_high_spp_probe() {
-    let spp: u32 = std::env::var("EMBER_SPP").ok().and_then(|s| s.parse().ok()).unwrap_or(2048);
+    let spp: u32 = std::env::var("EMBER_SPP")
+        .ok()
+        .and_then(|s| s.parse().ok())
+        .unwrap_or(2048);
     let r = reference("CBempty_m5.exr");
     let scene = load("scenes/cs184/sky/CBempty.dae");
-    let s = RenderSettings { width: 160, height: 120, spp, max_depth: 5, strategy: DirectStrategy::Mis, seed: 99, ..Default::default() };
+    let s = RenderSettings {
+        width: 160,
+        height: 120,
+        spp,
+        max_depth: 5,
+        strategy: DirectStrategy::Mis,
+        seed: 99,
+        ..Default::default()
+    };
     let h = render_halves(&scene, &s, AccelKind::Native(BvhBuilder::Sah));
     let (ours, n) = masked_mean(&h.avg, &r.image, 20.0);
     let (want, _) = masked_mean(&r.image, &r.image, 20.0);
-    eprintln!("spp {spp}: masked mean {ours:?} vs {want:?} over {n} px; se {}", h.noise_per_pixel() / (n as f64).sqrt());
+    eprintln!(
+        "spp {spp}: masked mean {ours:?} vs {want:?} over {n} px; se {}",
+        h.noise_per_pixel() / (n as f64).sqrt()
+    );
 }

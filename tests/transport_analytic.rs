@@ -16,8 +16,14 @@ use ember::{Color, Vec3};
 /// seen from its centre.
 fn furnace(a: f32, le: f32) -> (Scene, Camera) {
     let scene = Scene {
-        spheres: vec![Sphere { centre: Vec3::ZERO, radius: 1.0, material: 0 }],
-        materials: vec![Material::Lambertian { albedo: Color::splat(a) }],
+        spheres: vec![Sphere {
+            centre: Vec3::ZERO,
+            radius: 1.0,
+            material: 0,
+        }],
+        materials: vec![Material::Lambertian {
+            albedo: Color::splat(a),
+        }],
         surface_emission: vec![(0, Color::splat(le))],
         bounds: Aabb::new(Vec3::splat(-1.0), Vec3::splat(1.0)),
         ..Default::default()
@@ -35,7 +41,13 @@ fn furnace_expected(a: f32, le: f32, m: u32, accumulate: bool) -> f32 {
     }
 }
 
-fn furnace_render(a: f32, m: u32, accumulate: bool, strategy: DirectStrategy, roulette: Roulette) -> (f64, f64) {
+fn furnace_render(
+    a: f32,
+    m: u32,
+    accumulate: bool,
+    strategy: DirectStrategy,
+    roulette: Roulette,
+) -> (f64, f64) {
     let (scene, cam) = furnace(a, 1.0);
     let accel = accel::build(&scene, AccelKind::Native(BvhBuilder::Sah)).unwrap();
     let s = RenderSettings {
@@ -61,7 +73,12 @@ fn furnace_render(a: f32, m: u32, accumulate: bool, strategy: DirectStrategy, ro
 #[test]
 fn furnace_without_roulette_is_exact_at_every_pixel() {
     // Cosine sampling of a Lambertian BSDF has weight exactly a: zero variance.
-    for strategy in [DirectStrategy::Light, DirectStrategy::Mis, DirectStrategy::Bsdf, DirectStrategy::Hemisphere] {
+    for strategy in [
+        DirectStrategy::Light,
+        DirectStrategy::Mis,
+        DirectStrategy::Bsdf,
+        DirectStrategy::Hemisphere,
+    ] {
         for (a, m) in [(0.5, 0), (0.5, 1), (0.8, 5), (0.9, 12)] {
             for acc in [true, false] {
                 let (scene, cam) = furnace(a, 1.0);
@@ -83,7 +100,10 @@ fn furnace_without_roulette_is_exact_at_every_pixel() {
                     continue;
                 }
                 for p in &out.image.pixels {
-                    assert!((p.y - want).abs() <= 1e-4 * want.max(1.0), "{strategy:?} a={a} m={m} acc={acc}: {p} vs {want}");
+                    assert!(
+                        (p.y - want).abs() <= 1e-4 * want.max(1.0),
+                        "{strategy:?} a={a} m={m} acc={acc}: {p} vs {want}"
+                    );
                 }
             }
         }
@@ -94,7 +114,13 @@ fn furnace_without_roulette_is_exact_at_every_pixel() {
 fn furnace_means_with_roulette_and_hemisphere_sampling() {
     let cases = [
         (DirectStrategy::Mis, Roulette::default()),
-        (DirectStrategy::Light, Roulette::Fixed { start: 1, prob: 0.3 }),
+        (
+            DirectStrategy::Light,
+            Roulette::Fixed {
+                start: 1,
+                prob: 0.3,
+            },
+        ),
         (DirectStrategy::Hemisphere, Roulette::Off),
         (DirectStrategy::Hemisphere, Roulette::default()),
         (DirectStrategy::Bsdf, Roulette::default()),
@@ -104,7 +130,10 @@ fn furnace_means_with_roulette_and_hemisphere_sampling() {
         let (mean, se) = furnace_render(a, m, true, strategy, rr);
         let want = furnace_expected(a, 1.0, m, true) as f64;
         // 4.5 standard errors: a false failure has probability < 1e-5 per case.
-        assert!((mean - want).abs() <= 4.5 * se + 1e-5 * want, "{strategy:?} {rr:?}: {mean} ± {se} vs {want}");
+        assert!(
+            (mean - want).abs() <= 4.5 * se + 1e-5 * want,
+            "{strategy:?} {rr:?}: {mean} ± {se} vs {want}"
+        );
     }
 }
 
@@ -113,7 +142,10 @@ fn furnace_converges_to_geometric_series_limit() {
     let (a, le) = (0.7f32, 1.0f32);
     let limit = le / (1.0 - a);
     let (mean, _) = furnace_render(a, 60, true, DirectStrategy::Mis, Roulette::Off);
-    assert!((mean as f32 - limit).abs() < 1e-3 * limit, "{mean} vs {limit}");
+    assert!(
+        (mean as f32 - limit).abs() < 1e-3 * limit,
+        "{mean} vs {limit}"
+    );
 }
 
 /// Irradiance at `x` (normal `n`) from a uniformly emitting polygon of radiance `le`
@@ -132,14 +164,33 @@ fn polygon_irradiance(x: Vec3, n: Vec3, verts: &[Vec3], le: f32) -> f32 {
 
 /// A large Lambertian floor (y = 0) under a 1.0 × 0.8 area light at height 1.2 facing down.
 fn lit_floor(albedo: f32, le: f32) -> (Scene, [Vec3; 4]) {
-    let (c, ex, ey) = (Vec3::new(0.2, 1.2, -0.1), Vec3::new(1.0, 0.0, 0.0), Vec3::new(0.0, 0.0, 0.8));
+    let (c, ex, ey) = (
+        Vec3::new(0.2, 1.2, -0.1),
+        Vec3::new(1.0, 0.0, 0.0),
+        Vec3::new(0.0, 0.0, 0.8),
+    );
     let normal = Vec3::NEG_Y;
-    let q = [c - 0.5 * ex - 0.5 * ey, c + 0.5 * ex - 0.5 * ey, c + 0.5 * ex + 0.5 * ey, c - 0.5 * ex + 0.5 * ey];
+    let q = [
+        c - 0.5 * ex - 0.5 * ey,
+        c + 0.5 * ex - 0.5 * ey,
+        c + 0.5 * ex + 0.5 * ey,
+        c - 0.5 * ex + 0.5 * ey,
+    ];
     let f = 20.0;
-    let mut positions = vec![Vec3::new(-f, 0.0, -f), Vec3::new(f, 0.0, -f), Vec3::new(f, 0.0, f), Vec3::new(-f, 0.0, f)];
+    let mut positions = vec![
+        Vec3::new(-f, 0.0, -f),
+        Vec3::new(f, 0.0, -f),
+        Vec3::new(f, 0.0, f),
+        Vec3::new(-f, 0.0, f),
+    ];
     positions.extend_from_slice(&q);
     // Floor faces up: (p1−p0)×(p2−p0) must be +Y. Light faces down.
-    let tri = |v: [u32; 3], material, light| Triangle { v, n: None, material, light };
+    let tri = |v: [u32; 3], material, light| Triangle {
+        v,
+        n: None,
+        material,
+        light,
+    };
     let triangles = vec![
         tri([0, 2, 1], 0, NO_LIGHT),
         tri([0, 3, 2], 0, NO_LIGHT),
@@ -149,8 +200,22 @@ fn lit_floor(albedo: f32, le: f32) -> (Scene, [Vec3; 4]) {
     let scene = Scene {
         positions,
         triangles,
-        materials: vec![Material::Lambertian { albedo: Color::splat(albedo) }, Material::Emission { radiance: Color::splat(le) }],
-        lights: vec![Light::Area { centre: c, ex, ey, normal, area: 0.8, radiance: Color::splat(le) }],
+        materials: vec![
+            Material::Lambertian {
+                albedo: Color::splat(albedo),
+            },
+            Material::Emission {
+                radiance: Color::splat(le),
+            },
+        ],
+        lights: vec![Light::Area {
+            centre: c,
+            ex,
+            ey,
+            normal,
+            area: 0.8,
+            radiance: Color::splat(le),
+        }],
         bounds: Aabb::new(Vec3::new(-f, 0.0, -f), Vec3::new(f, 0.0, f)),
         ..Default::default()
     };
@@ -165,8 +230,18 @@ fn area_light_irradiance_matches_closed_form() {
     let [p0, p1, p2] = scene.triangle_positions(2);
     assert!((p1 - p0).cross(p2 - p0).y < 0.0);
     let accel = accel::build(&scene, AccelKind::Native(BvhBuilder::Sah)).unwrap();
-    let points = [Vec3::new(0.0, 0.0, 0.0), Vec3::new(0.3, 0.0, 0.2), Vec3::new(1.5, 0.0, -0.7), Vec3::new(-2.0, 0.0, 3.0)];
-    for strategy in [DirectStrategy::Light, DirectStrategy::Hemisphere, DirectStrategy::Mis, DirectStrategy::Bsdf] {
+    let points = [
+        Vec3::new(0.0, 0.0, 0.0),
+        Vec3::new(0.3, 0.0, 0.2),
+        Vec3::new(1.5, 0.0, -0.7),
+        Vec3::new(-2.0, 0.0, 3.0),
+    ];
+    for strategy in [
+        DirectStrategy::Light,
+        DirectStrategy::Hemisphere,
+        DirectStrategy::Mis,
+        DirectStrategy::Bsdf,
+    ] {
         let integ = PathIntegrator {
             scene: &scene,
             accel: accel.as_ref(),
@@ -180,11 +255,17 @@ fn area_light_irradiance_matches_closed_form() {
             let want = albedo / std::f32::consts::PI * polygon_irradiance(x, Vec3::Y, &quad, le);
             let eye = x + Vec3::new(0.05, 0.1, 0.08);
             // The estimators that find the light only by chance need more samples.
-            let n = if matches!(strategy, DirectStrategy::Hemisphere | DirectStrategy::Bsdf) { 200_000 } else { 20_000 };
+            let n = if matches!(strategy, DirectStrategy::Hemisphere | DirectStrategy::Bsdf) {
+                200_000
+            } else {
+                20_000
+            };
             let mut sampler = Sampler::new(11, k as u64, 0);
             let (mut s1, mut s2) = (0f64, 0f64);
             for _ in 0..n {
-                let v = integ.li(Ray::new(eye, (x - eye).normalize()), &mut sampler).y as f64;
+                let v = integ
+                    .li(Ray::new(eye, (x - eye).normalize()), &mut sampler)
+                    .y as f64;
                 s1 += v;
                 s2 += v * v;
             }

@@ -12,17 +12,54 @@ use std::path::Path;
 #[test]
 fn hemisphere_and_light_sampling_agree_on_cbspheres_lambertian() {
     let scene = load("scenes/cs184/sky/CBspheres_lambertian.dae");
-    let base = RenderSettings { width: 80, height: 60, max_depth: 1, light_samples: 1, seed: 3, ..Default::default() };
-    let light = render_halves(&scene, &RenderSettings { spp: 32, strategy: DirectStrategy::Light, ..base.clone() }, AccelKind::Native(BvhBuilder::Sah));
-    let hemi = render_halves(&scene, &RenderSettings { spp: 256, strategy: DirectStrategy::Hemisphere, ..base.clone() }, AccelKind::Native(BvhBuilder::Sah));
-    let mis = render_halves(&scene, &RenderSettings { spp: 32, strategy: DirectStrategy::Mis, ..base }, AccelKind::Native(BvhBuilder::Sah));
+    let base = RenderSettings {
+        width: 80,
+        height: 60,
+        max_depth: 1,
+        light_samples: 1,
+        seed: 3,
+        ..Default::default()
+    };
+    let light = render_halves(
+        &scene,
+        &RenderSettings {
+            spp: 32,
+            strategy: DirectStrategy::Light,
+            ..base.clone()
+        },
+        AccelKind::Native(BvhBuilder::Sah),
+    );
+    let hemi = render_halves(
+        &scene,
+        &RenderSettings {
+            spp: 256,
+            strategy: DirectStrategy::Hemisphere,
+            ..base.clone()
+        },
+        AccelKind::Native(BvhBuilder::Sah),
+    );
+    let mis = render_halves(
+        &scene,
+        &RenderSettings {
+            spp: 32,
+            strategy: DirectStrategy::Mis,
+            ..base
+        },
+        AccelKind::Native(BvhBuilder::Sah),
+    );
     let (ml, mh, mm) = (light.avg.mean(), hemi.avg.mean(), mis.avg.mean());
     // The two means differ by noise only: 4.5 combined standard errors.
     let se_lh = (light.noise_of_mean().powi(2) + hemi.noise_of_mean().powi(2)).sqrt();
     let se_lm = (light.noise_of_mean().powi(2) + mis.noise_of_mean().powi(2)).sqrt();
     for c in 0..3 {
-        assert!(((ml[c] - mh[c]) as f64).abs() <= 4.5 * se_lh, "channel {c}: light {ml} vs hemisphere {mh} (se {se_lh})");
-        assert!(((ml[c] - mm[c]) as f64).abs() <= 4.5 * se_lm, "channel {c}: light {ml} vs MIS {mm} (se {se_lm})");
+        assert!(
+            ((ml[c] - mh[c]) as f64).abs() <= 4.5 * se_lh,
+            "channel {c}: light {ml} vs hemisphere {mh} (se {se_lh})"
+        );
+        assert!(
+            ((ml[c] - mm[c]) as f64).abs() <= 4.5 * se_lm,
+            "channel {c}: light {ml} vs MIS {mm} (se {se_lm})"
+        );
     }
     // And light sampling is the less noisy one at equal samples, as it should be.
     assert!(light.noise_per_pixel() < hemi.noise_per_pixel() * (256f64 / 32.0).sqrt());
@@ -47,15 +84,29 @@ fn no_nan_or_inf_in_any_cs184_scene_at_m5() {
     assert!(scenes.len() >= 20);
     for p in scenes {
         let scene = ember::scene::collada::load(&p).unwrap();
-        let s = RenderSettings { width: 40, height: 30, spp: 4, max_depth: 5, strategy: DirectStrategy::Mis, ..Default::default() };
+        let s = RenderSettings {
+            width: 40,
+            height: 30,
+            spp: 4,
+            max_depth: 5,
+            strategy: DirectStrategy::Mis,
+            ..Default::default()
+        };
         let out = render_scene(&scene, &s);
         assert_eq!(out.nonfinite_samples, 0, "{}", p.display());
         assert!(out.image.all_finite(), "{}", p.display());
     }
 }
 
-fn render_threads(threads: usize, s: &RenderSettings, scene: &ember::scene::Scene) -> ember::film::Image {
-    let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap();
+fn render_threads(
+    threads: usize,
+    s: &RenderSettings,
+    scene: &ember::scene::Scene,
+) -> ember::film::Image {
+    let pool = rayon::ThreadPoolBuilder::new()
+        .num_threads(threads)
+        .build()
+        .unwrap();
     pool.install(|| render_scene(scene, s).image)
 }
 
@@ -63,9 +114,31 @@ fn render_threads(threads: usize, s: &RenderSettings, scene: &ember::scene::Scen
 fn renders_are_identical_for_one_and_two_threads() {
     let scene = load("scenes/cs184/sky/CBspheres.dae");
     for s in [
-        RenderSettings { width: 48, height: 36, spp: 8, max_depth: 5, strategy: DirectStrategy::Mis, seed: 5, ..Default::default() },
-        RenderSettings { width: 48, height: 36, spp: 64, max_depth: 2, adaptive: Some(Adaptive::new(8, 0.05)), seed: 9, ..Default::default() },
-        RenderSettings { width: 48, height: 36, spp: 2, shading: Shading::Normals, ..Default::default() },
+        RenderSettings {
+            width: 48,
+            height: 36,
+            spp: 8,
+            max_depth: 5,
+            strategy: DirectStrategy::Mis,
+            seed: 5,
+            ..Default::default()
+        },
+        RenderSettings {
+            width: 48,
+            height: 36,
+            spp: 64,
+            max_depth: 2,
+            adaptive: Some(Adaptive::new(8, 0.05)),
+            seed: 9,
+            ..Default::default()
+        },
+        RenderSettings {
+            width: 48,
+            height: 36,
+            spp: 2,
+            shading: Shading::Normals,
+            ..Default::default()
+        },
     ] {
         assert_eq!(render_threads(1, &s, &scene), render_threads(2, &s, &scene));
     }
@@ -74,13 +147,31 @@ fn renders_are_identical_for_one_and_two_threads() {
 #[test]
 fn adaptive_sampling_spends_more_samples_in_penumbrae_than_on_walls() {
     let scene = load("scenes/cs184/sky/CBspheres_lambertian.dae");
-    let s = RenderSettings { width: 64, height: 48, spp: 512, max_depth: 1, adaptive: Some(Adaptive::new(32, 0.05)), seed: 2, ..Default::default() };
+    let s = RenderSettings {
+        width: 64,
+        height: 48,
+        spp: 512,
+        max_depth: 1,
+        adaptive: Some(Adaptive::new(32, 0.05)),
+        seed: 2,
+        ..Default::default()
+    };
     let out = render_scene(&scene, &s);
     let max = *out.samples.iter().max().unwrap();
     let min = *out.samples.iter().min().unwrap();
     assert!(min >= 32 && max <= 512);
-    assert!(max > 4 * min, "adaptive sampling did not adapt: {min}..{max}");
+    assert!(
+        max > 4 * min,
+        "adaptive sampling did not adapt: {min}..{max}"
+    );
     // Pixels seeing the light directly are constant (10) and stop early (after the minimum for constant pixels).
-    let light_px = out.image.pixels.iter().zip(&out.samples).filter(|(p, _)| p.x >= 9.99).map(|(_, &n)| n).collect::<Vec<_>>();
+    let light_px = out
+        .image
+        .pixels
+        .iter()
+        .zip(&out.samples)
+        .filter(|(p, _)| p.x >= 9.99)
+        .map(|(_, &n)| n)
+        .collect::<Vec<_>>();
     assert!(!light_px.is_empty() && light_px.iter().all(|&n| n <= 4 * 32));
 }

@@ -24,7 +24,11 @@ fn register_font() {
     static ONCE: Once = Once::new();
     ONCE.call_once(|| {
         // Registration can only fail on a malformed font; the embedded one is fine.
-        let _ = plotters::style::register_font("sans-serif", FontStyle::Normal, dejavu::sans::regular());
+        let _ = plotters::style::register_font(
+            "sans-serif",
+            FontStyle::Normal,
+            dejavu::sans::regular(),
+        );
     });
 }
 
@@ -45,8 +49,13 @@ pub fn write_chart(stem: &Path, spec: &ChartSpec, series: &[Series]) -> anyhow::
 }
 
 fn bounds(series: &[Series], pick: impl Fn(&(f64, f64)) -> f64, log: bool) -> (f64, f64) {
-    let vals = series.iter().flat_map(|s| s.points.iter().map(&pick)).filter(|v| v.is_finite() && (!log || *v > 0.0));
-    let (mut lo, mut hi) = vals.fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), v| (a.min(v), b.max(v)));
+    let vals = series
+        .iter()
+        .flat_map(|s| s.points.iter().map(&pick))
+        .filter(|v| v.is_finite() && (!log || *v > 0.0));
+    let (mut lo, mut hi) = vals.fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), v| {
+        (a.min(v), b.max(v))
+    });
     if !lo.is_finite() {
         (lo, hi) = (1.0, 10.0);
     }
@@ -58,15 +67,24 @@ fn bounds(series: &[Series], pick: impl Fn(&(f64, f64)) -> f64, log: bool) -> (f
     }
 }
 
-fn draw<DB: DrawingBackend>(root: DrawingArea<DB, plotters::coord::Shift>, spec: &ChartSpec, series: &[Series]) -> anyhow::Result<()>
+fn draw<DB: DrawingBackend>(
+    root: DrawingArea<DB, plotters::coord::Shift>,
+    spec: &ChartSpec,
+    series: &[Series],
+) -> anyhow::Result<()>
 where
     DB::ErrorType: 'static,
 {
-    root.fill(&WHITE).map_err(|e| anyhow::anyhow!("chart: {e}"))?;
+    root.fill(&WHITE)
+        .map_err(|e| anyhow::anyhow!("chart: {e}"))?;
     let (x0, x1) = bounds(series, |p| p.0, spec.log_x);
     let (y0, y1) = bounds(series, |p| p.1, spec.log_y);
     let mut builder = ChartBuilder::on(&root);
-    builder.caption(spec.title, ("sans-serif", 24)).margin(15).x_label_area_size(50).y_label_area_size(80);
+    builder
+        .caption(spec.title, ("sans-serif", 24))
+        .margin(15)
+        .x_label_area_size(50)
+        .y_label_area_size(80);
     macro_rules! finish {
         ($chart:expr) => {{
             let mut chart = $chart.map_err(|e| anyhow::anyhow!("chart: {e}"))?;
@@ -83,13 +101,20 @@ where
                     .points
                     .iter()
                     .copied()
-                    .filter(|p| p.0.is_finite() && p.1.is_finite() && (!spec.log_x || p.0 > 0.0) && (!spec.log_y || p.1 > 0.0))
+                    .filter(|p| {
+                        p.0.is_finite()
+                            && p.1.is_finite()
+                            && (!spec.log_x || p.0 > 0.0)
+                            && (!spec.log_y || p.1 > 0.0)
+                    })
                     .collect();
                 chart
                     .draw_series(LineSeries::new(pts.clone(), color.stroke_width(2)))
                     .map_err(|e| anyhow::anyhow!("chart: {e}"))?
                     .label(s.name.clone())
-                    .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], color.stroke_width(2)));
+                    .legend(move |(x, y)| {
+                        PathElement::new(vec![(x, y), (x + 20, y)], color.stroke_width(2))
+                    });
                 chart
                     .draw_series(pts.into_iter().map(|p| Circle::new(p, 3, color.filled())))
                     .map_err(|e| anyhow::anyhow!("chart: {e}"))?;
@@ -104,7 +129,9 @@ where
         }};
     }
     match (spec.log_x, spec.log_y) {
-        (true, true) => finish!(builder.build_cartesian_2d((x0..x1).log_scale(), (y0..y1).log_scale())),
+        (true, true) => {
+            finish!(builder.build_cartesian_2d((x0..x1).log_scale(), (y0..y1).log_scale()))
+        }
         (true, false) => finish!(builder.build_cartesian_2d((x0..x1).log_scale(), y0..y1)),
         (false, true) => finish!(builder.build_cartesian_2d(x0..x1, (y0..y1).log_scale())),
         (false, false) => finish!(builder.build_cartesian_2d(x0..x1, y0..y1)),
@@ -122,10 +149,22 @@ mod tests {
         let dir = tempfile::tempdir().unwrap();
         let stem = dir.path().join("c");
         let s = vec![
-            Series { name: "a".into(), points: vec![(1.0, 1.0), (2.0, 0.5), (4.0, 0.25)] },
-            Series { name: "b".into(), points: vec![(1.0, 2.0), (2.0, 1.0), (4.0, 0.6)] },
+            Series {
+                name: "a".into(),
+                points: vec![(1.0, 1.0), (2.0, 0.5), (4.0, 0.25)],
+            },
+            Series {
+                name: "b".into(),
+                points: vec![(1.0, 2.0), (2.0, 1.0), (4.0, 0.6)],
+            },
         ];
-        let spec = ChartSpec { title: "t", x_label: "time (s)", y_label: "RMSE", log_x: true, log_y: true };
+        let spec = ChartSpec {
+            title: "t",
+            x_label: "time (s)",
+            y_label: "RMSE",
+            log_x: true,
+            log_y: true,
+        };
         write_chart(&stem, &spec, &s).unwrap();
         let png = image::open(stem.with_extension("png")).unwrap();
         assert_eq!(png.width(), 900);

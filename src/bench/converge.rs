@@ -75,28 +75,94 @@ pub struct ConvergeReport {
 /// (optionally) Embree with the default method.
 pub fn methods(base: &RenderSettings, compare_backends: bool) -> Vec<Method> {
     let native = AccelKind::Native(BvhBuilder::Sah);
-    let m = |name: &str, s: RenderSettings| Method { name: name.to_string(), settings: s, accel: native };
+    let m = |name: &str, s: RenderSettings| Method {
+        name: name.to_string(),
+        settings: s,
+        accel: native,
+    };
     let mut v = Vec::new();
-    let default_strategy = if base.max_depth > 1 { DirectStrategy::Mis } else { DirectStrategy::Light };
-    if base.max_depth <= 1 {
-        v.push(m("hemisphere", RenderSettings { strategy: DirectStrategy::Hemisphere, ..base.clone() }));
-        v.push(m("light sampling", RenderSettings { strategy: DirectStrategy::Light, ..base.clone() }));
-        v.push(m("MIS", RenderSettings { strategy: DirectStrategy::Mis, ..base.clone() }));
+    let default_strategy = if base.max_depth > 1 {
+        DirectStrategy::Mis
     } else {
-        v.push(m("light sampling, RR", RenderSettings { strategy: DirectStrategy::Light, ..base.clone() }));
-        v.push(m("MIS, RR", RenderSettings { strategy: DirectStrategy::Mis, ..base.clone() }));
-        v.push(m("MIS, no RR", RenderSettings { strategy: DirectStrategy::Mis, roulette: Roulette::Off, ..base.clone() }));
-        v.push(m("MIS, RR, -l 4", RenderSettings { strategy: DirectStrategy::Mis, light_samples: 4, ..base.clone() }));
-        v.push(m("MIS, RR, -l 16", RenderSettings { strategy: DirectStrategy::Mis, light_samples: 16, ..base.clone() }));
+        DirectStrategy::Light
+    };
+    if base.max_depth <= 1 {
+        v.push(m(
+            "hemisphere",
+            RenderSettings {
+                strategy: DirectStrategy::Hemisphere,
+                ..base.clone()
+            },
+        ));
+        v.push(m(
+            "light sampling",
+            RenderSettings {
+                strategy: DirectStrategy::Light,
+                ..base.clone()
+            },
+        ));
+        v.push(m(
+            "MIS",
+            RenderSettings {
+                strategy: DirectStrategy::Mis,
+                ..base.clone()
+            },
+        ));
+    } else {
+        v.push(m(
+            "light sampling, RR",
+            RenderSettings {
+                strategy: DirectStrategy::Light,
+                ..base.clone()
+            },
+        ));
+        v.push(m(
+            "MIS, RR",
+            RenderSettings {
+                strategy: DirectStrategy::Mis,
+                ..base.clone()
+            },
+        ));
+        v.push(m(
+            "MIS, no RR",
+            RenderSettings {
+                strategy: DirectStrategy::Mis,
+                roulette: Roulette::Off,
+                ..base.clone()
+            },
+        ));
+        v.push(m(
+            "MIS, RR, -l 4",
+            RenderSettings {
+                strategy: DirectStrategy::Mis,
+                light_samples: 4,
+                ..base.clone()
+            },
+        ));
+        v.push(m(
+            "MIS, RR, -l 16",
+            RenderSettings {
+                strategy: DirectStrategy::Mis,
+                light_samples: 16,
+                ..base.clone()
+            },
+        ));
     }
     v.push(m(
         "adaptive (-a 16 0.05)",
-        RenderSettings { strategy: default_strategy, adaptive: Some(Adaptive::new(16, 0.05)), ..base.clone() },
+        RenderSettings {
+            strategy: default_strategy,
+            adaptive: Some(Adaptive::new(16, 0.05)),
+            ..base.clone()
+        },
     ));
     if compare_backends && cfg!(feature = "embree") {
         v.push(Method {
             name: "Embree backend".into(),
-            settings: RenderSettings { strategy: default_strategy, ..base.clone() },
+            settings: RenderSettings {
+                strategy: default_strategy,
+                ..base.clone()
+            },
             accel: AccelKind::Embree(EmbreeQuality::Medium),
         });
     }
@@ -127,21 +193,42 @@ pub fn run(opts: &ConvergeOptions, log: &mut dyn FnMut(&str)) -> Result<Converge
     }
     let target = opts.target_rmse.unwrap_or_else(|| default_target(&points));
     let time_to_target = time_to_reach(&points, target);
-    Ok(ConvergeReport { points, target_rmse: target, time_to_target, reference_note: reference.note })
+    Ok(ConvergeReport {
+        points,
+        target_rmse: target,
+        time_to_target,
+        reference_note: reference.note,
+    })
 }
 
-fn run_method(scene: &Scene, method: &Method, opts: &ConvergeOptions, r: &Reference) -> Result<Vec<Point>> {
+fn run_method(
+    scene: &Scene,
+    method: &Method,
+    opts: &ConvergeOptions,
+    r: &Reference,
+) -> Result<Vec<Point>> {
     let accel = accel::build(scene, method.accel)?;
     let cam = Camera::new(&scene.camera, &scene.bounds, opts.width, opts.height);
     let mut out = Vec::new();
     let mut spp = 1;
     while spp <= opts.max_spp {
-        let s = RenderSettings { spp, seed: opts.seed.wrapping_add(1000 + spp as u64), ..method.settings.clone() };
+        let s = RenderSettings {
+            spp,
+            seed: opts.seed.wrapping_add(1000 + spp as u64),
+            ..method.settings.clone()
+        };
         let t = Instant::now();
         let o = render(scene, accel.as_ref(), &cam, &s, &|_| {});
         let seconds = t.elapsed().as_secs_f64();
         let (rmse, rel_mse) = errors(&o.image, r);
-        out.push(Point { method: method.name.clone(), spp, samples: o.total_samples(), seconds, rmse, rel_mse });
+        out.push(Point {
+            method: method.name.clone(),
+            spp,
+            samples: o.total_samples(),
+            seconds,
+            rmse,
+            rel_mse,
+        });
         if seconds > opts.max_seconds_per_point {
             break;
         }
@@ -165,41 +252,82 @@ fn errors(img: &Image, r: &Reference) -> (f64, f64) {
     (rmse, (rel / n).max(0.0))
 }
 
-fn reference(opts: &ConvergeOptions, scene: &Scene, base: &RenderSettings, log: &mut dyn FnMut(&str)) -> Result<Reference> {
+fn reference(
+    opts: &ConvergeOptions,
+    scene: &Scene,
+    base: &RenderSettings,
+    log: &mut dyn FnMut(&str),
+) -> Result<Reference> {
     if let Some(p) = &opts.reference {
         let image = read_image(p)?;
         if (image.width, image.height) != (opts.width, opts.height) {
-            bail!("{}: reference is {}x{}, but the renders are {}x{} (use -r)", p.display(), image.width, image.height, opts.width, opts.height);
+            bail!(
+                "{}: reference is {}x{}, but the renders are {}x{} (use -r)",
+                p.display(),
+                image.width,
+                image.height,
+                opts.width,
+                opts.height
+            );
         }
         let noise_var = opts.reference_noise.map_or(0.0, |n| n * n);
         let note = format!(
             "reference {} (its per-pixel noise {} is subtracted from every MSE)",
             p.display(),
-            opts.reference_noise.map_or("unknown, taken as negligible,".to_string(), |n| format!("{n:.2e}"))
+            opts.reference_noise
+                .map_or("unknown, taken as negligible,".to_string(), |n| format!(
+                    "{n:.2e}"
+                ))
         );
-        return Ok(Reference { image, noise_var, note });
+        return Ok(Reference {
+            image,
+            noise_var,
+            note,
+        });
     }
     own_reference(opts, scene, base, log)
 }
 
-fn own_reference(opts: &ConvergeOptions, scene: &Scene, base: &RenderSettings, log: &mut dyn FnMut(&str)) -> Result<Reference> {
-    let stem = opts.scene.file_stem().map(|s| s.to_string_lossy().into_owned()).unwrap_or_default();
+fn own_reference(
+    opts: &ConvergeOptions,
+    scene: &Scene,
+    base: &RenderSettings,
+    log: &mut dyn FnMut(&str),
+) -> Result<Reference> {
+    let stem = opts
+        .scene
+        .file_stem()
+        .map(|s| s.to_string_lossy().into_owned())
+        .unwrap_or_default();
     let cache = opts.out_dir.join("cache");
-    std::fs::create_dir_all(&cache).with_context(|| format!("{}: cannot create", cache.display()))?;
-    let name = |half: &str| cache.join(format!("{stem}_m{}_{}x{}_{}spp_{half}.exr", opts.max_depth, opts.width, opts.height, opts.reference_spp));
+    std::fs::create_dir_all(&cache)
+        .with_context(|| format!("{}: cannot create", cache.display()))?;
+    let name = |half: &str| {
+        cache.join(format!(
+            "{stem}_m{}_{}x{}_{}spp_{half}.exr",
+            opts.max_depth, opts.width, opts.height, opts.reference_spp
+        ))
+    };
     let (pa, pb) = (name("a"), name("b"));
     let (a, b) = if pa.exists() && pb.exists() {
         log(&format!("reference: cached {}", pa.display()));
         (read_image(&pa)?, read_image(&pb)?)
     } else {
-        log(&format!("reference: rendering {} spp (two halves) with MIS, no roulette", opts.reference_spp));
+        log(&format!(
+            "reference: rendering {} spp (two halves) with MIS, no roulette",
+            opts.reference_spp
+        ));
         let accel = accel::build(scene, AccelKind::Native(BvhBuilder::Sah))?;
         let cam = Camera::new(&scene.camera, &scene.bounds, opts.width, opts.height);
         let mut halves = Vec::new();
         for (k, p) in [(1u64, &pa), (2, &pb)] {
             let s = RenderSettings {
                 spp: (opts.reference_spp / 2).max(1),
-                strategy: if base.max_depth > 1 { DirectStrategy::Mis } else { DirectStrategy::Light },
+                strategy: if base.max_depth > 1 {
+                    DirectStrategy::Mis
+                } else {
+                    DirectStrategy::Light
+                },
                 roulette: Roulette::Off,
                 seed: 0xC0FFEE + k,
                 ..base.clone()
@@ -212,13 +340,25 @@ fn own_reference(opts: &ConvergeOptions, scene: &Scene, base: &RenderSettings, l
         (halves.pop().expect("two halves"), b)
     };
     let noise_var = a.rmse(&b).powi(2) / 4.0;
-    let image = Image { pixels: a.pixels.iter().zip(&b.pixels).map(|(x, y)| 0.5 * (*x + *y)).collect(), ..a };
+    let image = Image {
+        pixels: a
+            .pixels
+            .iter()
+            .zip(&b.pixels)
+            .map(|(x, y)| 0.5 * (*x + *y))
+            .collect(),
+        ..a
+    };
     let note = format!(
         "ember's own reference, {} spp in two halves; its per-pixel noise {:.2e} (from the halves) is subtracted from every MSE",
         opts.reference_spp,
         noise_var.sqrt()
     );
-    Ok(Reference { image, noise_var, note })
+    Ok(Reference {
+        image,
+        noise_var,
+        note,
+    })
 }
 
 fn default_target(points: &[Point]) -> f64 {
@@ -246,7 +386,12 @@ pub fn time_to_reach(points: &[Point], target: f64) -> Vec<(String, Option<f64>)
                 if a.rmse <= target {
                     return Some(a.seconds);
                 }
-                if b.rmse <= target && a.rmse > target && a.seconds > 0.0 && b.seconds > 0.0 && b.rmse > 0.0 {
+                if b.rmse <= target
+                    && a.rmse > target
+                    && a.seconds > 0.0
+                    && b.seconds > 0.0
+                    && b.rmse > 0.0
+                {
                     let f = (a.rmse.ln() - target.ln()) / (a.rmse.ln() - b.rmse.ln());
                     return Some((a.seconds.ln() + f * (b.seconds.ln() - a.seconds.ln())).exp());
                 }
@@ -262,15 +407,26 @@ impl ConvergeReport {
     pub fn to_csv(&self, scene: &str) -> String {
         let mut s = String::from("scene,method,spp,samples,seconds,rmse,relmse\n");
         for p in &self.points {
-            let _ = writeln!(s, "{scene},{},{},{},{:.6},{:.6e},{:.6e}", p.method, p.spp, p.samples, p.seconds, p.rmse, p.rel_mse);
+            let _ = writeln!(
+                s,
+                "{scene},{},{},{},{:.6},{:.6e},{:.6e}",
+                p.method, p.spp, p.samples, p.seconds, p.rmse, p.rel_mse
+            );
         }
         s
     }
 
     /// Time each method needs to reach the target RMSE, and its ratio to the fastest.
     pub fn efficiency_table(&self) -> String {
-        let best = self.time_to_target.iter().filter_map(|(_, t)| *t).fold(f64::INFINITY, f64::min);
-        let mut s = format!("| method | seconds to RMSE {:.4} | × fastest |\n|---|---|---|\n", self.target_rmse);
+        let best = self
+            .time_to_target
+            .iter()
+            .filter_map(|(_, t)| *t)
+            .fold(f64::INFINITY, f64::min);
+        let mut s = format!(
+            "| method | seconds to RMSE {:.4} | × fastest |\n|---|---|---|\n",
+            self.target_rmse
+        );
         for (name, t) in &self.time_to_target {
             match t {
                 Some(t) => {
@@ -289,7 +445,10 @@ impl ConvergeReport {
         for p in &self.points {
             match out.iter_mut().find(|s| s.name == p.method) {
                 Some(s) => s.points.push((p.seconds, y(p))),
-                None => out.push(Series { name: p.method.clone(), points: vec![(p.seconds, y(p))] }),
+                None => out.push(Series {
+                    name: p.method.clone(),
+                    points: vec![(p.seconds, y(p))],
+                }),
             }
         }
         out
@@ -298,11 +457,26 @@ impl ConvergeReport {
     /// Writes `<stem>.csv`, and error-vs-time charts `<stem>_rmse.{png,svg}` and `<stem>_relmse.{png,svg}`.
     pub fn write(&self, stem: &Path, scene: &str, title: &str) -> Result<()> {
         let csv = stem.with_extension("csv");
-        std::fs::write(&csv, self.to_csv(scene)).with_context(|| format!("{}: cannot write", csv.display()))?;
-        let name = |suffix: &str| stem.with_file_name(format!("{}_{suffix}", stem.file_name().unwrap_or_default().to_string_lossy()));
-        let spec = ChartSpec { title, x_label: "render time (s, 2 threads)", y_label: "RMSE vs reference", log_x: true, log_y: true };
+        std::fs::write(&csv, self.to_csv(scene))
+            .with_context(|| format!("{}: cannot write", csv.display()))?;
+        let name = |suffix: &str| {
+            stem.with_file_name(format!(
+                "{}_{suffix}",
+                stem.file_name().unwrap_or_default().to_string_lossy()
+            ))
+        };
+        let spec = ChartSpec {
+            title,
+            x_label: "render time (s, 2 threads)",
+            y_label: "RMSE vs reference",
+            log_x: true,
+            log_y: true,
+        };
         write_chart(&name("rmse"), &spec, &self.series(|p| p.rmse))?;
-        let spec = ChartSpec { y_label: "relMSE vs reference", ..spec };
+        let spec = ChartSpec {
+            y_label: "relMSE vs reference",
+            ..spec
+        };
         write_chart(&name("relmse"), &spec, &self.series(|p| p.rel_mse))?;
         Ok(())
     }
@@ -313,12 +487,24 @@ mod tests {
     use super::*;
 
     fn pt(method: &str, seconds: f64, rmse: f64) -> Point {
-        Point { method: method.into(), spp: 1, samples: 1, seconds, rmse, rel_mse: 0.0 }
+        Point {
+            method: method.into(),
+            spp: 1,
+            samples: 1,
+            seconds,
+            rmse,
+            rel_mse: 0.0,
+        }
     }
 
     #[test]
     fn time_to_reach_interpolates_in_log_log() {
-        let pts = vec![pt("a", 1.0, 0.4), pt("a", 4.0, 0.1), pt("b", 1.0, 0.5), pt("b", 2.0, 0.45)];
+        let pts = vec![
+            pt("a", 1.0, 0.4),
+            pt("a", 4.0, 0.1),
+            pt("b", 1.0, 0.5),
+            pt("b", 2.0, 0.45),
+        ];
         let t = time_to_reach(&pts, 0.2);
         // RMSE ∝ t^-1 between the points: 0.2 is reached at t = 2.
         assert!((t[0].1.unwrap() - 2.0).abs() < 1e-9);

@@ -27,14 +27,23 @@ pub enum DirectStrategy {
 pub enum Roulette {
     Off,
     /// From bounce `start` on, continue with probability `min(1, max channel of throughput)`, at least `min_prob`.
-    Throughput { start: u32, min_prob: f32 },
+    Throughput {
+        start: u32,
+        min_prob: f32,
+    },
     /// From bounce `start` on, continue with the fixed probability `prob`.
-    Fixed { start: u32, prob: f32 },
+    Fixed {
+        start: u32,
+        prob: f32,
+    },
 }
 
 impl Default for Roulette {
     fn default() -> Self {
-        Roulette::Throughput { start: 3, min_prob: 0.05 }
+        Roulette::Throughput {
+            start: 3,
+            min_prob: 0.05,
+        }
     }
 }
 
@@ -43,7 +52,9 @@ impl Roulette {
     pub fn continue_prob(&self, bounces: u32, beta: crate::Color) -> f32 {
         match *self {
             Roulette::Off => 1.0,
-            Roulette::Throughput { start, min_prob } if bounces >= start => beta.max_element().clamp(min_prob, 1.0),
+            Roulette::Throughput { start, min_prob } if bounces >= start => {
+                beta.max_element().clamp(min_prob, 1.0)
+            }
             Roulette::Fixed { start, prob } if bounces >= start => prob.clamp(1e-6, 1.0),
             _ => 1.0,
         }

@@ -75,7 +75,9 @@ impl PathIntegrator<'_> {
             if !material.is_delta() && self.counts(bounces) {
                 l += beta * self.direct(&si, &frame, material, wo, sampler);
             }
-            let Some(bs) = material.sample(wo, sampler.next_f32(), sampler.next_2d()) else { break };
+            let Some(bs) = material.sample(wo, sampler.next_f32(), sampler.next_2d()) else {
+                break;
+            };
             let wi_world = frame.to_world(bs.wi);
             if !geometrically_consistent(&si, wo_world, wi_world, bs.wi.z * wo.z > 0.0) {
                 break;
@@ -91,8 +93,15 @@ impl PathIntegrator<'_> {
             if !is_finite(beta) || beta == Color::ZERO {
                 break;
             }
-            prev = Some(PrevVertex { p: si.p, bsdf_pdf: bs.pdf, delta: bs.delta });
-            ray = Ray::new(offset_ray_origin(si.p, si.p_error, si.ng, wi_world), wi_world);
+            prev = Some(PrevVertex {
+                p: si.p,
+                bsdf_pdf: bs.pdf,
+                delta: bs.delta,
+            });
+            ray = Ray::new(
+                offset_ray_origin(si.p, si.p_error, si.ng, wi_world),
+                wi_world,
+            );
         }
         l
     }
@@ -110,9 +119,12 @@ impl PathIntegrator<'_> {
                 (DirectStrategy::Bsdf, _) => 1.0,
                 (_, None) => 1.0,
                 (DirectStrategy::Light, Some(_)) => 0.0,
-                (DirectStrategy::Mis, Some(l)) => {
-                    power_heuristic(1.0, v.bsdf_pdf, self.light_samples as f32, l.pdf_li(v.p, dir))
-                }
+                (DirectStrategy::Mis, Some(l)) => power_heuristic(
+                    1.0,
+                    v.bsdf_pdf,
+                    self.light_samples as f32,
+                    l.pdf_li(v.p, dir),
+                ),
             },
         }
     }
@@ -139,14 +151,25 @@ impl PathIntegrator<'_> {
     }
 
     /// Direct light at a non-delta vertex by the chosen strategy.
-    fn direct(&self, si: &SurfaceInteraction, frame: &Frame, m: &Material, wo: Vec3, s: &mut Sampler) -> Color {
+    fn direct(
+        &self,
+        si: &SurfaceInteraction,
+        frame: &Frame,
+        m: &Material,
+        wo: Vec3,
+        s: &mut Sampler,
+    ) -> Color {
         match self.strategy {
             DirectStrategy::Hemisphere => self.direct_hemisphere(si, frame, m, wo, s),
             DirectStrategy::Bsdf => Color::ZERO,
             DirectStrategy::Light | DirectStrategy::Mis => {
                 let mut l = Color::ZERO;
                 for light in &self.scene.lights {
-                    let n = if light.is_delta() { 1 } else { self.light_samples.max(1) };
+                    let n = if light.is_delta() {
+                        1
+                    } else {
+                        self.light_samples.max(1)
+                    };
                     for _ in 0..n {
                         l += self.light_sample(si, frame, m, wo, light, n, s) / n as f32;
                     }
@@ -168,8 +191,10 @@ impl PathIntegrator<'_> {
         n: u32,
         s: &mut Sampler,
     ) -> Color {
-        let Some(ls) = light.sample_li(si.p, s.next_2d()) else { return Color::ZERO };
-        if !(ls.pdf > 0.0) || ls.li == Color::ZERO {
+        let Some(ls) = light.sample_li(si.p, s.next_2d()) else {
+            return Color::ZERO;
+        };
+        if ls.pdf.is_nan() || ls.pdf <= 0.0 || ls.li == Color::ZERO {
             return Color::ZERO;
         }
         let wi = frame.to_local(ls.wi);
@@ -203,7 +228,14 @@ impl PathIntegrator<'_> {
     }
 
     /// `-H`: `l` uniform directions on the hemisphere of `wo`, counting whatever emission they find.
-    fn direct_hemisphere(&self, si: &SurfaceInteraction, frame: &Frame, m: &Material, wo: Vec3, s: &mut Sampler) -> Color {
+    fn direct_hemisphere(
+        &self,
+        si: &SurfaceInteraction,
+        frame: &Frame,
+        m: &Material,
+        wo: Vec3,
+        s: &mut Sampler,
+    ) -> Color {
         let n = self.light_samples.max(1);
         let mut l = Color::ZERO;
         for _ in 0..n {
@@ -213,13 +245,24 @@ impl PathIntegrator<'_> {
             }
             let wi_world = frame.to_world(wi);
             let f = m.eval(wo, wi);
-            if f == Color::ZERO || !geometrically_consistent(si, frame.to_world(wo), wi_world, true) {
+            if f == Color::ZERO || !geometrically_consistent(si, frame.to_world(wo), wi_world, true)
+            {
                 continue;
             }
-            let ray = Ray::new(offset_ray_origin(si.p, si.p_error, si.ng, wi_world), wi_world);
+            let ray = Ray::new(
+                offset_ray_origin(si.p, si.p_error, si.ng, wi_world),
+                wi_world,
+            );
             let le = match self.accel.intersect(&ray) {
-                Some(h) => self.scene.emission(&self.scene.interaction(&ray, &h), -wi_world),
-                None => self.scene.lights.iter().map(|lt| lt.le_escaped(wi_world)).sum(),
+                Some(h) => self
+                    .scene
+                    .emission(&self.scene.interaction(&ray, &h), -wi_world),
+                None => self
+                    .scene
+                    .lights
+                    .iter()
+                    .map(|lt| lt.le_escaped(wi_world))
+                    .sum(),
             };
             l += f * le * (wi.z.abs() / uniform_hemisphere_pdf());
         }

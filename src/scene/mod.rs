@@ -107,9 +107,15 @@ pub struct SurfaceInteraction {
 impl Scene {
     /// Radiance leaving the surface of `si` toward world direction `wo`.
     pub fn emission(&self, si: &SurfaceInteraction, wo: Vec3) -> Color {
-        let mut le = self.materials[si.material as usize].emitted(Vec3::new(0.0, 0.0, wo.dot(si.ng)));
+        let mut le =
+            self.materials[si.material as usize].emitted(Vec3::new(0.0, 0.0, wo.dot(si.ng)));
         if !self.surface_emission.is_empty() {
-            le += self.surface_emission.iter().filter(|(p, _)| *p == si.prim).map(|(_, c)| *c).sum::<Color>();
+            le += self
+                .surface_emission
+                .iter()
+                .filter(|(p, _)| *p == si.prim)
+                .map(|(_, c)| *c)
+                .sum::<Color>();
         }
         le
     }

@@ -1,7 +1,5 @@
 //! A small valid COLLADA document that the loader tests mutate.
 
-
-
 use ember::scene::collada::parse;
 use ember::scene::Scene;
 

@@ -1,6 +1,5 @@
 //! Helpers shared by the integration tests.
 
-
 use ember::accel::{self, AccelKind, BvhBuilder};
 use ember::camera::Camera;
 use ember::film::Image;
@@ -10,7 +9,9 @@ use std::path::PathBuf;
 
 /// A path under the shared folder beside the repository.
 pub fn shared(rel: &str) -> PathBuf {
-    PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../shared").join(rel)
+    PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+        .join("../shared")
+        .join(rel)
 }
 
 pub fn load(rel: &str) -> Scene {
@@ -24,7 +25,12 @@ pub fn render_scene(scene: &Scene, settings: &RenderSettings) -> RenderOutput {
 
 pub fn render_with(scene: &Scene, settings: &RenderSettings, kind: AccelKind) -> RenderOutput {
     let accel = accel::build(scene, kind).expect("accel");
-    let cam = Camera::new(&scene.camera, &scene.bounds, settings.width, settings.height);
+    let cam = Camera::new(
+        &scene.camera,
+        &scene.bounds,
+        settings.width,
+        settings.height,
+    );
     render(scene, accel.as_ref(), &cam, settings, &|_| {})
 }
 
@@ -43,12 +49,26 @@ pub fn render_halves(scene: &Scene, settings: &RenderSettings, kind: AccelKind) 
     let a = render_with(scene, &s, kind);
     s.seed = settings.seed.wrapping_mul(2).wrapping_add(2);
     let b = render_with(scene, &s, kind);
-    assert_eq!(a.nonfinite_samples + b.nonfinite_samples, 0, "non-finite samples");
+    assert_eq!(
+        a.nonfinite_samples + b.nonfinite_samples,
+        0,
+        "non-finite samples"
+    );
     let avg = Image {
-        pixels: a.image.pixels.iter().zip(&b.image.pixels).map(|(x, y)| 0.5 * (*x + *y)).collect(),
+        pixels: a
+            .image
+            .pixels
+            .iter()
+            .zip(&b.image.pixels)
+            .map(|(x, y)| 0.5 * (*x + *y))
+            .collect(),
         ..a.image.clone()
     };
-    HalfRenders { a: a.image, b: b.image, avg }
+    HalfRenders {
+        a: a.image,
+        b: b.image,
+        avg,
+    }
 }
 
 impl HalfRenders {

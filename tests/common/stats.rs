@@ -1,7 +1,6 @@
 //! Statistics shared by the BSDF and light tests: a pbrt-v4 style chi-square
 //! goodness-of-fit test of a direction sampler against its pdf, and mean/σ.
 
-
 use ember::sampling::Sampler;
 use glam::Vec3;
 use std::f64::consts::PI;

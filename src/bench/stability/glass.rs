@@ -32,21 +32,40 @@ pub fn caustic(b: &Budget) -> Result<CausticCase> {
     let mut opaque = glass.clone();
     for m in &mut opaque.materials {
         if m.is_delta() {
-            *m = Material::Lambertian { albedo: Color::ZERO };
+            *m = Material::Lambertian {
+                albedo: Color::ZERO,
+            };
         }
     }
-    let base = RenderSettings { max_depth: CAUSTIC_DEPTH, strategy: DirectStrategy::Mis, roulette: Roulette::Off, ..Default::default() };
+    let base = RenderSettings {
+        max_depth: CAUSTIC_DEPTH,
+        strategy: DirectStrategy::Mis,
+        roulette: Roulette::Off,
+        ..Default::default()
+    };
     let setup = Setup::new(glass, b.width, b.height)?;
     // Below the sphere (centre (0, 0.6, 0) after Z_UP) and a floor point 0.7 to its side.
-    let below = setup.project(Vec3::ZERO).ok_or_else(|| anyhow::anyhow!("caustic.dae: floor centre not in view"))?;
-    let open = setup.project(Vec3::new(0.7, 0.0, 0.0)).ok_or_else(|| anyhow::anyhow!("caustic.dae: open floor not in view"))?;
+    let below = setup
+        .project(Vec3::ZERO)
+        .ok_or_else(|| anyhow::anyhow!("caustic.dae: floor centre not in view"))?;
+    let open = setup
+        .project(Vec3::new(0.7, 0.0, 0.0))
+        .ok_or_else(|| anyhow::anyhow!("caustic.dae: open floor not in view"))?;
     let spot = block_around(b.width, b.height, below, 1);
     let open = block_around(b.width, b.height, open, 1);
     let h = setup.halves(&b.settings(base.clone()));
     let mut nonfinite = h.nonfinite();
     let mut all_finite = h.a.image.all_finite() && h.b.image.all_finite();
-    for s in [DirectStrategy::Light, DirectStrategy::Bsdf, DirectStrategy::Hemisphere] {
-        let o = setup.render(&b.settings(RenderSettings { strategy: s, spp: (b.spp / 4).max(1), ..base.clone() }));
+    for s in [
+        DirectStrategy::Light,
+        DirectStrategy::Bsdf,
+        DirectStrategy::Hemisphere,
+    ] {
+        let o = setup.render(&b.settings(RenderSettings {
+            strategy: s,
+            spp: (b.spp / 4).max(1),
+            ..base.clone()
+        }));
         nonfinite += o.nonfinite_samples;
         all_finite &= o.image.all_finite();
     }
@@ -75,7 +94,7 @@ impl CausticCase {
             note,
         };
         vec![
-            row("MIS, glass sphere", self.caustic, format!("spot below the sphere: ×{:.1} the opaque sphere's shadow, ×{:.2} open floor", self.caustic.0 / self.shadow.0.max(1e-12), self.caustic.0 / self.open_floor.0)),
+            row("MIS, glass sphere", self.caustic, format!("spot below the sphere: {} vs the opaque sphere's shadow {:.3}, ×{:.2} open floor", format_args!("{:.3}", self.caustic.0), self.shadow.0, self.caustic.0 / self.open_floor.0)),
             row("MIS, black sphere", self.shadow, "same pixels, pure shadow".into()),
             row("MIS, open floor", self.open_floor, "3×3 pixels of unshadowed floor".into()),
         ]
@@ -113,14 +132,24 @@ pub fn slab(b: &Budget) -> Result<SlabCase> {
     let mut points = Vec::new();
     let (mut noise, mut nonfinite) = (0.0, 0);
     for depth in [1, 2, 8] {
-        let s = RenderSettings { max_depth: depth, strategy: DirectStrategy::Mis, roulette: Roulette::Off, ..Default::default() };
+        let s = RenderSettings {
+            max_depth: depth,
+            strategy: DirectStrategy::Mis,
+            roulette: Roulette::Off,
+            ..Default::default()
+        };
         let h = setup.halves(&b.settings(s));
         let (mean, se) = h.mean_and_se(None);
         points.push((depth, mean, se, slab_expected(radiance, depth)));
         noise = h.noise_per_pixel();
         nonfinite += h.nonfinite();
     }
-    Ok(SlabCase { radiance, points, noise, nonfinite })
+    Ok(SlabCase {
+        radiance,
+        points,
+        noise,
+        nonfinite,
+    })
 }
 
 impl SlabCase {
@@ -135,7 +164,10 @@ impl SlabCase {
                 expected: Some(expected),
                 noise: self.noise,
                 nonfinite: self.nonfinite,
-                note: format!("L·(1−F)²·Σ F^2k = {expected:.5}; {:.1} σ off", (mean - expected).abs() / se.max(1e-12)),
+                note: format!(
+                    "L·(1−F)²·Σ F^2k = {expected:.5}; {:.1} σ off",
+                    (mean - expected).abs() / se.max(1e-12)
+                ),
             })
             .collect()
     }

@@ -23,7 +23,12 @@ pub const STRATEGIES: [(DirectStrategy, &str); 4] = [
 ];
 
 fn direct(strategy: DirectStrategy) -> RenderSettings {
-    RenderSettings { max_depth: 1, strategy, roulette: Roulette::Off, ..Default::default() }
+    RenderSettings {
+        max_depth: 1,
+        strategy,
+        roulette: Roulette::Off,
+        ..Default::default()
+    }
 }
 
 /// One strategy's render of a case.
@@ -44,17 +49,46 @@ impl StrategyRun {
     fn from_halves(strategy: DirectStrategy, name: &'static str, h: &Halves) -> StrategyRun {
         let (mean, se) = h.mean_and_se(None);
         let avg = h.average();
-        let max_pixel = avg.pixels.iter().map(|p| luminance(*p) as f64).fold(0.0, f64::max);
-        StrategyRun { strategy, name, mean, se, noise: h.noise_per_pixel(), max_pixel, warnings: h.a.warnings.clone(), nonfinite: h.nonfinite() }
+        let max_pixel = avg
+            .pixels
+            .iter()
+            .map(|p| luminance(*p) as f64)
+            .fold(0.0, f64::max);
+        StrategyRun {
+            strategy,
+            name,
+            mean,
+            se,
+            noise: h.noise_per_pixel(),
+            max_pixel,
+            warnings: h.a.warnings.clone(),
+            nonfinite: h.nonfinite(),
+        }
     }
 
     pub fn row(&self, case: &str, expected: Option<f64>, note: String) -> Row {
-        Row { case: case.into(), method: self.name.into(), mean: self.mean, stderr: self.se, expected, noise: self.noise, nonfinite: self.nonfinite, note }
+        Row {
+            case: case.into(),
+            method: self.name.into(),
+            mean: self.mean,
+            stderr: self.se,
+            expected,
+            noise: self.noise,
+            nonfinite: self.nonfinite,
+            note,
+        }
     }
 }
 
-fn run_all(setup: &Setup, b: &Budget, strategies: &[(DirectStrategy, &'static str)]) -> Vec<StrategyRun> {
-    strategies.iter().map(|&(s, name)| StrategyRun::from_halves(s, name, &setup.halves(&b.settings(direct(s))))).collect()
+fn run_all(
+    setup: &Setup,
+    b: &Budget,
+    strategies: &[(DirectStrategy, &'static str)],
+) -> Vec<StrategyRun> {
+    strategies
+        .iter()
+        .map(|&(s, name)| StrategyRun::from_halves(s, name, &setup.halves(&b.settings(direct(s)))))
+        .collect()
 }
 
 /// Case 1: a point light seen by each strategy, and the closed-form image mean.
@@ -68,23 +102,40 @@ pub fn point_light(b: &Budget) -> Result<PointLightCase> {
     let setup = Setup::new(embedded("point_light.dae")?, b.width, b.height)?;
     let runs = run_all(&setup, b, &STRATEGIES);
     let expected_mean = point_light_image_mean(&setup)?;
-    Ok(PointLightCase { runs, expected_mean })
+    Ok(PointLightCase {
+        runs,
+        expected_mean,
+    })
 }
 
 /// Direct light from the scene's point light on its Lambertian surfaces, averaged over
 /// a 16×16 grid in every pixel (the scene has no occluders).
 fn point_light_image_mean(setup: &Setup) -> Result<f64> {
-    let Some(&Light::Point { position, intensity }) = setup.scene.lights.first() else { bail!("point_light.dae: no point light") };
+    let Some(&Light::Point {
+        position,
+        intensity,
+    }) = setup.scene.lights.first()
+    else {
+        bail!("point_light.dae: no point light")
+    };
     let (w, h, k) = (setup.camera.width, setup.camera.height, 16u32);
     let mut sum = 0.0f64;
     for y in 0..h {
         for x in 0..w {
             for s in 0..k * k {
-                let xi = glam::Vec2::new(((s % k) as f32 + 0.5) / k as f32, ((s / k) as f32 + 0.5) / k as f32);
+                let xi = glam::Vec2::new(
+                    ((s % k) as f32 + 0.5) / k as f32,
+                    ((s / k) as f32 + 0.5) / k as f32,
+                );
                 let ray = setup.camera.generate_ray(x, y, xi);
-                let Some(hit) = setup.accel.intersect(&ray) else { continue };
+                let Some(hit) = setup.accel.intersect(&ray) else {
+                    continue;
+                };
                 let si = setup.scene.interaction(&ray, &hit);
-                let Material::Lambertian { albedo } = setup.scene.materials[si.material as usize] else { continue };
+                let Material::Lambertian { albedo } = setup.scene.materials[si.material as usize]
+                else {
+                    continue;
+                };
                 let to = position - si.p;
                 let cos = (to.normalize().dot(si.ng)).abs();
                 let lo = albedo / std::f32::consts::PI * intensity * cos / to.length_squared();
@@ -102,9 +153,16 @@ impl PointLightCase {
             .iter()
             .map(|r| {
                 let note = if r.warnings.is_empty() {
-                    format!("sees the light; mean/expected = {:.4}", r.mean / self.expected_mean)
+                    format!(
+                        "sees the light; mean/expected = {:.4}",
+                        r.mean / self.expected_mean
+                    )
                 } else {
-                    format!("black image (max pixel {:.1e}); ember warns: {}", r.max_pixel, r.warnings.join("; "))
+                    format!(
+                        "black image (max pixel {:.1e}); ember warns: {}",
+                        r.max_pixel,
+                        r.warnings.join("; ")
+                    )
                 };
                 r.row(case, Some(self.expected_mean), note)
             })
@@ -133,7 +191,10 @@ impl SmallLightCase {
     }
 
     pub fn run(&self, name: &str) -> &StrategyRun {
-        self.runs.iter().find(|r| r.name == name).expect("strategy run")
+        self.runs
+            .iter()
+            .find(|r| r.name == name)
+            .expect("strategy run")
     }
 
     pub fn rows(&self) -> Vec<Row> {
@@ -156,18 +217,34 @@ impl SmallLightCase {
 
 pub fn small_light(b: &Budget, size: f32) -> Result<SmallLightCase> {
     let scene = scale_area_lights(embedded("small_light.dae")?, size);
-    let Some(&Light::Area { centre, ex, ey, .. }) = scene.lights.first() else { bail!("small_light.dae: no area light") };
+    let Some(&Light::Area { centre, ex, ey, .. }) = scene.lights.first() else {
+        bail!("small_light.dae: no area light")
+    };
     let h = centre.y as f64; // the floor is y = 0
     let max_solid_angle = ex.cross(ey).length() as f64 / (h * h);
     let setup = Setup::new(scene, b.width, b.height)?;
-    Ok(SmallLightCase { size, max_solid_angle, runs: run_all(&setup, b, &STRATEGIES) })
+    Ok(SmallLightCase {
+        size,
+        max_solid_angle,
+        runs: run_all(&setup, b, &STRATEGIES),
+    })
 }
 
 /// Every area light (and its emitting triangles) scaled by `k` about its centre, its
 /// radiance by `1/k²`: the same power from a smaller or larger source.
 pub fn scale_area_lights(mut scene: Scene, k: f32) -> Scene {
     for (li, light) in scene.lights.iter_mut().enumerate() {
-        let Light::Area { centre, ex, ey, area, radiance, .. } = light else { continue };
+        let Light::Area {
+            centre,
+            ex,
+            ey,
+            area,
+            radiance,
+            ..
+        } = light
+        else {
+            continue;
+        };
         *ex *= k;
         *ey *= k;
         *area *= k * k;
@@ -178,7 +255,9 @@ pub fn scale_area_lights(mut scene: Scene, k: f32) -> Scene {
                 let p = &mut scene.positions[v as usize];
                 *p = c + k * (*p - c);
             }
-            scene.materials[t.material as usize] = Material::Emission { radiance: new_radiance };
+            scene.materials[t.material as usize] = Material::Emission {
+                radiance: new_radiance,
+            };
         }
     }
     scene
@@ -195,25 +274,43 @@ pub const GLOSSY_SCENES: [&str; 2] = ["glossy_large_light.dae", "rough_small_lig
 
 pub fn glossy(b: &Budget, scene: &'static str) -> Result<GlossyCase> {
     let setup = Setup::new(embedded(scene)?, b.width, b.height)?;
-    Ok(GlossyCase { scene, runs: run_all(&setup, b, &STRATEGIES[1..]) })
+    Ok(GlossyCase {
+        scene,
+        runs: run_all(&setup, b, &STRATEGIES[1..]),
+    })
 }
 
 impl GlossyCase {
     pub fn run(&self, name: &str) -> &StrategyRun {
-        self.runs.iter().find(|r| r.name == name).expect("strategy run")
+        self.runs
+            .iter()
+            .find(|r| r.name == name)
+            .expect("strategy run")
     }
 
     pub fn rows(&self) -> Vec<Row> {
-        let case = format!("3 {}", self.scene.trim_end_matches(".dae"));
-        let best = self.runs.iter().filter(|r| r.name != "MIS").map(|r| r.noise).fold(f64::INFINITY, f64::min);
+        let case = if self.scene.starts_with("glossy") {
+            "3 glossy, large light"
+        } else {
+            "3 rough, small light"
+        };
+        let best = self
+            .runs
+            .iter()
+            .filter(|r| r.name != "MIS")
+            .map(|r| r.noise)
+            .fold(f64::INFINITY, f64::min);
         let mis = self.run("MIS").clone();
         self.runs
             .iter()
             .map(|r| {
-                let note = format!("noise ×{:.2} of the better single strategy; {:.1} σ from MIS's mean", r.noise / best, z_score((r.mean, r.se), (mis.mean, mis.se)));
-                r.row(&case, None, note)
+                let note = format!(
+                    "noise ×{:.2} of the better single strategy; {:.1} σ from MIS's mean",
+                    r.noise / best,
+                    z_score((r.mean, r.se), (mis.mean, mis.se))
+                );
+                r.row(case, None, note)
             })
             .collect()
     }
 }
-

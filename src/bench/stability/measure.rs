@@ -22,7 +22,13 @@ pub struct Budget {
 impl Budget {
     /// Settings of this budget for the rest of `base`.
     pub fn settings(&self, base: RenderSettings) -> RenderSettings {
-        RenderSettings { width: self.width, height: self.height, spp: self.spp, seed: self.seed, ..base }
+        RenderSettings {
+            width: self.width,
+            height: self.height,
+            spp: self.spp,
+            seed: self.seed,
+            ..base
+        }
     }
 }
 
@@ -42,7 +48,11 @@ impl Setup {
 
     pub fn with_camera(scene: Scene, camera: Camera) -> Result<Setup> {
         let accel = accel::build(&scene, AccelKind::Native(BvhBuilder::Sah))?;
-        Ok(Setup { scene, accel, camera })
+        Ok(Setup {
+            scene,
+            accel,
+            camera,
+        })
     }
 
     pub fn render(&self, s: &RenderSettings) -> RenderOutput {
@@ -72,7 +82,8 @@ impl Setup {
         let sy = d.dot(c.up) / depth / c.tan_half_y;
         let u = 0.5 * (sx + 1.0) * c.width as f32;
         let v = 0.5 * (1.0 - sy) * c.height as f32;
-        (u >= 0.0 && v >= 0.0 && u < c.width as f32 && v < c.height as f32).then_some((u as u32, v as u32))
+        (u >= 0.0 && v >= 0.0 && u < c.width as f32 && v < c.height as f32)
+            .then_some((u as u32, v as u32))
     }
 }
 
@@ -86,8 +97,18 @@ pub struct Halves {
 
 impl Halves {
     pub fn average(&self) -> Image {
-        let pixels = self.a.image.pixels.iter().zip(&self.b.image.pixels).map(|(x, y)| 0.5 * (*x + *y)).collect();
-        Image { pixels, ..self.a.image.clone() }
+        let pixels = self
+            .a
+            .image
+            .pixels
+            .iter()
+            .zip(&self.b.image.pixels)
+            .map(|(x, y)| 0.5 * (*x + *y))
+            .collect();
+        Image {
+            pixels,
+            ..self.a.image.clone()
+        }
     }
 
     pub fn nonfinite(&self) -> u64 {
@@ -96,7 +117,8 @@ impl Halves {
 
     /// Samples taken per pixel by both halves together, averaged over the image.
     pub fn mean_samples(&self) -> f64 {
-        (self.a.total_samples() + self.b.total_samples()) as f64 / self.a.samples.len().max(1) as f64
+        (self.a.total_samples() + self.b.total_samples()) as f64
+            / self.a.samples.len().max(1) as f64
     }
 
     /// Luminance mean of the averaged image over `pixels` (all when None) and its standard error.
@@ -122,7 +144,9 @@ impl Halves {
     /// RMS noise of one pixel of the averaged image (luminance), over `pixels` or all.
     pub fn noise_per_pixel(&self) -> f64 {
         let n = self.a.image.pixels.len().max(1) as f64;
-        let s: f64 = (0..self.a.image.pixels.len()).map(|i| 0.25 * (lum(&self.a.image, i) - lum(&self.b.image, i)).powi(2)).sum();
+        let s: f64 = (0..self.a.image.pixels.len())
+            .map(|i| 0.25 * (lum(&self.a.image, i) - lum(&self.b.image, i)).powi(2))
+            .sum();
         (s / n).sqrt()
     }
 }

@@ -4,7 +4,7 @@
 //! through a closed mesh; degenerate triangles must not produce NaN.
 
 use super::measure::{lum, Budget, Halves, Setup};
-use super::scenes::{degenerate_room, embedded, grid_plane, transformed, GRID_HALF, GRID_CELLS};
+use super::scenes::{degenerate_room, embedded, grid_plane, transformed, GRID_CELLS, GRID_HALF};
 use super::Row;
 use crate::camera::Camera;
 use crate::geometry::Ray;
@@ -45,10 +45,20 @@ pub struct ScaleCase {
     pub runs: Vec<ScaledRun>,
 }
 
-pub const SCALE_VARIANTS: [(&str, f32, f32); 4] = [("scale 1e-3", 1e-3, 0.0), ("scale 1e3", 1e3, 0.0), ("translate 1e4", 1.0, 1e4), ("scale 1e-3, translate 1", 1e-3, 1.0)];
+pub const SCALE_VARIANTS: [(&str, f32, f32); 4] = [
+    ("scale 1e-3", 1e-3, 0.0),
+    ("scale 1e3", 1e3, 0.0),
+    ("translate 1e4", 1.0, 1e4),
+    ("scale 1e-3, translate 1", 1e-3, 1.0),
+];
 
 fn scale_settings() -> RenderSettings {
-    RenderSettings { max_depth: 4, strategy: DirectStrategy::Mis, roulette: Roulette::Off, ..Default::default() }
+    RenderSettings {
+        max_depth: 4,
+        strategy: DirectStrategy::Mis,
+        roulette: Roulette::Off,
+        ..Default::default()
+    }
 }
 
 pub fn scale(b: &Budget) -> Result<ScaleCase> {
@@ -57,40 +67,62 @@ pub fn scale(b: &Budget) -> Result<ScaleCase> {
     let base = Setup::new(base_scene.clone(), b.width, b.height)?;
     let reference = base.render(&s);
     // Noise of one render of `spp` samples: halves of 2·spp have exactly that size.
-    let halves = base.halves(&RenderSettings { spp: 2 * b.spp, ..s.clone() });
+    let halves = base.halves(&RenderSettings {
+        spp: 2 * b.spp,
+        ..s.clone()
+    });
     let sigma = halves.noise_per_pixel();
     let block_sigma = block_noise(&halves, 8);
     let surface = surface_pixels(&base);
     let mut runs = Vec::new();
     for (name, k, off) in SCALE_VARIANTS {
-        let setup = Setup::new(transformed(&base_scene, k, Vec3::splat(off)), b.width, b.height)?;
+        let setup = Setup::new(
+            transformed(&base_scene, k, Vec3::splat(off)),
+            b.width,
+            b.height,
+        )?;
         let o = setup.render(&s);
         let mut run = compare(name, k, off, &reference.image, &o, sigma, block_sigma);
-        (run.surface_rel_diff, run.surface_rel_se) = paired_relative_diff(&reference.image, &o.image, &surface);
+        (run.surface_rel_diff, run.surface_rel_se) =
+            paired_relative_diff(&reference.image, &o.image, &surface);
         runs.push(run);
     }
     let n = reference.image.pixels.len();
     let base_mean = (0..n).map(|i| lum(&reference.image, i)).sum::<f64>() / n as f64;
-    Ok(ScaleCase { base_mean, pixel_noise: sigma, runs })
+    Ok(ScaleCase {
+        base_mean,
+        pixel_noise: sigma,
+        runs,
+    })
 }
 
 /// Pixels none of whose corners or centre sees an emitter directly.
 fn surface_pixels(setup: &Setup) -> Vec<usize> {
     let cam = &setup.camera;
     let sees_emitter = |x: u32, y: u32| {
-        [(0.0, 0.0), (1.0, 0.0), (0.0, 1.0), (1.0, 1.0), (0.5, 0.5)].iter().any(|&(u, v)| {
-            let r = cam.generate_ray(x, y, glam::Vec2::new(u, v));
-            setup.accel.intersect(&r).is_some_and(|h| {
-                let si = setup.scene.interaction(&r, &h);
-                setup.scene.materials[si.material as usize].is_black()
+        [(0.0, 0.0), (1.0, 0.0), (0.0, 1.0), (1.0, 1.0), (0.5, 0.5)]
+            .iter()
+            .any(|&(u, v)| {
+                let r = cam.generate_ray(x, y, glam::Vec2::new(u, v));
+                setup.accel.intersect(&r).is_some_and(|h| {
+                    let si = setup.scene.interaction(&r, &h);
+                    setup.scene.materials[si.material as usize].is_black()
+                })
             })
-        })
     };
-    (0..cam.height).flat_map(|y| (0..cam.width).map(move |x| (x, y))).filter(|&(x, y)| !sees_emitter(x, y)).map(|(x, y)| (y * cam.width + x) as usize).collect()
+    (0..cam.height)
+        .flat_map(|y| (0..cam.width).map(move |x| (x, y)))
+        .filter(|&(x, y)| !sees_emitter(x, y))
+        .map(|(x, y)| (y * cam.width + x) as usize)
+        .collect()
 }
 
 /// Mean of `o − r` over `pixels` relative to the mean of `r`, and its paired standard error.
-fn paired_relative_diff(r: &crate::film::Image, o: &crate::film::Image, pixels: &[usize]) -> (f64, f64) {
+fn paired_relative_diff(
+    r: &crate::film::Image,
+    o: &crate::film::Image,
+    pixels: &[usize],
+) -> (f64, f64) {
     let n = pixels.len().max(2) as f64;
     let base = pixels.iter().map(|&i| lum(r, i)).sum::<f64>() / n;
     let d: Vec<f64> = pixels.iter().map(|&i| lum(o, i) - lum(r, i)).collect();
@@ -104,19 +136,36 @@ fn block_noise(h: &Halves, b: u32) -> f64 {
     let (a, c) = (h.a.image.block_average(b), h.b.image.block_average(b));
     // Var(a − c) = 2σ²_half; a render of the full spp has σ² = σ²_half/2.
     let n = a.pixels.len().max(1) as f64;
-    let var_diff = (0..a.pixels.len()).map(|i| (lum(&a, i) - lum(&c, i)).powi(2)).sum::<f64>() / n;
+    let var_diff = (0..a.pixels.len())
+        .map(|i| (lum(&a, i) - lum(&c, i)).powi(2))
+        .sum::<f64>()
+        / n;
     (var_diff / 4.0).sqrt()
 }
 
-fn compare(name: &str, scale: f32, offset: f32, reference: &crate::film::Image, o: &crate::render::RenderOutput, sigma: f64, block_sigma: f64) -> ScaledRun {
+fn compare(
+    name: &str,
+    scale: f32,
+    offset: f32,
+    reference: &crate::film::Image,
+    o: &crate::render::RenderOutput,
+    sigma: f64,
+    block_sigma: f64,
+) -> ScaledRun {
     let n = reference.pixels.len();
-    let d: Vec<f64> = (0..n).map(|i| lum(&o.image, i) - lum(reference, i)).collect();
+    let d: Vec<f64> = (0..n)
+        .map(|i| lum(&o.image, i) - lum(reference, i))
+        .collect();
     let mean_d = d.iter().sum::<f64>() / n as f64;
     let var_d = d.iter().map(|x| (x - mean_d).powi(2)).sum::<f64>() / (n as f64 - 1.0).max(1.0);
-    let changed = (0..n).filter(|&i| d[i].abs() > 1e-3 * lum(reference, i).max(1e-3)).count();
+    let changed = (0..n)
+        .filter(|&i| d[i].abs() > 1e-3 * lum(reference, i).max(1e-3))
+        .count();
     let beyond = d.iter().filter(|x| x.abs() > 4.0 * sigma).count();
     let (ra, oa) = (reference.block_average(8), o.image.block_average(8));
-    let max_block_z = (0..ra.pixels.len()).map(|i| (lum(&oa, i) - lum(&ra, i)).abs() / (block_sigma * 2f64.sqrt()).max(1e-12)).fold(0.0, f64::max);
+    let max_block_z = (0..ra.pixels.len())
+        .map(|i| (lum(&oa, i) - lum(&ra, i)).abs() / (block_sigma * 2f64.sqrt()).max(1e-12))
+        .fold(0.0, f64::max);
     ScaledRun {
         name: name.into(),
         scale,
@@ -210,18 +259,36 @@ fn grid_queries(setup: &Setup, c: &mut GridCase, seed: u64) {
     let mut targets = Vec::new();
     for j in 1..GRID_CELLS {
         for i in 1..GRID_CELLS {
-            let p = Vec3::new(-GRID_HALF + i as f32 * step, 0.0, -GRID_HALF + j as f32 * step);
-            targets.extend([p, p + Vec3::new(0.5 * step, 0.0, 0.0), p + Vec3::new(0.0, 0.0, 0.5 * step), p + Vec3::new(0.5 * step, 0.0, 0.5 * step)]);
+            let p = Vec3::new(
+                -GRID_HALF + i as f32 * step,
+                0.0,
+                -GRID_HALF + j as f32 * step,
+            );
+            targets.extend([
+                p,
+                p + Vec3::new(0.5 * step, 0.0, 0.0),
+                p + Vec3::new(0.0, 0.0, 0.5 * step),
+                p + Vec3::new(0.5 * step, 0.0, 0.5 * step),
+            ]);
         }
     }
     for _ in 0..4000 {
         let u = sampler.next_2d();
-        targets.push(Vec3::new((2.0 * u.x - 1.0) * 0.98 * GRID_HALF, 0.0, (2.0 * u.y - 1.0) * 0.98 * GRID_HALF));
+        targets.push(Vec3::new(
+            (2.0 * u.x - 1.0) * 0.98 * GRID_HALF,
+            0.0,
+            (2.0 * u.y - 1.0) * 0.98 * GRID_HALF,
+        ));
     }
     for (k, &target) in targets.iter().enumerate() {
         // Elevations from 1e-4 to 0.1 rad; eyes outside the grid, in line with the target.
         let elevation = 10f32.powf(-4.0 + 3.0 * (k % 7) as f32 / 6.0);
-        let horiz = [Vec3::Z, Vec3::X, Vec3::new(1.0, 0.0, 1.0).normalize(), Vec3::new(-0.3, 0.0, 1.0).normalize()][k % 4];
+        let horiz = [
+            Vec3::Z,
+            Vec3::X,
+            Vec3::new(1.0, 0.0, 1.0).normalize(),
+            Vec3::new(-0.3, 0.0, 1.0).normalize(),
+        ][k % 4];
         let dist = 2.5 * GRID_HALF;
         let o = target - dist * horiz + Vec3::new(0.0, dist * elevation.tan(), 0.0);
         check_ray(setup, c, o, target, elevation);
@@ -257,19 +324,25 @@ fn check_ray(setup: &Setup, c: &mut GridCase, o: Vec3, target: Vec3, elevation: 
 /// A normals render from 2 cm above the grid: a pixel all of whose corners' rays hit
 /// the grid must be the up normal's colour in every sample (a hole would show black).
 fn grazing_render(setup: &Setup, b: &Budget, c: &mut GridCase) {
-    let s = b.settings(RenderSettings { shading: Shading::Normals, spp: b.spp.max(4), ..Default::default() });
+    let s = b.settings(RenderSettings {
+        shading: Shading::Normals,
+        spp: b.spp.max(4),
+        ..Default::default()
+    });
     let img = setup.render(&s).image;
     let cam = &setup.camera;
     let hits = |x: u32, y: u32| {
-        [(0.0, 0.0), (1.0, 0.0), (0.0, 1.0), (1.0, 1.0)].iter().all(|&(u, v)| {
-            let r = cam.generate_ray(x, y, glam::Vec2::new(u, v));
-            if r.d.y >= 0.0 {
-                return false;
-            }
-            let t = -r.o.y / r.d.y;
-            let p = r.at(t);
-            p.x.abs() < GRID_HALF * 0.999 && p.z.abs() < GRID_HALF * 0.999
-        })
+        [(0.0, 0.0), (1.0, 0.0), (0.0, 1.0), (1.0, 1.0)]
+            .iter()
+            .all(|&(u, v)| {
+                let r = cam.generate_ray(x, y, glam::Vec2::new(u, v));
+                if r.d.y >= 0.0 {
+                    return false;
+                }
+                let t = -r.o.y / r.d.y;
+                let p = r.at(t);
+                p.x.abs() < GRID_HALF * 0.999 && p.z.abs() < GRID_HALF * 0.999
+            })
     };
     let up = Vec3::new(0.5, 1.0, 0.5);
     for y in 0..cam.height {
@@ -291,8 +364,18 @@ fn degenerate(b: &Budget, c: &mut GridCase) -> Result<()> {
     camera.eye = Vec3::new(0.05, -0.1, -0.95);
     let setup = Setup::with_camera(scene, camera)?;
     c.degenerate_all_finite = true;
-    for strategy in [DirectStrategy::Mis, DirectStrategy::Light, DirectStrategy::Bsdf, DirectStrategy::Hemisphere] {
-        let o = setup.render(&b.settings(RenderSettings { max_depth: 5, strategy, roulette: Roulette::default(), ..Default::default() }));
+    for strategy in [
+        DirectStrategy::Mis,
+        DirectStrategy::Light,
+        DirectStrategy::Bsdf,
+        DirectStrategy::Hemisphere,
+    ] {
+        let o = setup.render(&b.settings(RenderSettings {
+            max_depth: 5,
+            strategy,
+            roulette: Roulette::default(),
+            ..Default::default()
+        }));
         c.degenerate_nonfinite += o.nonfinite_samples;
         c.degenerate_all_finite &= o.image.all_finite();
         if strategy == DirectStrategy::Mis {

@@ -38,18 +38,49 @@ pub struct AdaptiveCase {
 pub fn adaptive(b: &Budget) -> Result<AdaptiveCase> {
     let scene = scale_area_lights(embedded("small_light.dae")?, 4.0);
     let setup = Setup::new(scene, b.width, b.height)?;
-    let base = RenderSettings { max_depth: 1, strategy: DirectStrategy::Bsdf, roulette: Roulette::Off, ..Default::default() };
+    let base = RenderSettings {
+        max_depth: 1,
+        strategy: DirectStrategy::Bsdf,
+        roulette: Roulette::Off,
+        ..Default::default()
+    };
     let reference: Halves = setup.halves(&b.settings(base.clone()));
     let avg = reference.average();
-    let lit_pixels: Vec<usize> = (0..avg.pixels.len()).filter(|&i| lum(&avg, i) > 0.0).collect();
+    let lit_pixels: Vec<usize> = (0..avg.pixels.len())
+        .filter(|&i| lum(&avg, i) > 0.0)
+        .collect();
     let run = |name: &'static str, guard: u32| {
-        let adaptive = Adaptive { min_samples_if_constant: guard, ..Adaptive::new(BATCH, TOL) };
-        let output = setup.render(&b.settings(RenderSettings { adaptive: Some(adaptive), ..base.clone() }));
+        let adaptive = Adaptive {
+            min_samples_if_constant: guard,
+            ..Adaptive::new(BATCH, TOL)
+        };
+        let output = setup.render(&b.settings(RenderSettings {
+            adaptive: Some(adaptive),
+            ..base.clone()
+        }));
         let n = lit_pixels.len().max(1) as f64;
-        let mean = lit_pixels.iter().map(|&i| lum(&output.image, i)).sum::<f64>() / n;
-        let mean_samples = lit_pixels.iter().map(|&i| output.samples[i] as f64).sum::<f64>() / n;
-        let stopped_at_zero_after_one_batch = lit_pixels.iter().filter(|&&i| output.samples[i] == BATCH && lum(&output.image, i) == 0.0).count();
-        AdaptiveRun { name, min_samples_if_constant: guard, mean, mean_samples, stopped_at_zero_after_one_batch, output }
+        let mean = lit_pixels
+            .iter()
+            .map(|&i| lum(&output.image, i))
+            .sum::<f64>()
+            / n;
+        let mean_samples = lit_pixels
+            .iter()
+            .map(|&i| output.samples[i] as f64)
+            .sum::<f64>()
+            / n;
+        let stopped_at_zero_after_one_batch = lit_pixels
+            .iter()
+            .filter(|&&i| output.samples[i] == BATCH && lum(&output.image, i) == 0.0)
+            .count();
+        AdaptiveRun {
+            name,
+            min_samples_if_constant: guard,
+            mean,
+            mean_samples,
+            stopped_at_zero_after_one_batch,
+            output,
+        }
     };
     Ok(AdaptiveCase {
         reference: reference.mean_and_se(Some(&lit_pixels)),
@@ -63,7 +94,16 @@ impl AdaptiveCase {
     pub fn rows(&self) -> Vec<Row> {
         let case = "7 adaptive, zero first batch";
         let (rm, rse) = self.reference;
-        let mut rows = vec![Row { case: case.into(), method: "fixed spp (reference)".into(), mean: rm, stderr: rse, expected: None, noise: 0.0, nonfinite: 0, note: format!("{} lit pixels", self.lit_pixels.len()) }];
+        let mut rows = vec![Row {
+            case: case.into(),
+            method: "fixed spp (reference)".into(),
+            mean: rm,
+            stderr: rse,
+            expected: None,
+            noise: 0.0,
+            nonfinite: 0,
+            note: format!("{} lit pixels", self.lit_pixels.len()),
+        }];
         for r in [&self.guarded, &self.unguarded] {
             rows.push(Row {
                 case: case.into(),
@@ -88,9 +128,27 @@ impl AdaptiveCase {
 
 pub const ROULETTES: [(&str, Roulette); 4] = [
     ("no roulette", Roulette::Off),
-    ("throughput (default)", Roulette::Throughput { start: 3, min_prob: 0.05 }),
-    ("fixed q = 0.2 from bounce 1", Roulette::Fixed { start: 1, prob: 0.2 }),
-    ("fixed q = 0.05 from bounce 1", Roulette::Fixed { start: 1, prob: 0.05 }),
+    (
+        "throughput (default)",
+        Roulette::Throughput {
+            start: 3,
+            min_prob: 0.05,
+        },
+    ),
+    (
+        "fixed q = 0.2 from bounce 1",
+        Roulette::Fixed {
+            start: 1,
+            prob: 0.2,
+        },
+    ),
+    (
+        "fixed q = 0.05 from bounce 1",
+        Roulette::Fixed {
+            start: 1,
+            prob: 0.05,
+        },
+    ),
 ];
 
 #[derive(Clone, Debug)]
@@ -113,10 +171,21 @@ pub fn roulette(b: &Budget) -> Result<RouletteCase> {
     let runs = ROULETTES
         .iter()
         .map(|&(name, roulette)| {
-            let s = RenderSettings { max_depth: ROULETTE_DEPTH, strategy: DirectStrategy::Mis, roulette, ..Default::default() };
+            let s = RenderSettings {
+                max_depth: ROULETTE_DEPTH,
+                strategy: DirectStrategy::Mis,
+                roulette,
+                ..Default::default()
+            };
             let h = setup.halves(&b.settings(s));
             let (mean, se) = h.mean_and_se(None);
-            RouletteRun { name, mean, se, noise: h.noise_per_pixel(), nonfinite: h.nonfinite() }
+            RouletteRun {
+                name,
+                mean,
+                se,
+                noise: h.noise_per_pixel(),
+                nonfinite: h.nonfinite(),
+            }
         })
         .collect();
     Ok(RouletteCase { runs })
@@ -139,7 +208,11 @@ impl RouletteCase {
                 expected: Some(off.mean),
                 noise: r.noise,
                 nonfinite: r.nonfinite,
-                note: format!("variance ×{:.2} of no roulette; mean {:.1} σ from it", (r.noise / off.noise).powi(2), super::measure::z_score((r.mean, r.se), (off.mean, off.se))),
+                note: format!(
+                    "variance ×{:.2} of no roulette; mean {:.1} σ from it",
+                    (r.noise / off.noise).powi(2),
+                    super::measure::z_score((r.mean, r.se), (off.mean, off.se))
+                ),
             })
             .collect()
     }

@@ -15,7 +15,9 @@ pub fn embedded(name: &str) -> Result<Scene> {
     let text = match name {
         "point_light.dae" => include_str!("../../../scenes/stability/point_light.dae"),
         "small_light.dae" => include_str!("../../../scenes/stability/small_light.dae"),
-        "glossy_large_light.dae" => include_str!("../../../scenes/stability/glossy_large_light.dae"),
+        "glossy_large_light.dae" => {
+            include_str!("../../../scenes/stability/glossy_large_light.dae")
+        }
         "rough_small_light.dae" => include_str!("../../../scenes/stability/rough_small_light.dae"),
         "caustic.dae" => include_str!("../../../scenes/stability/caustic.dae"),
         "cornell.dae" => include_str!("../../../scenes/cornell.dae"),
@@ -37,7 +39,13 @@ pub fn transformed(scene: &Scene, scale: f32, offset: Vec3) -> Scene {
     }
     for l in &mut s.lights {
         match l {
-            Light::Area { centre, ex, ey, area, .. } => {
+            Light::Area {
+                centre,
+                ex,
+                ey,
+                area,
+                ..
+            } => {
                 *centre = map(*centre);
                 *ex *= scale;
                 *ey *= scale;
@@ -68,7 +76,12 @@ impl SceneBuilder {
     pub fn triangle(&mut self, p: [Vec3; 3], material: u32, light: u32) {
         let base = self.scene.positions.len() as u32;
         self.scene.positions.extend_from_slice(&p);
-        self.scene.triangles.push(Triangle { v: [base, base + 1, base + 2], n: None, material, light });
+        self.scene.triangles.push(Triangle {
+            v: [base, base + 1, base + 2],
+            n: None,
+            material,
+            light,
+        });
     }
 
     /// Parallelogram `origin + s·ex + t·ey`, `s, t ∈ [0, 1]`; its front is `ex × ey`.
@@ -80,7 +93,11 @@ impl SceneBuilder {
     /// Axis-aligned box whose faces' fronts point outward.
     pub fn cuboid(&mut self, min: Vec3, max: Vec3, material: u32) {
         let d = max - min;
-        let (x, y, z) = (Vec3::new(d.x, 0.0, 0.0), Vec3::new(0.0, d.y, 0.0), Vec3::new(0.0, 0.0, d.z));
+        let (x, y, z) = (
+            Vec3::new(d.x, 0.0, 0.0),
+            Vec3::new(0.0, d.y, 0.0),
+            Vec3::new(0.0, 0.0, d.z),
+        );
         self.quad(min, y, x, material); // −z
         self.quad(min + z, x, y, material); // +z
         self.quad(min, x, z, material); // −y
@@ -90,7 +107,11 @@ impl SceneBuilder {
     }
 
     pub fn sphere(&mut self, centre: Vec3, radius: f32, material: u32) {
-        self.scene.spheres.push(Sphere { centre, radius, material });
+        self.scene.spheres.push(Sphere {
+            centre,
+            radius,
+            material,
+        });
     }
 
     /// A one-sided rectangular area light `centre ± ex/2 ± ey/2` emitting toward `ex × ey`.
@@ -102,7 +123,14 @@ impl SceneBuilder {
         self.triangle([o, o + ex, o + ex + ey], m, light);
         self.triangle([o, o + ex + ey, o + ey], m, light);
         let area = ex.cross(ey).length();
-        self.scene.lights.push(Light::Area { centre, ex, ey, normal, area, radiance });
+        self.scene.lights.push(Light::Area {
+            centre,
+            ex,
+            ey,
+            normal,
+            area,
+            radiance,
+        });
     }
 
     pub fn light(&mut self, light: Light) {
@@ -118,7 +146,11 @@ impl SceneBuilder {
             }
         }
         for (i, _) in self.scene.spheres.iter().enumerate() {
-            b = b.union(&self.scene.prim_bounds((self.scene.triangles.len() + i) as u32));
+            b = b.union(
+                &self
+                    .scene
+                    .prim_bounds((self.scene.triangles.len() + i) as u32),
+            );
         }
         self.scene.bounds = b;
         self.scene.camera = camera;
@@ -134,10 +166,24 @@ pub const GLASS_IOR: f32 = 1.5;
 /// through the slab, at near-normal incidence.
 pub fn slab_in_front_of_light(radiance: f32) -> Scene {
     let mut b = SceneBuilder::default();
-    let glass = b.material(Material::Glass { ior: GLASS_IOR, reflectance: Color::ONE, transmittance: Color::ONE });
+    let glass = b.material(Material::Glass {
+        ior: GLASS_IOR,
+        reflectance: Color::ONE,
+        transmittance: Color::ONE,
+    });
     b.cuboid(Vec3::new(-1.5, -1.5, 1.0), Vec3::new(1.5, 1.5, 1.2), glass);
-    b.area_light(Vec3::new(0.0, 0.0, 2.0), Vec3::new(0.0, 4.0, 0.0), Vec3::new(4.0, 0.0, 0.0), Color::splat(radiance));
-    b.finish(CameraDesc { forward: Vec3::Z, up: Vec3::Y, tan_half_x: Some(0.05), tan_half_y: None })
+    b.area_light(
+        Vec3::new(0.0, 0.0, 2.0),
+        Vec3::new(0.0, 4.0, 0.0),
+        Vec3::new(4.0, 0.0, 0.0),
+        Color::splat(radiance),
+    );
+    b.finish(CameraDesc {
+        forward: Vec3::Z,
+        up: Vec3::Y,
+        tan_half_x: Some(0.05),
+        tan_half_y: None,
+    })
 }
 
 /// Number of grid cells per side of `grid_plane`.
@@ -149,10 +195,18 @@ pub const GRID_HALF: f32 = 4.0;
 /// y = 0, `|x|, |z| ≤ GRID_HALF`, under an ambient sky of radiance 1.
 pub fn grid_plane() -> Scene {
     let mut b = SceneBuilder::default();
-    let m = b.material(Material::Lambertian { albedo: Color::splat(0.5) });
+    let m = b.material(Material::Lambertian {
+        albedo: Color::splat(0.5),
+    });
     let n = GRID_CELLS;
     let step = 2.0 * GRID_HALF / n as f32;
-    let corner = |i: u32, j: u32| Vec3::new(-GRID_HALF + i as f32 * step, 0.0, -GRID_HALF + j as f32 * step);
+    let corner = |i: u32, j: u32| {
+        Vec3::new(
+            -GRID_HALF + i as f32 * step,
+            0.0,
+            -GRID_HALF + j as f32 * step,
+        )
+    };
     let base = b.scene.positions.len() as u32;
     for j in 0..=n {
         for i in 0..=n {
@@ -163,14 +217,30 @@ pub fn grid_plane() -> Scene {
     for j in 0..n {
         for i in 0..n {
             // Winding for +y fronts: (p1−p0)×(p2−p0) with p1 along z, p2 along x.
-            let t = |v: [u32; 3]| Triangle { v, n: None, material: m, light: NO_LIGHT };
-            b.scene.triangles.push(t([id(i, j), id(i, j + 1), id(i + 1, j + 1)]));
-            b.scene.triangles.push(t([id(i, j), id(i + 1, j + 1), id(i + 1, j)]));
+            let t = |v: [u32; 3]| Triangle {
+                v,
+                n: None,
+                material: m,
+                light: NO_LIGHT,
+            };
+            b.scene
+                .triangles
+                .push(t([id(i, j), id(i, j + 1), id(i + 1, j + 1)]));
+            b.scene
+                .triangles
+                .push(t([id(i, j), id(i + 1, j + 1), id(i + 1, j)]));
         }
     }
-    b.light(Light::Ambient { radiance: Color::ONE });
+    b.light(Light::Ambient {
+        radiance: Color::ONE,
+    });
     // Looking along +z and slightly down; the eye position is set by the caller.
-    b.finish(CameraDesc { forward: Vec3::Z, up: Vec3::Y, tan_half_x: Some(0.4), tan_half_y: None })
+    b.finish(CameraDesc {
+        forward: Vec3::Z,
+        up: Vec3::Y,
+        tan_half_x: Some(0.4),
+        tan_half_y: None,
+    })
 }
 
 /// A closed grey room (2 × 2 × 2, fronts inward) lit by a ceiling light, holding
@@ -178,12 +248,24 @@ pub fn grid_plane() -> Scene {
 /// 1e-7 wide, a triangle with a corner at 1e-30 from another, and a zero-area light.
 pub fn degenerate_room() -> Scene {
     let mut b = SceneBuilder::default();
-    let grey = b.material(Material::Lambertian { albedo: Color::splat(0.6) });
-    let mirror = b.material(Material::Mirror { reflectance: Color::splat(0.9) });
-    let glass = b.material(Material::Glass { ior: GLASS_IOR, reflectance: Color::ONE, transmittance: Color::ONE });
+    let grey = b.material(Material::Lambertian {
+        albedo: Color::splat(0.6),
+    });
+    let mirror = b.material(Material::Mirror {
+        reflectance: Color::splat(0.9),
+    });
+    let glass = b.material(Material::Glass {
+        ior: GLASS_IOR,
+        reflectance: Color::ONE,
+        transmittance: Color::ONE,
+    });
     let (lo, hi) = (Vec3::splat(-1.0), Vec3::splat(1.0));
     let d = hi - lo;
-    let (x, y, z) = (Vec3::new(d.x, 0.0, 0.0), Vec3::new(0.0, d.y, 0.0), Vec3::new(0.0, 0.0, d.z));
+    let (x, y, z) = (
+        Vec3::new(d.x, 0.0, 0.0),
+        Vec3::new(0.0, d.y, 0.0),
+        Vec3::new(0.0, 0.0, d.z),
+    );
     // Inward fronts: the cuboid's windings reversed.
     b.quad(lo, x, y, grey);
     b.quad(lo + z, y, x, grey);
@@ -191,15 +273,42 @@ pub fn degenerate_room() -> Scene {
     b.quad(lo + y, x, z, grey);
     b.quad(lo, y, z, grey);
     b.quad(lo + x, z, y, grey);
-    b.area_light(Vec3::new(0.0, 0.99, 0.0), Vec3::new(0.0, 0.0, 0.5), Vec3::new(0.5, 0.0, 0.0), Color::splat(8.0));
-    b.area_light(Vec3::new(0.5, 0.99, 0.5), Vec3::new(0.0, 0.0, 0.5), Vec3::ZERO, Color::splat(8.0));
+    b.area_light(
+        Vec3::new(0.0, 0.99, 0.0),
+        Vec3::new(0.0, 0.0, 0.5),
+        Vec3::new(0.5, 0.0, 0.0),
+        Color::splat(8.0),
+    );
+    b.area_light(
+        Vec3::new(0.5, 0.99, 0.5),
+        Vec3::new(0.0, 0.0, 0.5),
+        Vec3::ZERO,
+        Color::splat(8.0),
+    );
     let p = Vec3::new(0.1, -0.3, 0.2);
     for m in [grey, mirror, glass] {
         let q = p + Vec3::new(0.2 * m as f32, 0.0, 0.0);
         b.triangle([q, q, q], m, NO_LIGHT);
         b.triangle([q, q + Vec3::X * 0.3, q + Vec3::X * 0.6], m, NO_LIGHT);
-        b.triangle([q, q + Vec3::new(0.5, 0.4, 0.0), q + Vec3::new(0.5, 0.4, 1e-7)], m, NO_LIGHT);
-        b.triangle([q, q + Vec3::splat(1e-30), q + Vec3::new(0.0, 0.4, 0.3)], m, NO_LIGHT);
+        b.triangle(
+            [
+                q,
+                q + Vec3::new(0.5, 0.4, 0.0),
+                q + Vec3::new(0.5, 0.4, 1e-7),
+            ],
+            m,
+            NO_LIGHT,
+        );
+        b.triangle(
+            [q, q + Vec3::splat(1e-30), q + Vec3::new(0.0, 0.4, 0.3)],
+            m,
+            NO_LIGHT,
+        );
     }
-    b.finish(CameraDesc { forward: Vec3::Z, up: Vec3::Y, tan_half_x: Some(0.5), tan_half_y: None })
+    b.finish(CameraDesc {
+        forward: Vec3::Z,
+        up: Vec3::Y,
+        tan_half_x: Some(0.5),
+        tan_half_y: None,
+    })
 }
