@@ -425,7 +425,10 @@ fn render_command(mut args: RenderArgs) -> Result<()> {
     let t0 = Instant::now();
     let scene = load_scene(&scene_path)?;
     let t_load = t0.elapsed();
-    let settings = RenderSettings { strategy: strategy(&args).unwrap_or_else(|| DirectStrategy::auto_for(&scene)), ..settings };
+    let settings = RenderSettings {
+        strategy: strategy(&args).unwrap_or_else(|| DirectStrategy::auto_for(&scene)),
+        ..settings
+    };
     let t1 = Instant::now();
     let accel = pool.install(|| accel::build(&scene, kind))?;
     let t_build = t1.elapsed();
@@ -640,7 +643,10 @@ fn bench_render_one(path: &Path, spp: u32, m: u32, repeat: u32, a: AccelArg) -> 
         let acc = accel::build(&scene, accel_kind(a, BvhArg::Sah, QualityArg::Medium))?;
         let t_build = t1.elapsed().as_secs_f64();
         let cam = Camera::new(&scene.camera, &scene.bounds, 480, 360);
-        let settings = RenderSettings { strategy: DirectStrategy::auto_for(&scene), ..settings.clone() };
+        let settings = RenderSettings {
+            strategy: DirectStrategy::auto_for(&scene),
+            ..settings.clone()
+        };
         let t2 = Instant::now();
         let out = render::render(&scene, acc.as_ref(), &cam, &settings, &|_| {});
         let t_render = t2.elapsed().as_secs_f64();

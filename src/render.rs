@@ -265,13 +265,17 @@ fn percentile(v: &[f32], q: f32) -> f32 {
 /// Cases where the chosen estimator cannot converge to the right image, said out loud.
 pub fn render_warnings(scene: &Scene, s: &RenderSettings) -> Vec<String> {
     let mut w = Vec::new();
-    if s.shading == Shading::Radiance && s.strategy == DirectStrategy::Hemisphere && s.max_depth > 0
-    {
+    let blind = match s.strategy {
+        DirectStrategy::Hemisphere => Some("hemisphere sampling (-H)"),
+        DirectStrategy::Bsdf => Some("BSDF sampling alone"),
+        DirectStrategy::Light | DirectStrategy::Mis => None,
+    };
+    if let (Some(name), Shading::Radiance, true) = (blind, s.shading, s.max_depth > 0) {
         let delta = scene.lights.iter().filter(|l| l.is_delta()).count();
         if delta > 0 {
             w.push(format!(
-                "hemisphere sampling (-H) cannot reach the scene's {delta} point/directional light(s): \
-                 their light is missing from this image; drop -H to use light sampling"
+                "{name} cannot reach the scene's {delta} point/directional light(s): \
+                 their light is missing from this image; use light sampling or MIS"
             ));
         }
     }

@@ -76,6 +76,7 @@ fn furnace_without_roulette_is_exact_at_every_pixel() {
     for strategy in [
         DirectStrategy::Light,
         DirectStrategy::Mis,
+        DirectStrategy::Bsdf,
         DirectStrategy::Hemisphere,
     ] {
         for (a, m) in [(0.5, 0), (0.5, 1), (0.8, 5), (0.9, 12)] {
@@ -122,6 +123,7 @@ fn furnace_means_with_roulette_and_hemisphere_sampling() {
         ),
         (DirectStrategy::Hemisphere, Roulette::Off),
         (DirectStrategy::Hemisphere, Roulette::default()),
+        (DirectStrategy::Bsdf, Roulette::default()),
     ];
     for (strategy, rr) in cases {
         let (a, m) = (0.8, 8);
@@ -238,6 +240,7 @@ fn area_light_irradiance_matches_closed_form() {
         DirectStrategy::Light,
         DirectStrategy::Hemisphere,
         DirectStrategy::Mis,
+        DirectStrategy::Bsdf,
     ] {
         let settings = PathSettings {
             max_depth: 1,
@@ -250,7 +253,7 @@ fn area_light_irradiance_matches_closed_form() {
         for (k, &x) in points.iter().enumerate() {
             let want = albedo / std::f32::consts::PI * polygon_irradiance(x, Vec3::Y, &quad, le);
             let eye = x + Vec3::new(0.05, 0.1, 0.08);
-            let n = if strategy == DirectStrategy::Hemisphere {
+            let n = if matches!(strategy, DirectStrategy::Hemisphere | DirectStrategy::Bsdf) {
                 200_000
             } else {
                 20_000
@@ -282,11 +285,26 @@ fn tilted_shading_normals_do_not_leak_light() {
     let f = 5.0;
     let c = Vec3::new(0.0, -0.3, 0.0);
     let (ex, ey) = (Vec3::new(0.0, 0.0, 1.0), Vec3::new(1.0, 0.0, 0.0)); // ex × ey = +Y: faces up
-    let q = [c - 0.5 * ex - 0.5 * ey, c + 0.5 * ex - 0.5 * ey, c + 0.5 * ex + 0.5 * ey, c - 0.5 * ex + 0.5 * ey];
-    let mut positions = vec![Vec3::new(-f, 0.0, -f), Vec3::new(f, 0.0, -f), Vec3::new(f, 0.0, f), Vec3::new(-f, 0.0, f)];
+    let q = [
+        c - 0.5 * ex - 0.5 * ey,
+        c + 0.5 * ex - 0.5 * ey,
+        c + 0.5 * ex + 0.5 * ey,
+        c - 0.5 * ex + 0.5 * ey,
+    ];
+    let mut positions = vec![
+        Vec3::new(-f, 0.0, -f),
+        Vec3::new(f, 0.0, -f),
+        Vec3::new(f, 0.0, f),
+        Vec3::new(-f, 0.0, f),
+    ];
     positions.extend_from_slice(&q);
     let tilted = Vec3::new(1.0, 0.2, 0.3).normalize();
-    let tri = |v: [u32; 3], n: Option<[u32; 3]>, material, light| Triangle { v, n, material, light };
+    let tri = |v: [u32; 3], n: Option<[u32; 3]>, material, light| Triangle {
+        v,
+        n,
+        material,
+        light,
+    };
     let scene = Scene {
         positions,
         normals: vec![tilted],
@@ -296,25 +314,63 @@ fn tilted_shading_normals_do_not_leak_light() {
             tri([4, 5, 6], None, 1, 0),
             tri([4, 6, 7], None, 1, 0),
         ],
-        materials: vec![Material::Lambertian { albedo: Color::splat(0.9) }, Material::Emission { radiance: Color::splat(50.0) }],
-        lights: vec![Light::Area { centre: c, ex, ey, normal: Vec3::Y, area: 1.0, radiance: Color::splat(50.0) }],
+        materials: vec![
+            Material::Lambertian {
+                albedo: Color::splat(0.9),
+            },
+            Material::Emission {
+                radiance: Color::splat(50.0),
+            },
+        ],
+        lights: vec![Light::Area {
+            centre: c,
+            ex,
+            ey,
+            normal: Vec3::Y,
+            area: 1.0,
+            radiance: Color::splat(50.0),
+        }],
         bounds: Aabb::new(Vec3::new(-f, -0.3, -f), Vec3::new(f, 0.0, f)),
         ..Default::default()
     };
     let [p0, p1, p2] = scene.triangle_positions(2);
-    assert!((p1 - p0).cross(p2 - p0).y > 0.0, "the light faces up, toward the floor's underside");
+    assert!(
+        (p1 - p0).cross(p2 - p0).y > 0.0,
+        "the light faces up, toward the floor's underside"
+    );
     let accel = accel::build(&scene, AccelKind::Native(BvhBuilder::Sah)).unwrap();
     let mut cam = Camera::new(&scene.camera, &scene.bounds, 24, 24);
     cam.eye = Vec3::new(0.1, 1.0, 0.05);
     cam.forward = Vec3::NEG_Y;
     cam.up = Vec3::Z;
     cam.right = cam.forward.cross(cam.up);
-    for strategy in [DirectStrategy::Light, DirectStrategy::Mis, DirectStrategy::Hemisphere] {
+    for strategy in [
+        DirectStrategy::Light,
+        DirectStrategy::Mis,
+        DirectStrategy::Hemisphere,
+        DirectStrategy::Bsdf,
+    ] {
         for m in [1, 5] {
-            let s = RenderSettings { width: 24, height: 24, spp: 16, max_depth: m, strategy, roulette: Roulette::Off, ..Default::default() };
+            let s = RenderSettings {
+                width: 24,
+                height: 24,
+                spp: 16,
+                max_depth: m,
+                strategy,
+                roulette: Roulette::Off,
+                ..Default::default()
+            };
             let out = render(&scene, accel.as_ref(), &cam, &s, &|_| {});
-            let max = out.image.pixels.iter().map(|p| p.max_element()).fold(0.0, f32::max);
-            assert_eq!(max, 0.0, "{strategy:?} -m {m}: light leaked through the floor");
+            let max = out
+                .image
+                .pixels
+                .iter()
+                .map(|p| p.max_element())
+                .fold(0.0, f32::max);
+            assert_eq!(
+                max, 0.0,
+                "{strategy:?} -m {m}: light leaked through the floor"
+            );
         }
     }
 }

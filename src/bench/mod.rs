@@ -5,6 +5,7 @@ pub mod accel;
 pub mod chart;
 pub mod converge;
 pub mod meshes;
+pub mod stability;
 
 /// Median of `samples` (mean of the middle two for an even count); 0 when empty.
 pub fn median(samples: &mut [f64]) -> f64 {

@@ -16,6 +16,10 @@ pub enum DirectStrategy {
     Light,
     /// Light sampling and BSDF sampling combined by the power heuristic.
     Mis,
+    /// BSDF sampling alone: no light sampling; emission found by the path's own
+    /// BSDF-sampled rays counts in full. Like `Hemisphere`, it cannot see delta lights;
+    /// it exists to show where BSDF sampling is the better half of MIS.
+    Bsdf,
 }
 
 impl DirectStrategy {
@@ -25,8 +29,14 @@ impl DirectStrategy {
     /// as glossy surfaces reflect a light, or an environment (ambient) light is sampled
     /// by a cosine about +Y that is poor near the horizon.
     pub fn auto_for(scene: &crate::scene::Scene) -> DirectStrategy {
-        let glossy = scene.materials.iter().any(|m| matches!(m, crate::materials::Material::Microfacet { .. }));
-        let ambient = scene.lights.iter().any(|l| matches!(l, crate::lights::Light::Ambient { .. }));
+        let glossy = scene
+            .materials
+            .iter()
+            .any(|m| matches!(m, crate::materials::Material::Microfacet { .. }));
+        let ambient = scene
+            .lights
+            .iter()
+            .any(|l| matches!(l, crate::lights::Light::Ambient { .. }));
         if glossy || ambient {
             DirectStrategy::Mis
         } else {

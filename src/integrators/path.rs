@@ -138,7 +138,7 @@ impl<'a> PathIntegrator<'a> {
     /// or when the scene has emitters that light sampling cannot pick.
     fn bsdf_rays_find_light(&self) -> bool {
         match self.strategy {
-            DirectStrategy::Mis => true,
+            DirectStrategy::Mis | DirectStrategy::Bsdf => true,
             DirectStrategy::Hemisphere => false,
             DirectStrategy::Light => self.unsampled_emitters,
         }
@@ -153,6 +153,8 @@ impl<'a> PathIntegrator<'a> {
             Some(v) => match (self.strategy, light) {
                 // The hemisphere estimator already counted every emitter the direction finds.
                 (DirectStrategy::Hemisphere, _) => 0.0,
+                // Nothing else estimates direct light: the BSDF-sampled ray counts in full.
+                (DirectStrategy::Bsdf, _) => 1.0,
                 (_, None) => 1.0,
                 (DirectStrategy::Light, Some(_)) => 0.0,
                 (DirectStrategy::Mis, Some(l)) => power_heuristic(
@@ -197,6 +199,7 @@ impl<'a> PathIntegrator<'a> {
     ) -> Color {
         match self.strategy {
             DirectStrategy::Hemisphere => self.direct_hemisphere(si, frame, m, wo, s),
+            DirectStrategy::Bsdf => Color::ZERO,
             DirectStrategy::Light | DirectStrategy::Mis => {
                 let mut l = Color::ZERO;
                 for light in &self.scene.lights {

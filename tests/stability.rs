@@ -1,0 +1,292 @@
+//! Stability where methods fail: one test per case of `ember::bench::stability`
+//! (scenes in scenes/stability/ and src/bench/stability/scenes.rs).
+//!
+//! Statistical tolerances are multiples of standard errors estimated from two
+//! independent half renders (`measure::Halves`: the average of two halves has
+//! variance E[(a−b)²]/4 per pixel; pixels are independent, so the image mean's
+//! variance is that summed over pixels / N²). 4.5 σ makes a false failure rarer
+//! than 1e-5 per comparison for near-Gaussian means; the seeds are fixed.
+
+use ember::bench::stability::measure::z_score;
+use ember::bench::stability::{glass, lights, robust, sampling, Budget};
+
+const SEED: u64 = 20240611;
+const Z_MAX: f64 = 4.5;
+
+fn budget(width: u32, height: u32, spp: u32) -> Budget {
+    Budget {
+        width,
+        height,
+        spp,
+        seed: SEED,
+    }
+}
+
+#[test]
+fn case1_point_light_is_invisible_to_hemisphere_and_bsdf_sampling() {
+    let c = lights::point_light(&budget(48, 36, 16)).unwrap();
+    for r in &c.runs {
+        assert_eq!(r.nonfinite, 0, "{}", r.name);
+        match r.name {
+            "hemisphere" | "BSDF" => {
+                // Nothing in the scene emits toward a ray: the image is exactly black, and ember says why.
+                assert_eq!(r.max_pixel, 0.0, "{}: a delta light cannot be hit", r.name);
+                assert!(
+                    r.warnings.iter().any(|w| w.contains("point/directional")),
+                    "{}: no warning: {:?}",
+                    r.name,
+                    r.warnings
+                );
+            }
+            _ => {
+                assert!(r.warnings.is_empty(), "{}: {:?}", r.name, r.warnings);
+                // Only pixel jitter is random here; 0.2% covers the 16×16 quadrature of pixels cut by the floor's edge.
+                let tol = Z_MAX * r.se + 2e-3 * c.expected_mean;
+                assert!(
+                    (r.mean - c.expected_mean).abs() <= tol,
+                    "{}: {} ± {} vs closed form {}",
+                    r.name,
+                    r.mean,
+                    r.se,
+                    c.expected_mean
+                );
+            }
+        }
+    }
+}
+
+#[test]
+fn case2_small_light_hemisphere_noise_explodes_but_means_agree() {
+    let c = lights::small_light(&budget(40, 30, 256), 1.0).unwrap();
+    let light = c.run("light");
+    for r in &c.runs {
+        assert_eq!(r.nonfinite, 0, "{}", r.name);
+        assert!(
+            r.se < 0.25 * r.mean,
+            "{}: not measurable at this budget ({} ± {})",
+            r.name,
+            r.mean,
+            r.se
+        );
+        let z = z_score((r.mean, r.se), (light.mean, light.se));
+        assert!(
+            z <= Z_MAX,
+            "{}: mean {} ± {} vs light sampling {} ± {} ({z:.1} σ)",
+            r.name,
+            r.mean,
+            r.se,
+            light.mean,
+            light.se
+        );
+    }
+    // Hemisphere noise / light noise ≥ √(2π/Ω − 1) (see `predicted_min_ratio`); half of
+    // it leaves room for the noise of the noise estimate (≈ 1/√hits ≈ 10% here).
+    let bound = 0.5 * c.predicted_min_ratio();
+    let ratio = c.run("hemisphere").noise / light.noise;
+    assert!(
+        ratio >= bound,
+        "noise ratio hemisphere/light {ratio:.1} < {bound:.1}"
+    );
+    assert!(
+        c.run("MIS").noise <= 1.1 * light.noise,
+        "MIS is not as good as light sampling on a small light"
+    );
+}
+
+#[test]
+fn case3_mis_is_never_much_worse_than_the_better_strategy() {
+    for (scene, noisy, good) in [
+        (lights::GLOSSY_SCENES[0], "light", "BSDF"),
+        (lights::GLOSSY_SCENES[1], "BSDF", "light"),
+    ] {
+        let c = lights::glossy(&budget(40, 30, 128), scene).unwrap();
+        let mis = c.run("MIS");
+        for r in &c.runs {
+            assert_eq!(r.nonfinite, 0, "{scene} {}", r.name);
+            let z = z_score((r.mean, r.se), (mis.mean, mis.se));
+            assert!(
+                z <= Z_MAX,
+                "{scene} {}: {} ± {} vs MIS {} ± {}",
+                r.name,
+                r.mean,
+                r.se,
+                mis.mean,
+                mis.se
+            );
+        }
+        // Solid angles: glossy α = 0.05 reflects into ≈ π(2α)² ≈ 0.03 sr, the 1 × 1 light covers ≈ 0.3 sr
+        // (light sampling wastes ~90% of its samples); the rough lobe (≈ 3 sr) against the small light
+        // (≈ 0.005 sr) is worse still for BSDF sampling. A factor 3 in noise is far inside both.
+        let (n, g) = (c.run(noisy).noise, c.run(good).noise);
+        assert!(
+            n >= 3.0 * g,
+            "{scene}: {noisy} noise {n} not ≫ {good} noise {g}"
+        );
+        // The power heuristic's variance is within a small factor of the better technique's (Veach 1997, thm 9.2 for balance).
+        assert!(
+            mis.noise <= 1.25 * g,
+            "{scene}: MIS noise {} vs best {g}",
+            mis.noise
+        );
+    }
+}
+
+#[test]
+fn case4_caustic_exists_and_glass_transmits_what_fresnel_predicts() {
+    let c = glass::caustic(&budget(48, 36, 256)).unwrap();
+    assert_eq!(c.nonfinite, 0);
+    assert!(c.all_finite);
+    // The opaque sphere blocks the light entirely there: its shadow is black; the glass sphere
+    // focuses light into that spot, brighter even than open floor.
+    assert!(
+        z_score(c.caustic, c.shadow) > Z_MAX && c.caustic.0 > c.shadow.0,
+        "caustic {:?} vs shadow {:?}",
+        c.caustic,
+        c.shadow
+    );
+    assert!(
+        c.caustic.0 - c.open_floor.0
+            > Z_MAX * (c.caustic.1.powi(2) + c.open_floor.1.powi(2)).sqrt(),
+        "caustic {:?} vs open floor {:?}",
+        c.caustic,
+        c.open_floor
+    );
+
+    let s = glass::slab(&budget(32, 24, 256)).unwrap();
+    assert_eq!(s.nonfinite, 0);
+    for &(depth, mean, se, expected) in &s.points {
+        // At m = 1 the light is unreachable (two interfaces): exactly 0. Otherwise the estimator
+        // is L·(product of lobe choices), whose mean is `slab_expected` (F = 0.04 at ≤ 3°: F varies by < 1e-5).
+        assert!(
+            (mean - expected).abs() <= Z_MAX * se + 1e-4 * expected,
+            "m = {depth}: {mean} ± {se} vs {expected}"
+        );
+    }
+}
+
+#[test]
+fn case5_scaled_and_translated_scenes_render_the_same_image() {
+    let c = robust::scale(&budget(64, 48, 16)).unwrap();
+    for r in &c.runs {
+        assert_eq!(r.nonfinite, 0, "{}", r.name);
+        if r.offset == 0.0 {
+            // Pure scaling: every epsilon is relative, so the same seed traces the same paths.
+            assert!(
+                r.frac_changed <= 0.01,
+                "{}: {:.2}% of pixels changed",
+                r.name,
+                100.0 * r.frac_changed
+            );
+            assert_eq!(r.frac_beyond_noise, 0.0, "{}", r.name);
+        } else {
+            // Far from the origin the f32 grid is ~1e-3 of the box (translation 1e4, box 2):
+            // paths diverge, but surfaces must not darken (acne) or brighten (leaks)
+            // beyond the paired standard error plus 1% for the quantized geometry, and
+            // few pixels may differ by more than 4 σ (two independent renders: ~0.5%).
+            assert!(
+                r.surface_rel_diff.abs() <= Z_MAX * r.surface_rel_se + 0.01,
+                "{}: surfaces {:+.3}% ± {:.3}%",
+                r.name,
+                100.0 * r.surface_rel_diff,
+                100.0 * r.surface_rel_se
+            );
+            assert!(
+                r.frac_beyond_noise <= 0.02,
+                "{}: {:.2}% of pixels beyond 4σ",
+                r.name,
+                100.0 * r.frac_beyond_noise
+            );
+        }
+    }
+}
+
+#[test]
+fn case6_no_holes_at_edges_vertices_and_grazing_angles_no_nan_from_degenerates() {
+    let c = robust::grid(&budget(160, 120, 4)).unwrap();
+    assert!(c.rays > 10_000);
+    assert_eq!(
+        c.holes, 0,
+        "{} of {} rays through vertices/edges slipped through the grid",
+        c.holes, c.rays
+    );
+    assert!(
+        c.max_abs_y < 1e-5 && c.max_rel_t < 1e-5,
+        "hit off the plane: |y| {}, Δt/t {}",
+        c.max_abs_y,
+        c.max_rel_t
+    );
+    assert!(c.covered_pixels > 500);
+    assert_eq!(
+        c.hole_pixels, 0,
+        "{} of {} grazing pixels show a hole",
+        c.hole_pixels, c.covered_pixels
+    );
+    assert_eq!(c.degenerate_nonfinite, 0);
+    assert!(c.degenerate_all_finite && c.degenerate_mean > 0.0);
+}
+
+#[test]
+fn case7_adaptive_sampling_does_not_stop_on_a_first_batch_of_zeros() {
+    let c = sampling::adaptive(&budget(32, 24, 256)).unwrap();
+    let (g, u) = (&c.guarded, &c.unguarded);
+    // Same seed: both runs draw the same first batch per pixel. Pixels the unguarded run
+    // stopped at 0 after one batch had an all-zero first batch; the guard keeps them going.
+    let stuck: Vec<usize> = c
+        .lit_pixels
+        .iter()
+        .copied()
+        .filter(|&i| {
+            u.output.samples[i] == sampling::BATCH && u.output.image.pixels[i].max_element() == 0.0
+        })
+        .collect();
+    // p(hit) ≤ Ω/π ≈ 0.05 per sample, so P(8 zeros) ≥ 0.66 per lit pixel; 0.5 is 4.5 binomial σ below for ~200 pixels.
+    assert!(
+        stuck.len() as f64 >= 0.5 * c.lit_pixels.len() as f64,
+        "{} of {} lit pixels stuck",
+        stuck.len(),
+        c.lit_pixels.len()
+    );
+    for &i in &stuck {
+        assert!(
+            g.output.samples[i] >= g.min_samples_if_constant,
+            "pixel {i} stopped after {} samples",
+            g.output.samples[i]
+        );
+    }
+    assert_eq!(g.stopped_at_zero_after_one_batch, 0);
+    // Without the guard the image is biased low; the guard recovers part of it (paired: it can only add).
+    let (rm, rse) = c.reference;
+    assert!(
+        u.mean < rm - Z_MAX * rse,
+        "unguarded {} vs reference {rm} ± {rse}",
+        u.mean
+    );
+    assert!(g.mean > u.mean, "guard {} vs no guard {}", g.mean, u.mean);
+}
+
+#[test]
+fn case8_russian_roulette_with_low_probability_stays_unbiased() {
+    let c = sampling::roulette(&budget(40, 30, 128)).unwrap();
+    let off = c.off();
+    for r in &c.runs {
+        assert_eq!(r.nonfinite, 0, "{}", r.name);
+        let z = z_score((r.mean, r.se), (off.mean, off.se));
+        assert!(
+            z <= Z_MAX,
+            "{}: {} ± {} vs no roulette {} ± {}",
+            r.name,
+            r.mean,
+            r.se,
+            off.mean,
+            off.se
+        );
+    }
+    // Killing 95% of paths after the first bounce and weighting survivors ×20 must cost variance.
+    let q05 = c.runs.iter().find(|r| r.name.contains("0.05")).unwrap();
+    assert!(
+        q05.noise > 2.0 * off.noise,
+        "q = 0.05 noise {} vs {}",
+        q05.noise,
+        off.noise
+    );
+}
