@@ -45,6 +45,19 @@ pub enum Command {
 
 #[derive(Subcommand, Debug)]
 pub enum BenchCommand {
+    /// Where methods fail: a row per case (delta lights, tiny lights, glossy vs rough, caustics, scale, grazing rays,
+    /// adaptive sampling, roulette) with what each method does there. Writes stability.csv, stability.md and a chart.
+    Stability {
+        /// Output folder.
+        #[arg(long, default_value = "bench-out/stability")]
+        out: PathBuf,
+        /// Multiplies every case's samples per pixel.
+        #[arg(long, default_value_t = 1.0)]
+        spp_scale: f32,
+        /// Random seed.
+        #[arg(long, default_value_t = 0)]
+        seed: u64,
+    },
     /// Build time, memory and Mrays/s (camera, incoherent, shadow rays) of every backend this build has,
     /// at each thread count, with the native/Embree ratio. Default scenes: CBbunny, CBspheres_lambertian, a ~1M-triangle displaced sphere.
     Accel {
@@ -241,6 +254,8 @@ pub enum IntegratorArg {
     Mis,
     /// Uniform hemisphere sampling (same as -H).
     Hemisphere,
+    /// BSDF sampling alone, no light sampling (cannot see point/directional lights).
+    Bsdf,
 }
 
 pub fn run(cli: Cli) -> Result<()> {
@@ -339,6 +354,7 @@ fn strategy(args: &RenderArgs) -> Option<DirectStrategy> {
         IntegratorArg::Light => Some(DirectStrategy::Light),
         IntegratorArg::Mis => Some(DirectStrategy::Mis),
         IntegratorArg::Hemisphere => Some(DirectStrategy::Hemisphere),
+        IntegratorArg::Bsdf => Some(DirectStrategy::Bsdf),
         IntegratorArg::Auto => None,
     }
 }
@@ -508,6 +524,16 @@ fn rate_path(out: &Path) -> PathBuf {
 
 fn bench(which: BenchCommand) -> Result<()> {
     match which {
+        BenchCommand::Stability { out, spp_scale, seed } => {
+            if !(spp_scale.is_finite() && spp_scale > 0.0) {
+                bail!("--spp-scale must be a positive number");
+            }
+            let opts = ember::bench::stability::StabilityOptions { out_dir: out.clone(), spp_scale, seed };
+            let report = ember::bench::stability::run_stability(&opts)?;
+            println!("{}", report.to_markdown());
+            println!("wrote {}/stability.csv, stability.md and stability_noise.png/.svg", out.display());
+            Ok(())
+        }
         BenchCommand::Accel {
             scenes,
             rays,

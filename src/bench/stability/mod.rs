@@ -57,8 +57,8 @@ pub struct StabilityReport {
 /// What ember does about each case, for the report.
 pub const EMBER_DOES: [(&str, &str); 8] = [
     ("1", "Hemisphere and BSDF-only sampling cannot see delta lights; `render_warnings` says so in RenderOutput.warnings (the CLI prints it). The default strategies sample lights."),
-    ("2", "Light sampling (default for -m 1) and MIS (default beyond) sample the light's area: their noise does not grow as the light shrinks; -H's grows as √(2π/Ω)."),
-    ("3", "MIS (power heuristic) is the default for -m > 1: never much worse than the better of light and BSDF sampling."),
+    ("2", "Light sampling and MIS (the defaults: MIS for glossy or ambient-lit scenes, light sampling otherwise) sample the light's area: their noise does not grow as the light shrinks; -H's grows as √(2π/Ω)."),
+    ("3", "MIS (power heuristic) is the default whenever the scene has glossy surfaces: never much worse than the better of light and BSDF sampling."),
     ("4", "Specular chains are followed by BSDF sampling with weight 1 at delta vertices; exact Fresnel; non-finite samples are counted and dropped (0 here)."),
     ("5", "Ray origins are offset by the hit point's own floating-point error bound, shadow rays stop a relative 1e-4 short: every epsilon scales with the scene."),
     ("6", "Watertight triangle test (Woop et al.), f64 edge functions when f32 rounds to zero; degenerate triangles are never hit; zero-area lights are never sampled. Limitation: below ~2e-4 rad the conservative t ≤ δt rejection (pbrt-v4) drops hits through vertices/edges."),
