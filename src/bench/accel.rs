@@ -122,7 +122,7 @@ pub fn run(
     let mut report = AccelBenchReport::default();
     let repeats = Repeats {
         count: opts.repeats,
-        build_budget_s: f64::INFINITY,
+        budget_s: f64::INFINITY,
     };
     for bench_scene in &opts.scenes {
         let scene = bench_scene.load()?;

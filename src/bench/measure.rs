@@ -148,10 +148,11 @@ fn point_in_bounds(scene: &Scene, rng: &mut Sampler) -> Vec3 {
 #[derive(Clone, Copy, Debug)]
 pub(crate) struct Repeats {
     pub count: usize,
-    /// Stop repeating builds once they have taken this long in total (at least one
-    /// build always runs): a 4M-triangle build repeated five times would dominate a
-    /// scaling run while its run-to-run spread is small anyway.
-    pub build_budget_s: f64,
+    /// Stop repeating a figure (a build, or a traversal of one ray set) once its runs
+    /// have taken this long in total; at least one always runs. A 4M-triangle build
+    /// or soup traversal repeated five times would dominate a scaling run, while the
+    /// run-to-run spread of such long runs is small anyway.
+    pub budget_s: f64,
 }
 
 /// One backend's figures on one scene; throughputs in Mrays/s.
@@ -174,36 +175,53 @@ pub(crate) fn measure(
     backend: Backend,
     repeats: Repeats,
 ) -> Result<Measurement, AccelError> {
-    let count = repeats.count.max(1);
-    let mut build_ms = Vec::with_capacity(count);
     let mut accel = None;
-    for _ in 0..count {
-        if build_ms.iter().sum::<f64>() >= repeats.build_budget_s * 1e3 {
-            break;
-        }
+    let mut build_ms = repeated(repeats, || {
         drop(accel.take());
         let start = Instant::now();
         let built = pool.install(|| builder.build(scene, backend))?;
-        build_ms.push(start.elapsed().as_secs_f64() * 1e3);
         accel = Some(built);
-    }
+        Ok(start.elapsed().as_secs_f64())
+    })?
+    .into_iter()
+    .map(|s| s * 1e3)
+    .collect::<Vec<_>>();
     let accel = accel.expect("at least one build runs");
-    let throughput = |rays: &[Ray], shadow: bool| {
-        let mut samples: Vec<f64> = (0..count)
-            .map(|_| mrays_per_s(pool, accel.as_ref(), rays, shadow))
-            .collect();
-        median(&mut samples)
+    let throughput = |rays: &[Ray], shadow: bool| -> Result<f64, AccelError> {
+        let mut samples = repeated(repeats, || {
+            Ok(time_rays(pool, accel.as_ref(), rays, shadow))
+        })?
+        .into_iter()
+        .map(|s| rays.len() as f64 / s.max(1e-9) / 1e6)
+        .collect::<Vec<_>>();
+        Ok(median(&mut samples))
     };
     Ok(Measurement {
         build_ms: median(&mut build_ms),
         memory_mb: accel.memory_bytes() as f64 / (1024.0 * 1024.0),
-        camera_mrays: throughput(&rays.camera, false),
-        incoherent_mrays: throughput(&rays.incoherent, false),
-        shadow_mrays: throughput(&rays.shadow, true),
+        camera_mrays: throughput(&rays.camera, false)?,
+        incoherent_mrays: throughput(&rays.incoherent, false)?,
+        shadow_mrays: throughput(&rays.shadow, true)?,
     })
 }
 
-fn mrays_per_s(pool: &rayon::ThreadPool, accel: &dyn Accel, rays: &[Ray], shadow: bool) -> f64 {
+/// Runs `timed` (which returns seconds) up to `repeats.count` times, stopping early
+/// once the budget is spent; returns the times.
+fn repeated(
+    repeats: Repeats,
+    mut timed: impl FnMut() -> Result<f64, AccelError>,
+) -> Result<Vec<f64>, AccelError> {
+    let mut times = Vec::with_capacity(repeats.count.max(1));
+    while times.is_empty()
+        || (times.len() < repeats.count && times.iter().sum::<f64>() < repeats.budget_s)
+    {
+        times.push(timed()?);
+    }
+    Ok(times)
+}
+
+/// Seconds to trace `rays` on `pool`.
+fn time_rays(pool: &rayon::ThreadPool, accel: &dyn Accel, rays: &[Ray], shadow: bool) -> f64 {
     let start = Instant::now();
     let hits: usize = pool.install(|| {
         rays.par_chunks(1024)
@@ -222,7 +240,7 @@ fn mrays_per_s(pool: &rayon::ThreadPool, accel: &dyn Accel, rays: &[Ray], shadow
             .sum()
     });
     std::hint::black_box(hits);
-    rays.len() as f64 / start.elapsed().as_secs_f64().max(1e-9) / 1e6
+    start.elapsed().as_secs_f64()
 }
 
 /// Three significant digits: build times and sizes span 0.01 ms to seconds.

@@ -7,7 +7,7 @@
 //! ray should grow like log N. The fits say how close each backend comes.
 
 use super::chart::{write_chart, ChartSpec, Series};
-use super::fit::{log2_fit, n_log_n_fit, power_law_fit, LinearFit};
+use super::fit::{log2_fit, n_log_n_fit, power_law_fit, LinearFit, NLogNFit, PowerLawFit};
 use super::measure::{
     make_rays, measure, three_digits, tracing_pool, Backend, Builder, Measurement, Repeats,
 };
@@ -64,8 +64,9 @@ pub struct ScalingOptions {
     pub threads: usize,
     /// Each figure is the median of up to this many runs.
     pub repeats: usize,
-    /// Builds stop repeating once they have taken this long in total.
-    pub build_budget_s: f64,
+    /// A figure (a build, or a traversal of one ray set) stops repeating once its
+    /// runs have taken this many seconds in total.
+    pub budget_s: f64,
     /// Where the CSV, Markdown and charts go.
     pub out_dir: PathBuf,
     /// Measure Embree at its three build qualities when this build has it.
@@ -84,7 +85,7 @@ impl Default for ScalingOptions {
             rays: 200_000,
             threads: std::thread::available_parallelism().map_or(1, |n| n.get()),
             repeats: 3,
-            build_budget_s: 2.0,
+            budget_s: 2.0,
             out_dir: PathBuf::from("bench-out/scaling"),
             include_embree: true,
             fit_min_triangles: 16_000,
@@ -153,7 +154,7 @@ pub fn run_scaling(opts: &ScalingOptions, mut progress: impl FnMut(&str)) -> Res
     let builder = Builder::new(opts.threads)?;
     let repeats = Repeats {
         count: opts.repeats.max(1),
-        build_budget_s: opts.build_budget_s,
+        budget_s: opts.budget_s,
     };
     let (width, height) = camera_resolution(opts.rays);
     let mut report = ScalingReport {
@@ -260,12 +261,15 @@ fn ns_per_ray(mrays: f64) -> f64 {
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct GrowthFits {
     /// Build time in ms against N.
-    pub build_power: Option<super::fit::PowerLawFit>,
+    pub build_power: Option<PowerLawFit>,
     /// Build time in ms as a·N·log2 N.
-    pub build_n_log_n: Option<super::fit::NLogNFit>,
-    pub memory_power: Option<super::fit::PowerLawFit>,
+    pub build_n_log_n: Option<NLogNFit>,
+    pub memory_power: Option<PowerLawFit>,
     /// Nanoseconds per ray as c + d·log2 N, for camera, incoherent and shadow rays.
     pub per_ray: [Option<LinearFit>; 3],
+    /// Nanoseconds per ray as a power law: an exponent well above 0 means the cost
+    /// grows faster than log N (e.g. once the tree no longer fits in cache).
+    pub per_ray_power: [Option<PowerLawFit>; 3],
 }
 
 impl ScalingReport {
@@ -324,22 +328,18 @@ impl ScalingReport {
         let pts =
             |value: fn(&ScalingRow) -> f64| self.fit_points(self.points(mesh, backend, value));
         let build = pts(|r| r.build_ms);
-        let per_ray = |value: fn(&ScalingRow) -> f64| {
-            let p: Vec<_> = pts(value)
-                .into_iter()
-                .map(|(n, m)| (n, ns_per_ray(m)))
-                .collect();
-            log2_fit(&p)
-        };
+        let ns: [Vec<(f64, f64)>; 3] = [
+            pts(|r| r.camera_mrays),
+            pts(|r| r.incoherent_mrays),
+            pts(|r| r.shadow_mrays),
+        ]
+        .map(|p| p.into_iter().map(|(n, m)| (n, ns_per_ray(m))).collect());
         GrowthFits {
             build_power: power_law_fit(&build),
             build_n_log_n: n_log_n_fit(&build),
             memory_power: power_law_fit(&pts(|r| r.memory_mb)),
-            per_ray: [
-                per_ray(|r| r.camera_mrays),
-                per_ray(|r| r.incoherent_mrays),
-                per_ray(|r| r.shadow_mrays),
-            ],
+            per_ray: ns.clone().map(|p| log2_fit(&p)),
+            per_ray_power: ns.map(|p| power_law_fit(&p)),
         }
     }
 
@@ -394,7 +394,7 @@ impl ScalingReport {
         let mut s = format!(
             "\nGrowth, least squares over N ≥ {} triangles (all sizes when fewer than two qualify). \
              Build: a power law N^b fitted on log-log axes, and a·N·log2 N (a in ns). \
-             Traversal: time per ray (ns, wall time over all threads) = c + d·log2 N.\n\n\
+             Traversal: time per ray (ns, wall time over all threads) = c + d·log2 N, and its power-law exponent.\n\n\
              | mesh | backend | build ~ N^b (R²) | build = a·N·log2 N: a (R²) | memory ~ N^b (R²) \
              | camera: c + d·log2 N (R²) | incoherent: c + d·log2 N (R²) | shadow: c + d·log2 N (R²) |\n\
              |---|---|---|---|---|---|---|---|\n",
@@ -403,7 +403,7 @@ impl ScalingReport {
         for mesh in self.meshes() {
             for backend in self.backends(mesh) {
                 let f = self.fits(mesh, backend);
-                let power = |p: Option<super::fit::PowerLawFit>| {
+                let power = |p: Option<PowerLawFit>| {
                     p.map_or("—".into(), |p| {
                         format!("N^{:.2} ({:.3})", p.exponent, p.r2)
                     })
@@ -411,11 +411,14 @@ impl ScalingReport {
                 let nlogn = f.build_n_log_n.map_or("—".into(), |p| {
                     format!("{} ({:.3})", three_digits(p.coefficient * 1e6), p.r2)
                 });
-                let [cam, inc, sh] = f.per_ray.map(|l| {
-                    l.map_or("—".into(), |l| {
-                        format!("{:.1} + {:.2}·log2 N ({:.3})", l.intercept, l.slope, l.r2)
-                    })
-                });
+                let per_ray = |i: usize| match (f.per_ray[i], f.per_ray_power[i]) {
+                    (Some(l), Some(p)) => format!(
+                        "{:.1} + {:.2}·log2 N ({:.3}); ~N^{:.2}",
+                        l.intercept, l.slope, l.r2, p.exponent
+                    ),
+                    _ => "—".into(),
+                };
+                let [cam, inc, sh] = [0, 1, 2].map(per_ray);
                 let _ = writeln!(
                     s,
                     "| {} | {} | {} | {} | {} | {} | {} | {} |",
