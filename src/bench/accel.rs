@@ -206,14 +206,6 @@ mod tests {
     use super::*;
 
     #[test]
-    fn three_significant_digits() {
-        assert_eq!(three_digits(1305.5), "1306");
-        assert_eq!(three_digits(25.81), "25.8");
-        assert_eq!(three_digits(0.01234), "0.0123");
-        assert_eq!(three_digits(0.0), "0");
-    }
-
-    #[test]
     fn markdown_ratio_is_native_over_embree() {
         let row = |backend: &str, is_embree, mrays| AccelBenchRow {
             scene: "s".into(),

@@ -252,3 +252,27 @@ pub(crate) fn three_digits(x: f64) -> String {
     };
     format!("{x:.decimals$}")
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn three_significant_digits() {
+        assert_eq!(three_digits(1305.5), "1306");
+        assert_eq!(three_digits(25.81), "25.8");
+        assert_eq!(three_digits(0.01234), "0.0123");
+        assert_eq!(three_digits(0.0), "0");
+    }
+
+    #[test]
+    fn embree_labels_carry_the_quality_only_when_asked() {
+        let b = Backend::Embree(EmbreeQuality::High);
+        assert_eq!(b.label(), "Embree");
+        assert_eq!(b.label_with_quality(), "Embree high");
+        assert_eq!(
+            Backend::Native(BvhBuilder::Sah).label_with_quality(),
+            "native SAH"
+        );
+    }
+}
