@@ -78,6 +78,13 @@ pub enum BenchCommand {
         /// Triangle count of the generated displaced sphere (0 leaves it out).
         #[arg(long, default_value_t = 1_000_000)]
         mesh_triangles: usize,
+        /// Instead: generated meshes (displaced sphere, random soup) from 1k to 4M triangles, every native builder and
+        /// Embree quality, charted against triangle count (log-log) with fitted growth. Writes CSV, Markdown and charts to --out.
+        #[arg(long)]
+        scaling: bool,
+        /// Output folder of --scaling.
+        #[arg(long, default_value = "bench-out/scaling")]
+        out: PathBuf,
     },
     /// Error against render time for each method (direct: hemisphere / light / MIS; GI: roulette, -l, adaptive, backends).
     /// Writes <out>/<scene>_m<M>.csv and error-vs-time charts (PNG and SVG), prints the time each method needs to reach an error.
@@ -524,14 +531,25 @@ fn rate_path(out: &Path) -> PathBuf {
 
 fn bench(which: BenchCommand) -> Result<()> {
     match which {
-        BenchCommand::Stability { out, spp_scale, seed } => {
+        BenchCommand::Stability {
+            out,
+            spp_scale,
+            seed,
+        } => {
             if !(spp_scale.is_finite() && spp_scale > 0.0) {
                 bail!("--spp-scale must be a positive number");
             }
-            let opts = ember::bench::stability::StabilityOptions { out_dir: out.clone(), spp_scale, seed };
+            let opts = ember::bench::stability::StabilityOptions {
+                out_dir: out.clone(),
+                spp_scale,
+                seed,
+            };
             let report = ember::bench::stability::run_stability(&opts)?;
             println!("{}", report.to_markdown());
-            println!("wrote {}/stability.csv, stability.md and stability_noise.png/.svg", out.display());
+            println!(
+                "wrote {}/stability.csv, stability.md and stability_noise.png/.svg",
+                out.display()
+            );
             Ok(())
         }
         BenchCommand::Accel {

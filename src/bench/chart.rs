@@ -37,14 +37,32 @@ pub fn write_chart(stem: &Path, spec: &ChartSpec, series: &[Series]) -> anyhow::
     register_font();
     let png = stem.with_extension("png");
     let svg = stem.with_extension("svg");
+    let (width, height) = (900, 600);
+    let mut rgb = vec![0u8; (width * height * 3) as usize];
     {
-        let root = BitMapBackend::new(&png, (900, 600)).into_drawing_area();
+        let root = BitMapBackend::with_buffer(&mut rgb, (width, height)).into_drawing_area();
         draw(root, spec, series)?;
     }
+    write_png(&png, &rgb, width, height)?;
     {
         let root = SVGBackend::new(&svg, (900, 600)).into_drawing_area();
         draw(root, spec, series)?;
     }
+    Ok(())
+}
+
+/// Best compression: charts are committed to the repository, and line art
+/// compresses far better than the encoder's fast default.
+fn write_png(path: &Path, rgb: &[u8], width: u32, height: u32) -> anyhow::Result<()> {
+    use image::codecs::png::{CompressionType, FilterType, PngEncoder};
+    use image::ImageEncoder;
+    let file = std::io::BufWriter::new(std::fs::File::create(path)?);
+    PngEncoder::new_with_quality(file, CompressionType::Best, FilterType::Adaptive).write_image(
+        rgb,
+        width,
+        height,
+        image::ExtendedColorType::Rgb8,
+    )?;
     Ok(())
 }
 

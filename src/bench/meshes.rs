@@ -171,3 +171,25 @@ pub fn sphere_cluster(n: usize, seed: u64) -> Scene {
     ];
     geometry_scene(floor, &[[0, 1, 2], [0, 2, 3]], &spheres)
 }
+
+/// `n` independent random triangles in the box [−1, 1]³: no shared vertices, heavy
+/// overlap, no surface structure, the hard case for a BVH. Corners lie in a cube of
+/// side `16/√n` around a uniform centre, so the total area (≈ 0.077·side² per
+/// triangle) and with it the mean free path of a ray (about one box side) stay the
+/// same at every `n`, and only the fineness of the geometry changes.
+pub fn random_soup(n: usize, seed: u64) -> Scene {
+    let mut rng = Sampler::from_seed(seed);
+    let side = 16.0 / (n.max(1) as f32).sqrt();
+    let mut unit = || Vec3::new(rng.next_f32(), rng.next_f32(), rng.next_f32());
+    let mut positions = Vec::with_capacity(3 * n);
+    for _ in 0..n {
+        let centre = 2.0 * unit() - Vec3::ONE;
+        for _ in 0..3 {
+            positions.push(centre + side * (unit() - Vec3::splat(0.5)));
+        }
+    }
+    let tris: Vec<[u32; 3]> = (0..n as u32)
+        .map(|t| [3 * t, 3 * t + 1, 3 * t + 2])
+        .collect();
+    geometry_scene(positions, &tris, &[])
+}

@@ -4,7 +4,10 @@
 pub mod accel;
 pub mod chart;
 pub mod converge;
+pub mod fit;
+pub mod measure;
 pub mod meshes;
+pub mod scaling;
 pub mod stability;
 
 /// Median of `samples` (mean of the middle two for an even count); 0 when empty.

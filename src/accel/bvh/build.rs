@@ -3,15 +3,23 @@
 //!
 //! Large subtrees are built in parallel with `rayon::join`, each into its own
 //! node vector that is appended in a fixed order, so the tree is the same
-//! whatever the thread count.
+//! whatever the thread count. Reductions over large nodes (bounds, SAH bins) run
+//! over fixed-size chunks whose partial results are merged in chunk order, so
+//! they too give the same bits whatever the thread count.
 
 use super::node::BvhNode;
 use crate::geometry::Aabb;
 use crate::scene::PrimId;
 use glam::Vec3;
+use rayon::prelude::*;
 
 /// Subtrees with more primitives than this are built in parallel.
 const PARALLEL_THRESHOLD: usize = 4096;
+
+/// Reductions over more primitives than this run in parallel, in chunks of
+/// [`REDUCE_CHUNK`]: otherwise the top levels of a large build are serial.
+pub(crate) const PARALLEL_REDUCE: usize = 8192;
+pub(crate) const REDUCE_CHUNK: usize = 4096;
 
 /// Past this depth every split is an object median, so the tree is at most
 /// `MEDIAN_DEPTH + 32` deep and fits the traversal stack.
@@ -72,7 +80,11 @@ fn build_into<R: SplitRule>(
     depth: u32,
     out: &mut Vec<BvhNode>,
 ) {
-    let bounds = prims.iter().fold(Aabb::EMPTY, |b, p| b.union(&p.bounds));
+    let bounds = reduce_chunks(
+        prims,
+        |c| c.iter().fold(Aabb::EMPTY, |b, p| b.union(&p.bounds)),
+        |a, b| a.union(&b),
+    );
     let split = choose_split(rule, prims, &bounds, depth);
     let Some(Split { axis, mid }) = split else {
         out.push(BvhNode::leaf(&bounds, first, prims.len() as u32));
@@ -153,10 +165,30 @@ pub(crate) fn median_split(prims: &mut [BuildPrim]) -> Split {
 }
 
 pub(crate) fn centroid_bounds(prims: &[BuildPrim]) -> Aabb {
-    prims.iter().fold(Aabb::EMPTY, |mut b, p| {
-        b.grow(p.centroid);
-        b
-    })
+    let serial = |c: &[BuildPrim]| {
+        c.iter().fold(Aabb::EMPTY, |mut b, p| {
+            b.grow(p.centroid);
+            b
+        })
+    };
+    reduce_chunks(prims, serial, |a, b| a.union(&b))
+}
+
+/// `serial(prims)` for small inputs; for large ones `serial` of each chunk in
+/// parallel, then the partial results merged left to right. The result depends only
+/// on the input, not on how rayon schedules the chunks.
+pub(crate) fn reduce_chunks<T: Send>(
+    prims: &[BuildPrim],
+    serial: impl Fn(&[BuildPrim]) -> T + Sync,
+    merge: impl Fn(T, T) -> T,
+) -> T {
+    if prims.len() <= PARALLEL_REDUCE {
+        return serial(prims);
+    }
+    let parts: Vec<T> = prims.par_chunks(REDUCE_CHUNK).map(&serial).collect();
+    let mut parts = parts.into_iter();
+    let first = parts.next().expect("a large input has a chunk");
+    parts.fold(first, merge)
 }
 
 /// Moves the primitives satisfying `left` to the front (deterministic, not

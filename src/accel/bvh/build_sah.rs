@@ -2,7 +2,7 @@
 //! each axis and the cheapest of the bin boundaries is taken, or a leaf when
 //! that is cheaper still.
 
-use super::build::{centroid_bounds, partition, BuildPrim, Split, SplitRule};
+use super::build::{centroid_bounds, partition, reduce_chunks, BuildPrim, Split, SplitRule};
 use crate::geometry::Aabb;
 
 pub(crate) const BINS: usize = 32;
@@ -107,14 +107,26 @@ impl SplitRule for SahBinnedBuilder {
     }
 }
 
-/// Cheapest boundary `k` (bins `< k` go left) as `(Σ area·count·C_isect, k)`.
-fn best_boundary(prims: &[BuildPrim], binning: Binning) -> Option<(f32, usize)> {
+fn fill_bins(prims: &[BuildPrim], binning: Binning) -> [Bin; BINS] {
     let mut bins = [Bin::EMPTY; BINS];
     for p in prims {
         let b = &mut bins[binning.bin(p)];
         b.bounds = b.bounds.union(&p.bounds);
         b.count += 1;
     }
+    bins
+}
+
+fn merge_bins(mut a: [Bin; BINS], b: [Bin; BINS]) -> [Bin; BINS] {
+    for (x, y) in a.iter_mut().zip(&b) {
+        *x = x.union(y);
+    }
+    a
+}
+
+/// Cheapest boundary `k` (bins `< k` go left) as `(Σ area·count·C_isect, k)`.
+fn best_boundary(prims: &[BuildPrim], binning: Binning) -> Option<(f32, usize)> {
+    let bins = reduce_chunks(prims, |c| fill_bins(c, binning), merge_bins);
     // right[k]: the union of bins k.. (k ≥ 1).
     let mut right = [Bin::EMPTY; BINS];
     let mut acc = Bin::EMPTY;
@@ -135,4 +147,48 @@ fn best_boundary(prims: &[BuildPrim], binning: Binning) -> Option<(f32, usize)> 
         }
     }
     best
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::sampling::Sampler;
+    use glam::Vec3;
+
+    #[test]
+    fn parallel_binning_matches_serial_at_any_thread_count() {
+        let mut rng = Sampler::from_seed(3);
+        let mut point = || Vec3::new(rng.next_f32(), rng.next_f32(), rng.next_f32()) * 2.0 - 1.0;
+        let prims: Vec<BuildPrim> = (0..50_000)
+            .map(|id| {
+                let (a, b) = (point(), point() * 0.01);
+                BuildPrim::new(
+                    id,
+                    Aabb::EMPTY.union(&Aabb {
+                        min: a,
+                        max: a + b.abs(),
+                    }),
+                )
+            })
+            .collect();
+        let binning = Binning {
+            axis: 1,
+            min: -1.0,
+            scale: BINS as f32 / 2.0,
+        };
+        let serial = fill_bins(&prims, binning);
+        for threads in [1, 3] {
+            let pool = rayon::ThreadPoolBuilder::new()
+                .num_threads(threads)
+                .build()
+                .unwrap();
+            let bins =
+                pool.install(|| reduce_chunks(&prims, |c| fill_bins(c, binning), merge_bins));
+            for (p, s) in bins.iter().zip(&serial) {
+                assert_eq!(p.count, s.count);
+                assert_eq!(p.bounds, s.bounds);
+            }
+        }
+        assert_eq!(serial.iter().map(|b| b.count).sum::<u32>(), 50_000);
+    }
 }

@@ -1,0 +1,501 @@
+//! `ember bench accel --scaling`: build time, memory and ray throughput of every
+//! backend against the triangle count, on a surface (a displaced sphere) and on a
+//! random triangle soup, with least-squares fits of how each grows.
+//!
+//! A top-down build touches every primitive once per level, so its time should
+//! grow like N·log N; a traversal visits about one node per level, so the time per
+//! ray should grow like log N. The fits say how close each backend comes.
+
+use super::chart::{write_chart, ChartSpec, Series};
+use super::fit::{log2_fit, n_log_n_fit, power_law_fit, LinearFit, NLogNFit, PowerLawFit};
+use super::measure::{
+    make_rays, measure, three_digits, tracing_pool, Backend, Builder, Measurement, Repeats,
+};
+use super::meshes;
+use crate::accel::{BvhBuilder, EmbreeQuality};
+use crate::scene::Scene;
+use anyhow::{bail, Context, Result};
+use std::fmt::Write as _;
+use std::path::{Path, PathBuf};
+
+/// A family of generated meshes, one per size.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum ScalingMesh {
+    /// [`meshes::displaced_sphere`]: a finely tessellated closed surface.
+    DisplacedSphere,
+    /// [`meshes::random_soup`]: independent overlapping triangles in a box.
+    RandomSoup,
+}
+
+impl ScalingMesh {
+    pub const ALL: [ScalingMesh; 2] = [ScalingMesh::DisplacedSphere, ScalingMesh::RandomSoup];
+
+    pub fn name(self) -> &'static str {
+        match self {
+            ScalingMesh::DisplacedSphere => "displaced sphere",
+            ScalingMesh::RandomSoup => "random soup",
+        }
+    }
+
+    /// File-name stem of this mesh's charts.
+    pub fn slug(self) -> &'static str {
+        match self {
+            ScalingMesh::DisplacedSphere => "sphere",
+            ScalingMesh::RandomSoup => "soup",
+        }
+    }
+
+    pub fn generate(self, triangles: usize, seed: u64) -> Scene {
+        match self {
+            ScalingMesh::DisplacedSphere => meshes::displaced_sphere(triangles),
+            ScalingMesh::RandomSoup => meshes::random_soup(triangles, seed),
+        }
+    }
+}
+
+#[derive(Clone, Debug)]
+pub struct ScalingOptions {
+    /// Target triangle counts (the sphere's tessellation rounds them slightly).
+    pub sizes: Vec<usize>,
+    pub meshes: Vec<ScalingMesh>,
+    /// Rays of each kind per measurement (camera rays: the nearest 4:3 image).
+    pub rays: usize,
+    /// Build and tracing threads.
+    pub threads: usize,
+    /// Each figure is the median of up to this many runs.
+    pub repeats: usize,
+    /// A figure (a build, or a traversal of one ray set) stops repeating once its
+    /// runs have taken this many seconds in total.
+    pub budget_s: f64,
+    /// Where the CSV, Markdown and charts go.
+    pub out_dir: PathBuf,
+    /// Measure Embree at its three build qualities when this build has it.
+    pub include_embree: bool,
+    /// Growth fits use only sizes from this count up (all sizes when fewer than
+    /// two qualify): at a thousand triangles fixed costs dominate and would bend the fit.
+    pub fit_min_triangles: usize,
+    pub seed: u64,
+}
+
+impl Default for ScalingOptions {
+    fn default() -> Self {
+        ScalingOptions {
+            sizes: vec![1_000, 4_000, 16_000, 64_000, 256_000, 1_000_000, 4_000_000],
+            meshes: ScalingMesh::ALL.to_vec(),
+            rays: 200_000,
+            threads: std::thread::available_parallelism().map_or(1, |n| n.get()),
+            repeats: 3,
+            budget_s: 2.0,
+            out_dir: PathBuf::from("bench-out/scaling"),
+            include_embree: true,
+            fit_min_triangles: 16_000,
+            seed: 7,
+        }
+    }
+}
+
+/// One backend on one mesh of one size. Throughputs are in Mrays/s.
+#[derive(Clone, Debug, PartialEq)]
+pub struct ScalingRow {
+    pub mesh: ScalingMesh,
+    pub triangles: usize,
+    pub backend: String,
+    pub is_embree: bool,
+    pub threads: usize,
+    pub build_ms: f64,
+    pub memory_mb: f64,
+    pub camera_mrays: f64,
+    pub incoherent_mrays: f64,
+    pub shadow_mrays: f64,
+}
+
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct ScalingReport {
+    pub rows: Vec<ScalingRow>,
+    pub fit_min_triangles: usize,
+}
+
+fn backends(include_embree: bool) -> Vec<Backend> {
+    let mut list = vec![
+        Backend::Native(BvhBuilder::Midpoint),
+        Backend::Native(BvhBuilder::Sah),
+    ];
+    if include_embree && cfg!(feature = "embree") {
+        list.extend(
+            [
+                EmbreeQuality::Low,
+                EmbreeQuality::Medium,
+                EmbreeQuality::High,
+            ]
+            .map(Backend::Embree),
+        );
+    }
+    list
+}
+
+/// Width and height of a 4:3 image with about `rays` pixels (at least 1×1).
+fn camera_resolution(rays: usize) -> (u32, u32) {
+    let height = ((rays as f64 * 0.75).sqrt().round() as u32).max(1);
+    let width = (rays as u32).div_ceil(height).max(1);
+    (width, height)
+}
+
+/// Measures every mesh, size and backend, writes `scaling.csv`, `scaling.md` and
+/// the charts into `opts.out_dir`, and returns the report. `progress` hears one
+/// line per measured row.
+pub fn run_scaling(opts: &ScalingOptions, mut progress: impl FnMut(&str)) -> Result<ScalingReport> {
+    if opts.sizes.is_empty() || opts.sizes.contains(&0) {
+        bail!("scaling: sizes must be a non-empty list of positive triangle counts");
+    }
+    if opts.rays == 0 || opts.threads == 0 {
+        bail!("scaling: rays and threads must be at least 1");
+    }
+    let pool = tracing_pool(opts.threads)?;
+    let builder = Builder::new(opts.threads)?;
+    let repeats = Repeats {
+        count: opts.repeats.max(1),
+        budget_s: opts.budget_s,
+    };
+    let (width, height) = camera_resolution(opts.rays);
+    let mut report = ScalingReport {
+        rows: Vec::new(),
+        fit_min_triangles: opts.fit_min_triangles,
+    };
+    for &mesh in &opts.meshes {
+        for &size in &opts.sizes {
+            let scene = mesh.generate(size, opts.seed);
+            let rays = make_rays(&scene, width, height, opts.rays, opts.seed);
+            for backend in backends(opts.include_embree) {
+                let m = measure(&scene, &rays, &pool, &builder, backend, repeats)?;
+                let row = ScalingRow::new(mesh, scene.triangles.len(), backend, opts.threads, m);
+                progress(&format!(
+                    "{} / {} tris / {}: build {} ms, {} MB, {:.2} / {:.2} / {:.2} Mrays/s",
+                    mesh.name(),
+                    row.triangles,
+                    row.backend,
+                    three_digits(row.build_ms),
+                    three_digits(row.memory_mb),
+                    row.camera_mrays,
+                    row.incoherent_mrays,
+                    row.shadow_mrays
+                ));
+                report.rows.push(row);
+            }
+        }
+    }
+    report.write_all(&opts.out_dir)?;
+    Ok(report)
+}
+
+impl ScalingRow {
+    fn new(
+        mesh: ScalingMesh,
+        triangles: usize,
+        backend: Backend,
+        threads: usize,
+        m: Measurement,
+    ) -> Self {
+        ScalingRow {
+            mesh,
+            triangles,
+            backend: backend.label_with_quality(),
+            is_embree: backend.is_embree(),
+            threads,
+            build_ms: m.build_ms,
+            memory_mb: m.memory_mb,
+            camera_mrays: m.camera_mrays,
+            incoherent_mrays: m.incoherent_mrays,
+            shadow_mrays: m.shadow_mrays,
+        }
+    }
+}
+
+/// A measured quantity of a row, for charts and fits.
+#[derive(Clone, Copy)]
+struct Metric {
+    stem: &'static str,
+    title: &'static str,
+    y_label: &'static str,
+    value: fn(&ScalingRow) -> f64,
+}
+
+const METRICS: [Metric; 5] = [
+    Metric {
+        stem: "build",
+        title: "Build time",
+        y_label: "build time (ms)",
+        value: |r| r.build_ms,
+    },
+    Metric {
+        stem: "memory",
+        title: "Memory",
+        y_label: "memory (MB)",
+        value: |r| r.memory_mb,
+    },
+    Metric {
+        stem: "camera",
+        title: "Camera rays",
+        y_label: "throughput (Mrays/s)",
+        value: |r| r.camera_mrays,
+    },
+    Metric {
+        stem: "incoherent",
+        title: "Incoherent rays",
+        y_label: "throughput (Mrays/s)",
+        value: |r| r.incoherent_mrays,
+    },
+    Metric {
+        stem: "shadow",
+        title: "Shadow rays",
+        y_label: "throughput (Mrays/s)",
+        value: |r| r.shadow_mrays,
+    },
+];
+
+/// Nanoseconds per ray at a throughput in Mrays/s (wall time over all threads).
+fn ns_per_ray(mrays: f64) -> f64 {
+    1e3 / mrays
+}
+
+/// The growth of one backend on one mesh.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct GrowthFits {
+    /// Build time in ms against N.
+    pub build_power: Option<PowerLawFit>,
+    /// Build time in ms as a·N·log2 N.
+    pub build_n_log_n: Option<NLogNFit>,
+    pub memory_power: Option<PowerLawFit>,
+    /// Nanoseconds per ray as c + d·log2 N, for camera, incoherent and shadow rays.
+    pub per_ray: [Option<LinearFit>; 3],
+    /// Nanoseconds per ray as a power law: an exponent well above 0 means the cost
+    /// grows faster than log N (e.g. once the tree no longer fits in cache).
+    pub per_ray_power: [Option<PowerLawFit>; 3],
+}
+
+impl ScalingReport {
+    /// Meshes in first-seen order.
+    fn meshes(&self) -> Vec<ScalingMesh> {
+        let mut out: Vec<ScalingMesh> = Vec::new();
+        for r in &self.rows {
+            if !out.contains(&r.mesh) {
+                out.push(r.mesh);
+            }
+        }
+        out
+    }
+
+    /// Backends measured on `mesh`, in first-seen order.
+    fn backends(&self, mesh: ScalingMesh) -> Vec<&str> {
+        let mut out: Vec<&str> = Vec::new();
+        for r in self.rows.iter().filter(|r| r.mesh == mesh) {
+            if !out.contains(&r.backend.as_str()) {
+                out.push(&r.backend);
+            }
+        }
+        out
+    }
+
+    /// `(N, value)` of one backend on one mesh, in row order.
+    fn points(
+        &self,
+        mesh: ScalingMesh,
+        backend: &str,
+        value: fn(&ScalingRow) -> f64,
+    ) -> Vec<(f64, f64)> {
+        self.rows
+            .iter()
+            .filter(|r| r.mesh == mesh && r.backend == backend)
+            .map(|r| (r.triangles as f64, value(r)))
+            .collect()
+    }
+
+    /// The points the fits use: those from `fit_min_triangles` up, or all when
+    /// fewer than two are that large.
+    fn fit_points(&self, points: Vec<(f64, f64)>) -> Vec<(f64, f64)> {
+        let large: Vec<_> = points
+            .iter()
+            .copied()
+            .filter(|p| p.0 >= self.fit_min_triangles as f64)
+            .collect();
+        if large.len() >= 2 {
+            large
+        } else {
+            points
+        }
+    }
+
+    pub fn fits(&self, mesh: ScalingMesh, backend: &str) -> GrowthFits {
+        let pts =
+            |value: fn(&ScalingRow) -> f64| self.fit_points(self.points(mesh, backend, value));
+        let build = pts(|r| r.build_ms);
+        let ns: [Vec<(f64, f64)>; 3] = [
+            pts(|r| r.camera_mrays),
+            pts(|r| r.incoherent_mrays),
+            pts(|r| r.shadow_mrays),
+        ]
+        .map(|p| p.into_iter().map(|(n, m)| (n, ns_per_ray(m))).collect());
+        GrowthFits {
+            build_power: power_law_fit(&build),
+            build_n_log_n: n_log_n_fit(&build),
+            memory_power: power_law_fit(&pts(|r| r.memory_mb)),
+            per_ray: ns.clone().map(|p| log2_fit(&p)),
+            per_ray_power: ns.map(|p| power_law_fit(&p)),
+        }
+    }
+
+    pub fn to_csv(&self) -> String {
+        let mut s = String::from(
+            "mesh,triangles,backend,threads,build_ms,memory_mb,camera_mrays,incoherent_mrays,shadow_mrays\n",
+        );
+        for r in &self.rows {
+            let _ = writeln!(
+                s,
+                "{},{},{},{},{:.6},{:.6},{:.6},{:.6},{:.6}",
+                r.mesh.name(),
+                r.triangles,
+                r.backend,
+                r.threads,
+                r.build_ms,
+                r.memory_mb,
+                r.camera_mrays,
+                r.incoherent_mrays,
+                r.shadow_mrays
+            );
+        }
+        s
+    }
+
+    /// The measurements as one table, then the fitted growth of each backend.
+    pub fn to_markdown(&self) -> String {
+        let mut s = String::from(
+            "| mesh | triangles | backend | threads | build (ms) | memory (MB) | camera (Mrays/s) \
+             | incoherent (Mrays/s) | shadow (Mrays/s) |\n|---|---:|---|---:|---:|---:|---:|---:|---:|\n",
+        );
+        for r in &self.rows {
+            let _ = writeln!(
+                s,
+                "| {} | {} | {} | {} | {} | {} | {:.2} | {:.2} | {:.2} |",
+                r.mesh.name(),
+                r.triangles,
+                r.backend,
+                r.threads,
+                three_digits(r.build_ms),
+                three_digits(r.memory_mb),
+                r.camera_mrays,
+                r.incoherent_mrays,
+                r.shadow_mrays
+            );
+        }
+        s.push_str(&self.growth_markdown());
+        s
+    }
+
+    fn growth_markdown(&self) -> String {
+        let mut s = format!(
+            "\nGrowth, least squares over N ≥ {} triangles (all sizes when fewer than two qualify). \
+             Build: a power law N^b fitted on log-log axes, and a·N·log2 N (a in ns). \
+             Traversal: time per ray (ns, wall time over all threads) = c + d·log2 N, and its power-law exponent.\n\n\
+             | mesh | backend | build ~ N^b (R²) | build = a·N·log2 N: a (R²) | memory ~ N^b (R²) \
+             | camera: c + d·log2 N (R²) | incoherent: c + d·log2 N (R²) | shadow: c + d·log2 N (R²) |\n\
+             |---|---|---|---|---|---|---|---|\n",
+            self.fit_min_triangles
+        );
+        for mesh in self.meshes() {
+            for backend in self.backends(mesh) {
+                let f = self.fits(mesh, backend);
+                let power = |p: Option<PowerLawFit>| {
+                    p.map_or("—".into(), |p| {
+                        format!("N^{:.2} ({:.3})", p.exponent, p.r2)
+                    })
+                };
+                let nlogn = f.build_n_log_n.map_or("—".into(), |p| {
+                    format!("{} ({:.3})", three_digits(p.coefficient * 1e6), p.r2)
+                });
+                let per_ray = |i: usize| match (f.per_ray[i], f.per_ray_power[i]) {
+                    (Some(l), Some(p)) => format!(
+                        "{:.1} + {:.2}·log2 N ({:.3}); ~N^{:.2}",
+                        l.intercept, l.slope, l.r2, p.exponent
+                    ),
+                    _ => "—".into(),
+                };
+                let [cam, inc, sh] = [0, 1, 2].map(per_ray);
+                let _ = writeln!(
+                    s,
+                    "| {} | {} | {} | {} | {} | {} | {} | {} |",
+                    mesh.name(),
+                    backend,
+                    power(f.build_power),
+                    nlogn,
+                    power(f.memory_power),
+                    cam,
+                    inc,
+                    sh
+                );
+            }
+        }
+        s
+    }
+
+    /// Five log-log charts per mesh against the triangle count (build time,
+    /// memory, and throughput for each ray kind), one line per backend, as
+    /// `<slug>_<metric>.png` and `.svg`. Returns the stems written.
+    pub fn write_charts(&self, out_dir: &Path) -> Result<Vec<PathBuf>> {
+        std::fs::create_dir_all(out_dir)
+            .with_context(|| format!("creating {}", out_dir.display()))?;
+        let threads = self.rows.first().map_or(0, |r| r.threads);
+        let mut stems = Vec::new();
+        for mesh in self.meshes() {
+            for metric in METRICS {
+                let series: Vec<Series> = self
+                    .backends(mesh)
+                    .into_iter()
+                    .map(|b| Series {
+                        name: b.to_string(),
+                        points: self.points(mesh, b, metric.value),
+                    })
+                    .collect();
+                let title = format!(
+                    "{} vs triangle count: {} ({threads} threads)",
+                    metric.title,
+                    mesh.name()
+                );
+                let spec = ChartSpec {
+                    title: &title,
+                    x_label: "triangles N",
+                    y_label: metric.y_label,
+                    log_x: true,
+                    log_y: true,
+                };
+                let stem = out_dir.join(format!("{}_{}", mesh.slug(), metric.stem));
+                write_chart(&stem, &spec, &series)?;
+                stems.push(stem);
+            }
+        }
+        Ok(stems)
+    }
+
+    /// `scaling.csv`, `scaling.md` and the charts.
+    pub fn write_all(&self, out_dir: &Path) -> Result<()> {
+        std::fs::create_dir_all(out_dir)
+            .with_context(|| format!("creating {}", out_dir.display()))?;
+        std::fs::write(out_dir.join("scaling.csv"), self.to_csv())?;
+        std::fs::write(out_dir.join("scaling.md"), self.to_markdown())?;
+        self.write_charts(out_dir)?;
+        Ok(())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn camera_resolution_is_about_the_ray_count() {
+        let (w, h) = camera_resolution(200_000);
+        assert!(
+            (w * h) as usize >= 200_000 && (w * h) < 200_000 + w,
+            "{w}x{h}"
+        );
+        assert_eq!(camera_resolution(1), (1, 1));
+    }
+}
