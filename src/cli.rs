@@ -553,12 +553,30 @@ fn bench(which: BenchCommand) -> Result<()> {
             Ok(())
         }
         BenchCommand::Accel {
+            scaling: true,
+            out,
+            repeats,
+            ..
+        } => {
+            let opts = ember::bench::scaling::ScalingOptions {
+                out_dir: out.clone(),
+                repeats: repeats.max(1),
+                ..Default::default()
+            };
+            let report =
+                ember::bench::scaling::run_scaling(&opts, |line| eprintln!("ember: {line}"))?;
+            println!("{}", report.to_markdown());
+            println!("wrote {}/scaling.csv, scaling.md and charts", out.display());
+            Ok(())
+        }
+        BenchCommand::Accel {
             scenes,
             rays,
             threads,
             repeats,
             quality,
             mesh_triangles,
+            ..
         } => {
             use ember::bench::accel::{run, AccelBenchOptions, BenchScene};
             let mut opts = AccelBenchOptions {
