@@ -20,6 +20,19 @@ pub struct ChartSpec<'a> {
     pub log_y: bool,
 }
 
+/// Short tick labels: log axes otherwise print values like 0.30000000000000004.
+fn tick(v: f64) -> String {
+    let a = v.abs();
+    if a == 0.0 {
+        "0".into()
+    } else if (1e-3..1e5).contains(&a) {
+        let s = format!("{:.3}", v);
+        s.trim_end_matches('0').trim_end_matches('.').to_string()
+    } else {
+        format!("{v:.1e}")
+    }
+}
+
 fn register_font() {
     static ONCE: Once = Once::new();
     ONCE.call_once(|| {
@@ -111,6 +124,8 @@ where
                 .x_desc(spec.x_label)
                 .y_desc(spec.y_label)
                 .label_style(("sans-serif", 14))
+                .x_label_formatter(&|v| tick(*v))
+                .y_label_formatter(&|v| tick(*v))
                 .draw()
                 .map_err(|e| anyhow::anyhow!("chart: {e}"))?;
             for (i, s) in series.iter().enumerate() {

@@ -369,8 +369,15 @@ fn default_target(points: &[Point]) -> f64 {
     v.get(v.len() / 2).copied().unwrap_or(0.0)
 }
 
-/// Seconds at which each method's RMSE first falls to `target`, interpolated in log-log.
+/// Seconds each method needs to reach `target`, from its Monte Carlo efficiency:
+/// an unbiased estimator has MSE ∝ 1/time, so `k = RMSE²·time` is constant in the
+/// converged regime and the time to reach `target` is `k/target²`. `k` is the median
+/// over the points with at least `MIN_SPP` samples per pixel (the first few points
+/// are dominated by fixed costs). A single run's crossing point would be decided by
+/// noise; this uses every point. Methods whose error stalls (bias) get a growing `k`
+/// and so a long time, as they should.
 pub fn time_to_reach(points: &[Point], target: f64) -> Vec<(String, Option<f64>)> {
+    const MIN_SPP: u32 = 8;
     let mut names: Vec<String> = Vec::new();
     for p in points {
         if !names.contains(&p.method) {
@@ -380,24 +387,15 @@ pub fn time_to_reach(points: &[Point], target: f64) -> Vec<(String, Option<f64>)
     names
         .into_iter()
         .map(|name| {
-            let ps: Vec<&Point> = points.iter().filter(|p| p.method == name).collect();
-            let t = ps.windows(2).find_map(|w| {
-                let (a, b) = (w[0], w[1]);
-                if a.rmse <= target {
-                    return Some(a.seconds);
-                }
-                if b.rmse <= target
-                    && a.rmse > target
-                    && a.seconds > 0.0
-                    && b.seconds > 0.0
-                    && b.rmse > 0.0
-                {
-                    let f = (a.rmse.ln() - target.ln()) / (a.rmse.ln() - b.rmse.ln());
-                    return Some((a.seconds.ln() + f * (b.seconds.ln() - a.seconds.ln())).exp());
-                }
-                None
-            });
-            let t = t.or_else(|| ps.last().filter(|p| p.rmse <= target).map(|p| p.seconds));
+            let mut ks: Vec<f64> = points
+                .iter()
+                .filter(|p| {
+                    p.method == name && p.spp >= MIN_SPP && p.seconds > 0.0 && p.rmse.is_finite()
+                })
+                .map(|p| p.rmse * p.rmse * p.seconds)
+                .collect();
+            let t = (!ks.is_empty() && target > 0.0)
+                .then(|| super::median(&mut ks) / (target * target));
             (name, t)
         })
         .collect()
@@ -424,7 +422,7 @@ impl ConvergeReport {
             .filter_map(|(_, t)| *t)
             .fold(f64::INFINITY, f64::min);
         let mut s = format!(
-            "| method | seconds to RMSE {:.4} | × fastest |\n|---|---|---|\n",
+            "| method | seconds to RMSE {:.4} (from median RMSE²·time) | × fastest |\n|---|---|---|\n",
             self.target_rmse
         );
         for (name, t) in &self.time_to_target {
@@ -486,28 +484,25 @@ impl ConvergeReport {
 mod tests {
     use super::*;
 
-    fn pt(method: &str, seconds: f64, rmse: f64) -> Point {
-        Point {
+    #[test]
+    fn time_to_reach_uses_the_efficiency() {
+        let pt = |method: &str, spp, seconds, rmse| Point {
             method: method.into(),
-            spp: 1,
+            spp,
             samples: 1,
             seconds,
             rmse,
             rel_mse: 0.0,
-        }
-    }
-
-    #[test]
-    fn time_to_reach_interpolates_in_log_log() {
+        };
+        // RMSE² · time = 0.01 at every converged point: 0.05 is reached at 0.01/0.0025 = 4 s.
         let pts = vec![
-            pt("a", 1.0, 0.4),
-            pt("a", 4.0, 0.1),
-            pt("b", 1.0, 0.5),
-            pt("b", 2.0, 0.45),
+            pt("a", 1, 0.01, 5.0),
+            pt("a", 8, 1.0, 0.1),
+            pt("a", 16, 4.0, 0.05),
+            pt("a", 32, 16.0, 0.025),
         ];
-        let t = time_to_reach(&pts, 0.2);
-        // RMSE ∝ t^-1 between the points: 0.2 is reached at t = 2.
-        assert!((t[0].1.unwrap() - 2.0).abs() < 1e-9);
-        assert_eq!(t[1].1, None);
+        let t = time_to_reach(&pts, 0.05);
+        assert!((t[0].1.unwrap() - 4.0).abs() < 1e-9);
+        assert_eq!(time_to_reach(&[pt("b", 1, 1.0, 1.0)], 0.1)[0].1, None);
     }
 }
