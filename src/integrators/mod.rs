@@ -23,11 +23,11 @@ pub enum DirectStrategy {
 }
 
 impl DirectStrategy {
-    /// The better default for `scene`, from `ember bench converge`: light sampling is
-    /// about 1.3× more efficient on purely diffuse scenes (MIS pays for BSDF-sampled
-    /// emission that carries little weight), while MIS is several times better as soon
-    /// as glossy surfaces reflect a light, or an environment (ambient) light is sampled
-    /// by a cosine about +Y that is poor near the horizon.
+    /// The better default for `scene`, from `ember bench converge` (BENCHMARKS.md):
+    /// light sampling is 5–50 % more efficient on purely diffuse scenes (MIS pays for
+    /// BSDF-sampled emission that carries little weight), while MIS is an order of
+    /// magnitude better as soon as glossy surfaces reflect a light, or when an ambient
+    /// light is sampled by a cosine about +Y that is poor near the horizon.
     pub fn auto_for(scene: &crate::scene::Scene) -> DirectStrategy {
         let glossy = scene
             .materials
