@@ -32,11 +32,11 @@ fn tiny_scaling_run_reports_every_row_and_writes_files() {
     }
     for r in &report.rows {
         for (what, v) in [
-            ("build", r.build_ms),
-            ("memory", r.memory_mb),
-            ("camera", r.camera_mrays),
-            ("incoherent", r.incoherent_mrays),
-            ("shadow", r.shadow_mrays),
+            ("build", r.measured.build_ms),
+            ("memory", r.measured.memory_mb),
+            ("camera", r.measured.camera_mrays),
+            ("incoherent", r.measured.incoherent_mrays),
+            ("shadow", r.measured.shadow_mrays),
         ] {
             assert!(v.is_finite() && v > 0.0, "{what} of {r:?}");
         }

@@ -1,7 +1,9 @@
 //! `ember bench accel`: build time, memory and ray throughput of every backend this
 //! build has, per scene and thread count, as data plus a Markdown table.
 
-use super::measure::{make_rays, measure, three_digits, tracing_pool, Backend, Builder, Repeats};
+use super::measure::{
+    make_rays, measure, three_digits, tracing_pool, Backend, Builder, Measurement, Repeats,
+};
 use super::meshes;
 use crate::accel::{AccelError, BvhBuilder, EmbreeQuality};
 use crate::scene::collada::{self, LoadError};
@@ -81,11 +83,7 @@ pub struct AccelBenchRow {
     pub backend: String,
     pub is_embree: bool,
     pub threads: usize,
-    pub build_ms: f64,
-    pub memory_mb: f64,
-    pub camera_mrays: f64,
-    pub incoherent_mrays: f64,
-    pub shadow_mrays: f64,
+    pub measured: Measurement,
 }
 
 #[derive(Clone, Debug, Default, PartialEq)]
@@ -138,11 +136,7 @@ pub fn run(
                     backend: backend.label().to_string(),
                     is_embree: backend.is_embree(),
                     threads: pool.current_num_threads(),
-                    build_ms: m.build_ms,
-                    memory_mb: m.memory_mb,
-                    camera_mrays: m.camera_mrays,
-                    incoherent_mrays: m.incoherent_mrays,
-                    shadow_mrays: m.shadow_mrays,
+                    measured: m,
                 };
                 progress(&format!(
                     "{} / {} / {} threads: done",
@@ -170,9 +164,9 @@ impl AccelBenchReport {
                 |e| {
                     format!(
                         "{:.2} / {:.2} / {:.2}",
-                        r.camera_mrays / e.camera_mrays,
-                        r.incoherent_mrays / e.incoherent_mrays,
-                        r.shadow_mrays / e.shadow_mrays
+                        r.measured.camera_mrays / e.measured.camera_mrays,
+                        r.measured.incoherent_mrays / e.measured.incoherent_mrays,
+                        r.measured.shadow_mrays / e.measured.shadow_mrays
                     )
                 },
             );
@@ -183,11 +177,11 @@ impl AccelBenchReport {
                 r.prims,
                 r.backend,
                 r.threads,
-                three_digits(r.build_ms),
-                three_digits(r.memory_mb),
-                r.camera_mrays,
-                r.incoherent_mrays,
-                r.shadow_mrays,
+                three_digits(r.measured.build_ms),
+                three_digits(r.measured.memory_mb),
+                r.measured.camera_mrays,
+                r.measured.incoherent_mrays,
+                r.measured.shadow_mrays,
                 ratio
             );
         }
@@ -213,11 +207,13 @@ mod tests {
             backend: backend.into(),
             is_embree,
             threads: 1,
-            build_ms: 1.0,
-            memory_mb: 1.0,
-            camera_mrays: mrays,
-            incoherent_mrays: mrays,
-            shadow_mrays: mrays,
+            measured: Measurement {
+                build_ms: 1.0,
+                memory_mb: 1.0,
+                camera_mrays: mrays,
+                incoherent_mrays: mrays,
+                shadow_mrays: mrays,
+            },
         };
         let report = AccelBenchReport {
             rows: vec![row("native SAH", false, 5.0), row("Embree", true, 10.0)],

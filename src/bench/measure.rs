@@ -157,7 +157,7 @@ pub(crate) struct Repeats {
 
 /// One backend's figures on one scene; throughputs in Mrays/s.
 #[derive(Clone, Copy, Debug, PartialEq)]
-pub(crate) struct Measurement {
+pub struct Measurement {
     pub build_ms: f64,
     pub memory_mb: f64,
     pub camera_mrays: f64,

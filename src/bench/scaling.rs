@@ -102,11 +102,7 @@ pub struct ScalingRow {
     pub backend: String,
     pub is_embree: bool,
     pub threads: usize,
-    pub build_ms: f64,
-    pub memory_mb: f64,
-    pub camera_mrays: f64,
-    pub incoherent_mrays: f64,
-    pub shadow_mrays: f64,
+    pub measured: Measurement,
 }
 
 #[derive(Clone, Debug, Default, PartialEq)]
@@ -173,11 +169,11 @@ pub fn run_scaling(opts: &ScalingOptions, mut progress: impl FnMut(&str)) -> Res
                     mesh.name(),
                     row.triangles,
                     row.backend,
-                    three_digits(row.build_ms),
-                    three_digits(row.memory_mb),
-                    row.camera_mrays,
-                    row.incoherent_mrays,
-                    row.shadow_mrays
+                    three_digits(row.measured.build_ms),
+                    three_digits(row.measured.memory_mb),
+                    row.measured.camera_mrays,
+                    row.measured.incoherent_mrays,
+                    row.measured.shadow_mrays
                 ));
                 report.rows.push(row);
             }
@@ -201,11 +197,7 @@ impl ScalingRow {
             backend: backend.label_with_quality(),
             is_embree: backend.is_embree(),
             threads,
-            build_ms: m.build_ms,
-            memory_mb: m.memory_mb,
-            camera_mrays: m.camera_mrays,
-            incoherent_mrays: m.incoherent_mrays,
-            shadow_mrays: m.shadow_mrays,
+            measured: m,
         }
     }
 }
@@ -224,31 +216,31 @@ const METRICS: [Metric; 5] = [
         stem: "build",
         title: "Build time",
         y_label: "build time (ms)",
-        value: |r| r.build_ms,
+        value: |r| r.measured.build_ms,
     },
     Metric {
         stem: "memory",
         title: "Memory",
         y_label: "memory (MB)",
-        value: |r| r.memory_mb,
+        value: |r| r.measured.memory_mb,
     },
     Metric {
         stem: "camera",
         title: "Camera rays",
         y_label: "throughput (Mrays/s)",
-        value: |r| r.camera_mrays,
+        value: |r| r.measured.camera_mrays,
     },
     Metric {
         stem: "incoherent",
         title: "Incoherent rays",
         y_label: "throughput (Mrays/s)",
-        value: |r| r.incoherent_mrays,
+        value: |r| r.measured.incoherent_mrays,
     },
     Metric {
         stem: "shadow",
         title: "Shadow rays",
         y_label: "throughput (Mrays/s)",
-        value: |r| r.shadow_mrays,
+        value: |r| r.measured.shadow_mrays,
     },
 ];
 
@@ -327,17 +319,17 @@ impl ScalingReport {
     pub fn fits(&self, mesh: ScalingMesh, backend: &str) -> GrowthFits {
         let pts =
             |value: fn(&ScalingRow) -> f64| self.fit_points(self.points(mesh, backend, value));
-        let build = pts(|r| r.build_ms);
+        let build = pts(|r| r.measured.build_ms);
         let ns: [Vec<(f64, f64)>; 3] = [
-            pts(|r| r.camera_mrays),
-            pts(|r| r.incoherent_mrays),
-            pts(|r| r.shadow_mrays),
+            pts(|r| r.measured.camera_mrays),
+            pts(|r| r.measured.incoherent_mrays),
+            pts(|r| r.measured.shadow_mrays),
         ]
         .map(|p| p.into_iter().map(|(n, m)| (n, ns_per_ray(m))).collect());
         GrowthFits {
             build_power: power_law_fit(&build),
             build_n_log_n: n_log_n_fit(&build),
-            memory_power: power_law_fit(&pts(|r| r.memory_mb)),
+            memory_power: power_law_fit(&pts(|r| r.measured.memory_mb)),
             per_ray: ns.clone().map(|p| log2_fit(&p)),
             per_ray_power: ns.map(|p| power_law_fit(&p)),
         }
@@ -355,11 +347,11 @@ impl ScalingReport {
                 r.triangles,
                 r.backend,
                 r.threads,
-                r.build_ms,
-                r.memory_mb,
-                r.camera_mrays,
-                r.incoherent_mrays,
-                r.shadow_mrays
+                r.measured.build_ms,
+                r.measured.memory_mb,
+                r.measured.camera_mrays,
+                r.measured.incoherent_mrays,
+                r.measured.shadow_mrays
             );
         }
         s
@@ -379,11 +371,11 @@ impl ScalingReport {
                 r.triangles,
                 r.backend,
                 r.threads,
-                three_digits(r.build_ms),
-                three_digits(r.memory_mb),
-                r.camera_mrays,
-                r.incoherent_mrays,
-                r.shadow_mrays
+                three_digits(r.measured.build_ms),
+                three_digits(r.measured.memory_mb),
+                r.measured.camera_mrays,
+                r.measured.incoherent_mrays,
+                r.measured.shadow_mrays
             );
         }
         s.push_str(&self.growth_markdown());
