@@ -20,33 +20,17 @@ fn hemisphere_and_light_sampling_agree_on_cbspheres_lambertian() {
         seed: 3,
         ..Default::default()
     };
-    let light = render_halves(
-        &scene,
-        &RenderSettings {
-            spp: 32,
-            strategy: DirectStrategy::Light,
+    let run = |spp, strategy| {
+        let s = RenderSettings {
+            spp,
+            strategy,
             ..base.clone()
-        },
-        AccelKind::Native(BvhBuilder::Sah),
-    );
-    let hemi = render_halves(
-        &scene,
-        &RenderSettings {
-            spp: 256,
-            strategy: DirectStrategy::Hemisphere,
-            ..base.clone()
-        },
-        AccelKind::Native(BvhBuilder::Sah),
-    );
-    let mis = render_halves(
-        &scene,
-        &RenderSettings {
-            spp: 32,
-            strategy: DirectStrategy::Mis,
-            ..base
-        },
-        AccelKind::Native(BvhBuilder::Sah),
-    );
+        };
+        render_halves(&scene, &s, AccelKind::Native(BvhBuilder::Sah))
+    };
+    let light = run(32, DirectStrategy::Light);
+    let hemi = run(256, DirectStrategy::Hemisphere);
+    let mis = run(32, DirectStrategy::Mis);
     let (ml, mh, mm) = (light.avg.mean(), hemi.avg.mean(), mis.avg.mean());
     // The two means differ by noise only: 4.5 combined standard errors.
     let se_lh = (light.noise_of_mean().powi(2) + hemi.noise_of_mean().powi(2)).sqrt();
