@@ -1,9 +1,7 @@
 //! `ember bench accel`: build time, memory and ray throughput of every backend this
 //! build has, per scene and thread count, as data plus a Markdown table.
 
-use super::measure::{
-    make_rays, measure, three_digits, tracing_pool, Backend, Builder, Measurement, Repeats,
-};
+use super::measure::{make_rays, measure, tracing_pool, Backend, Builder, Measurement, Repeats};
 use super::meshes;
 use crate::accel::{AccelError, BvhBuilder, EmbreeQuality};
 use crate::scene::collada::{self, LoadError};
@@ -172,16 +170,12 @@ impl AccelBenchReport {
             );
             let _ = writeln!(
                 s,
-                "| {} | {} | {} | {} | {} | {} | {:.2} | {:.2} | {:.2} | {} |",
+                "| {} | {} | {} | {} {} | {} |",
                 r.scene,
                 r.prims,
                 r.backend,
                 r.threads,
-                three_digits(r.measured.build_ms),
-                three_digits(r.measured.memory_mb),
-                r.measured.camera_mrays,
-                r.measured.incoherent_mrays,
-                r.measured.shadow_mrays,
+                r.measured.markdown_cells(),
                 ratio
             );
         }

@@ -165,6 +165,21 @@ pub struct Measurement {
     pub shadow_mrays: f64,
 }
 
+impl Measurement {
+    /// The five Markdown table cells `| build | memory | camera | incoherent | shadow`
+    /// shared by the accel and scaling tables.
+    pub fn markdown_cells(&self) -> String {
+        format!(
+            "| {} | {} | {:.2} | {:.2} | {:.2}",
+            three_digits(self.build_ms),
+            three_digits(self.memory_mb),
+            self.camera_mrays,
+            self.incoherent_mrays,
+            self.shadow_mrays
+        )
+    }
+}
+
 /// Times `repeats` builds (the last one is kept) and then `repeats` traversals of
 /// each ray set, all inside `pool`.
 pub(crate) fn measure(

@@ -366,16 +366,12 @@ impl ScalingReport {
         for r in &self.rows {
             let _ = writeln!(
                 s,
-                "| {} | {} | {} | {} | {} | {} | {:.2} | {:.2} | {:.2} |",
+                "| {} | {} | {} | {} {} |",
                 r.mesh.name(),
                 r.triangles,
                 r.backend,
                 r.threads,
-                three_digits(r.measured.build_ms),
-                three_digits(r.measured.memory_mb),
-                r.measured.camera_mrays,
-                r.measured.incoherent_mrays,
-                r.measured.shadow_mrays
+                r.measured.markdown_cells()
             );
         }
         s.push_str(&self.growth_markdown());

@@ -80,6 +80,11 @@ impl StrategyRun {
     }
 }
 
+/// The run of strategy `name` (every case runs a fixed list, so it is there).
+fn find_run<'a>(runs: &'a [StrategyRun], name: &str) -> &'a StrategyRun {
+    runs.iter().find(|r| r.name == name).expect("strategy run")
+}
+
 fn run_all(
     setup: &Setup,
     b: &Budget,
@@ -191,10 +196,7 @@ impl SmallLightCase {
     }
 
     pub fn run(&self, name: &str) -> &StrategyRun {
-        self.runs
-            .iter()
-            .find(|r| r.name == name)
-            .expect("strategy run")
+        find_run(&self.runs, name)
     }
 
     pub fn rows(&self) -> Vec<Row> {
@@ -282,10 +284,7 @@ pub fn glossy(b: &Budget, scene: &'static str) -> Result<GlossyCase> {
 
 impl GlossyCase {
     pub fn run(&self, name: &str) -> &StrategyRun {
-        self.runs
-            .iter()
-            .find(|r| r.name == name)
-            .expect("strategy run")
+        find_run(&self.runs, name)
     }
 
     pub fn rows(&self) -> Vec<Row> {
