@@ -276,7 +276,7 @@ pub fn run(cli: Cli) -> Result<()> {
 fn load_scene(path: &Path) -> Result<Scene> {
     let scene = collada::load(path)?;
     for w in &scene.warnings {
-        eprintln!("ember: warning: {w}");
+        ember::errln!("ember: warning: {w}");
     }
     Ok(scene)
 }
@@ -284,9 +284,9 @@ fn load_scene(path: &Path) -> Result<Scene> {
 fn info(path: &Path, w: u32, h: u32) -> Result<()> {
     check_resolution(w, h)?;
     let scene = load_scene(path)?;
-    println!("{}", path.display());
-    print!("{}", ember::info::scene_info(&scene, w, h));
-    println!("{}", accel::backends_info());
+    ember::outln!("{}", path.display())?;
+    ember::out!("{}", ember::info::scene_info(&scene, w, h))?;
+    ember::outln!("{}", accel::backends_info())?;
     Ok(())
 }
 
@@ -443,6 +443,15 @@ fn render_command(mut args: RenderArgs) -> Result<()> {
     };
     let settings = settings_from(&args)?;
     let out = output_path(&args, &scene_path)?;
+    // Hook (issue 12, bugs 2-3): claim the outputs before loading, so a bad path fails at once.
+    let pending = ember::image_io::PendingImage::claim(&out, &[&scene_path])?;
+    let pending_rate = match settings.adaptive {
+        Some(_) => Some(ember::image_io::PendingImage::claim(
+            &rate_path(&out),
+            &[&scene_path],
+        )?),
+        None => None,
+    };
     let kind = accel_kind(args.accel, args.bvh, args.embree_quality);
     let pool = thread_pool(args.threads)?;
     let t0 = Instant::now();
@@ -462,7 +471,7 @@ fn render_command(mut args: RenderArgs) -> Result<()> {
         settings.height,
     );
     for w in render::render_warnings(&scene, &settings) {
-        eprintln!("ember: warning: {w}");
+        ember::errln!("ember: warning: {w}");
     }
     let pb = progress_bar((settings.width * settings.height) as u64, args.quiet);
     let t2 = Instant::now();
@@ -470,23 +479,23 @@ fn render_command(mut args: RenderArgs) -> Result<()> {
         pool.install(|| render::render(&scene, accel.as_ref(), &camera, &settings, &|n| pb.inc(n)));
     let t_render = t2.elapsed();
     pb.finish_and_clear();
-    ember::image_io::write_image(&output.image, &out)?;
-    if settings.adaptive.is_some() {
-        let rate = rate_path(&out);
-        ember::image_io::write_image(&output.rate_image(settings.spp), &rate)?;
+    pending.write(&output.image)?;
+    if let Some(pending_rate) = pending_rate {
+        let rate = pending_rate.path().to_path_buf();
+        pending_rate.write(&output.rate_image(settings.spp))?;
         if !args.quiet {
-            eprintln!("ember: sample rate map written to {}", rate.display());
+            ember::errln!("ember: sample rate map written to {}", rate.display());
         }
     }
     if output.nonfinite_samples > 0 {
-        eprintln!(
+        ember::errln!(
             "ember: warning: {} samples were NaN or infinite and were counted as black",
             output.nonfinite_samples
         );
     }
     if !args.quiet {
         let samples = output.total_samples();
-        eprintln!(
+        ember::errln!(
             "ember: {}: loaded in {:.1} ms, {} built in {:.1} ms, {} samples in {:.3} s ({:.2} M samples/s), wrote {}",
             scene_path.display(),
             t_load.as_secs_f64() * 1e3,
@@ -498,7 +507,7 @@ fn render_command(mut args: RenderArgs) -> Result<()> {
             out.display()
         );
         if let Some(s) = output.cost_scale {
-            eprintln!("ember: bvh-cost scale: blue = 0, red = {s:.0} nodes + primitives tested per camera ray (99th percentile)");
+            ember::errln!("ember: bvh-cost scale: blue = 0, red = {s:.0} nodes + primitives tested per camera ray (99th percentile)");
         }
     }
     Ok(())
@@ -545,11 +554,11 @@ fn bench(which: BenchCommand) -> Result<()> {
                 seed,
             };
             let report = ember::bench::stability::run_stability(&opts)?;
-            println!("{}", report.to_markdown());
-            println!(
+            ember::outln!("{}", report.to_markdown())?;
+            ember::outln!(
                 "wrote {}/stability.csv, stability.md and stability_noise.png/.svg",
                 out.display()
-            );
+            )?;
             Ok(())
         }
         BenchCommand::Accel {
@@ -564,9 +573,9 @@ fn bench(which: BenchCommand) -> Result<()> {
                 ..Default::default()
             };
             let report =
-                ember::bench::scaling::run_scaling(&opts, |line| eprintln!("ember: {line}"))?;
-            println!("{}", report.to_markdown());
-            println!("wrote {}/scaling.csv, scaling.md and charts", out.display());
+                ember::bench::scaling::run_scaling(&opts, |line| ember::errln!("ember: {line}"))?;
+            ember::outln!("{}", report.to_markdown())?;
+            ember::outln!("wrote {}/scaling.csv, scaling.md and charts", out.display())?;
             Ok(())
         }
         BenchCommand::Accel {
@@ -600,8 +609,8 @@ fn bench(which: BenchCommand) -> Result<()> {
             if let AccelKind::Embree(q) = accel_kind(AccelArg::Embree, BvhArg::Sah, quality) {
                 opts.embree_quality = q;
             }
-            let report = run(&opts, |line| eprintln!("ember: {line}"))?;
-            println!("{}", report.to_markdown());
+            let report = run(&opts, |line| ember::errln!("ember: {line}"))?;
+            ember::outln!("{}", report.to_markdown())?;
             Ok(())
         }
         BenchCommand::Converge {
@@ -635,7 +644,7 @@ fn bench(which: BenchCommand) -> Result<()> {
                 seed,
                 compare_backends: true,
             };
-            let report = ember::bench::converge::run(&opts, &mut |m| eprintln!("ember: {m}"))?;
+            let report = ember::bench::converge::run(&opts, &mut |m| ember::errln!("ember: {m}"))?;
             let stem_name = scene
                 .file_stem()
                 .map(|s| s.to_string_lossy().into_owned())
@@ -646,14 +655,14 @@ fn bench(which: BenchCommand) -> Result<()> {
                 resolution[0], resolution[1]
             );
             report.write(&stem, &stem_name, &title)?;
-            println!("{}", report.reference_note);
-            println!("{}", report.efficiency_table());
-            println!(
+            ember::outln!("{}", report.reference_note)?;
+            ember::outln!("{}", report.efficiency_table())?;
+            ember::outln!(
                 "wrote {}.csv and {}_rmse.png/.svg, {}_relmse.png/.svg",
                 stem.display(),
                 stem.display(),
                 stem.display()
-            );
+            )?;
             Ok(())
         }
         BenchCommand::Render {
@@ -672,11 +681,11 @@ fn bench(which: BenchCommand) -> Result<()> {
             } else {
                 scenes
             };
-            println!("| scene | spp | -m | render-only M samples/s | incl. load+build M samples/s | render s | load ms | build ms |");
-            println!("|---|---|---|---|---|---|---|---|");
+            ember::outln!("| scene | spp | -m | render-only M samples/s | incl. load+build M samples/s | render s | load ms | build ms |")?;
+            ember::outln!("|---|---|---|---|---|---|---|---|")?;
             for path in scenes {
                 let row = bench_render_one(&path, spp, max_depth, repeat.max(1), a)?;
-                println!("{row}");
+                ember::outln!("{row}")?;
             }
             Ok(())
         }

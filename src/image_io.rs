@@ -4,6 +4,7 @@
 
 use crate::film::Image;
 use image::{ImageFormat, Rgb32FImage, RgbImage};
+use std::fs::{File, OpenOptions};
 use std::io::{BufWriter, Write};
 use std::path::{Path, PathBuf};
 
@@ -11,11 +12,15 @@ use std::path::{Path, PathBuf};
 pub enum ImageIoError {
     #[error("{path}: unsupported image extension (use .png or .exr)")]
     UnknownFormat { path: String },
-    #[error("{path}: cannot write: {source}")]
+    #[error("{path}: cannot write")]
     Write {
         path: String,
         source: std::io::Error,
     },
+    #[error("{path}: is a directory, not an image file")]
+    IsDirectory { path: String },
+    #[error("{path}: the output would overwrite the input scene; choose another -f")]
+    SameAsInput { path: String },
     #[error("{path}: cannot encode: {msg}")]
     Encode { path: String, msg: String },
     #[error("{path}: cannot read image: {msg}")]
@@ -63,20 +68,78 @@ pub fn srgb8(x: f32) -> u8 {
 
 /// Writes `img` to `path` in the format its extension names.
 pub fn write_image(img: &Image, path: &Path) -> Result<(), ImageIoError> {
-    let format = OutputFormat::from_path(path)?;
-    let display = path.display().to_string();
-    let tmp = temp_sibling(path);
-    let result = write_to_file(img, &tmp, format, &display);
-    match result.and_then(|_| {
-        std::fs::rename(&tmp, path).map_err(|source| ImageIoError::Write {
-            path: display.clone(),
-            source,
+    PendingImage::claim(path, &[])?.write(img)
+}
+
+/// An output file checked and claimed before any work: the extension is known, the
+/// path is not one of the inputs, and its temporary sibling already exists (so the
+/// directory exists and is writable). [`PendingImage::write`] fills the temporary and
+/// renames it into place; dropping an unwritten `PendingImage` removes the temporary,
+/// so no partial file is ever left at `path`.
+#[derive(Debug)]
+pub struct PendingImage {
+    path: PathBuf,
+    tmp: PathBuf,
+    format: OutputFormat,
+    file: Option<File>,
+}
+
+impl PendingImage {
+    /// Checks `path` as an output for a job reading `inputs`, and creates its temporary.
+    pub fn claim(path: &Path, inputs: &[&Path]) -> Result<Self, ImageIoError> {
+        let format = OutputFormat::from_path(path)?;
+        let display = path.display().to_string();
+        if path.is_dir() {
+            return Err(ImageIoError::IsDirectory { path: display });
+        }
+        if let Ok(out) = path.canonicalize() {
+            if inputs
+                .iter()
+                .any(|i| i.canonicalize().is_ok_and(|i| i == out))
+            {
+                return Err(ImageIoError::SameAsInput { path: display });
+            }
+        }
+        let tmp = temp_sibling(path);
+        let file = OpenOptions::new()
+            .write(true)
+            .create_new(true)
+            .open(&tmp)
+            .map_err(|source| ImageIoError::Write {
+                path: display,
+                source,
+            })?;
+        Ok(PendingImage {
+            path: path.to_path_buf(),
+            tmp,
+            format,
+            file: Some(file),
         })
-    }) {
-        Ok(()) => Ok(()),
-        Err(e) => {
-            let _ = std::fs::remove_file(&tmp);
-            Err(e)
+    }
+
+    /// The final path the image will be renamed to.
+    pub fn path(&self) -> &Path {
+        &self.path
+    }
+
+    /// Encodes `img` into the temporary, syncs it and renames it into place.
+    pub fn write(mut self, img: &Image) -> Result<(), ImageIoError> {
+        let display = self.path.display().to_string();
+        let file = self.file.take().expect("a pending image is written once");
+        write_to_file(img, file, self.format, &display)?;
+        std::fs::rename(&self.tmp, &self.path).map_err(|source| ImageIoError::Write {
+            path: display,
+            source,
+        })?;
+        self.tmp = PathBuf::new();
+        Ok(())
+    }
+}
+
+impl Drop for PendingImage {
+    fn drop(&mut self) {
+        if !self.tmp.as_os_str().is_empty() {
+            let _ = std::fs::remove_file(&self.tmp);
         }
     }
 }
@@ -91,7 +154,7 @@ fn temp_sibling(path: &Path) -> PathBuf {
 
 fn write_to_file(
     img: &Image,
-    tmp: &Path,
+    file: File,
     format: OutputFormat,
     display: &str,
 ) -> Result<(), ImageIoError> {
@@ -99,7 +162,6 @@ fn write_to_file(
         path: display.to_string(),
         source,
     };
-    let file = std::fs::File::create(tmp).map_err(werr)?;
     let mut out = BufWriter::new(file);
     let enc = |e: image::ImageError| ImageIoError::Encode {
         path: display.to_string(),
@@ -122,10 +184,9 @@ fn write_to_file(
             rgb.write_to(&mut out, ImageFormat::OpenExr).map_err(enc)?;
         }
     }
+    out.flush().map_err(werr)?;
     let file = out.into_inner().map_err(|e| werr(e.into_error()))?;
-    file.sync_all().map_err(werr)?;
-    let mut f = file;
-    f.flush().map_err(werr)
+    file.sync_all().map_err(werr)
 }
 
 /// Reads a linear float image (EXR) or a PNG (decoded back to linear).

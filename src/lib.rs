@@ -14,6 +14,7 @@ pub mod info;
 pub mod integrators;
 pub mod lights;
 pub mod materials;
+pub mod output;
 pub mod render;
 pub mod sampling;
 pub mod scene;

@@ -3,14 +3,17 @@
 mod cli;
 
 use clap::Parser;
+use ember::output::{error_chain_message, is_broken_pipe};
 use std::process::ExitCode;
 
 fn main() -> ExitCode {
     let args = cli::Cli::parse();
     match cli::run(args) {
         Ok(()) => ExitCode::SUCCESS,
+        // The reader of our output went away (`ember info x.dae | head -1`): not an error.
+        Err(e) if is_broken_pipe(e.as_ref()) => ExitCode::SUCCESS,
         Err(e) => {
-            eprintln!("ember: error: {e:#}");
+            ember::errln!("ember: error: {}", error_chain_message(e.as_ref()));
             ExitCode::FAILURE
         }
     }

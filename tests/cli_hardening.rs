@@ -1,0 +1,193 @@
+//! The command line under hostile plumbing: closed pipes, full disks, bad output
+//! paths, and error messages that say each cause once.
+
+use std::path::PathBuf;
+use std::process::{Command, Output, Stdio};
+use std::time::{Duration, Instant};
+
+fn ember() -> Command {
+    Command::new(env!("CARGO_BIN_EXE_ember"))
+}
+
+fn shared(rel: &str) -> PathBuf {
+    PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+        .join("../shared")
+        .join(rel)
+}
+
+fn scene() -> PathBuf {
+    shared("scenes/cs184/sky/CBempty.dae")
+}
+
+fn dev_full() -> Stdio {
+    Stdio::from(
+        std::fs::OpenOptions::new()
+            .write(true)
+            .open("/dev/full")
+            .unwrap(),
+    )
+}
+
+fn stderr(o: &Output) -> String {
+    String::from_utf8_lossy(&o.stderr).into_owned()
+}
+
+/// Not a panic: exit code 101 is Rust's panic exit, and the panic message names itself.
+fn assert_no_panic(o: &Output) {
+    assert_ne!(o.status.code(), Some(101), "panicked: {}", stderr(o));
+    assert!(
+        o.status.code().is_some(),
+        "killed by a signal: {:?}",
+        o.status
+    );
+    assert!(!stderr(o).contains("panicked"), "{}", stderr(o));
+}
+
+/// Runs `cmd` with its stdout a pipe whose read end is closed at once (`| head -0`).
+fn with_closed_stdout(cmd: &mut Command) -> Output {
+    let mut child = cmd
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    drop(child.stdout.take());
+    child.wait_with_output().unwrap()
+}
+
+#[test]
+fn closed_stdout_exits_quietly() {
+    let info = with_closed_stdout(ember().arg("info").arg(scene()));
+    assert_no_panic(&info);
+    assert!(info.status.success(), "{}", stderr(&info));
+    assert!(stderr(&info).is_empty(), "{}", stderr(&info));
+    let help = with_closed_stdout(ember().arg("--help"));
+    assert_no_panic(&help);
+}
+
+#[test]
+fn full_stdout_is_an_ordinary_error() {
+    let o = ember()
+        .arg("info")
+        .arg(scene())
+        .stdout(dev_full())
+        .output()
+        .unwrap();
+    assert_no_panic(&o);
+    assert_eq!(o.status.code(), Some(1));
+    let err = stderr(&o);
+    assert_eq!(err.lines().count(), 1, "{err}");
+    assert!(err.starts_with("ember: error: "), "{err}");
+}
+
+#[test]
+fn full_stderr_does_not_stop_a_render() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("x.png");
+    let o = ember()
+        .args(["-s", "1", "-r", "8", "6", "-f"])
+        .arg(&out)
+        .arg(scene())
+        .stderr(dev_full())
+        .output()
+        .unwrap();
+    assert_no_panic(&o);
+    assert!(o.status.success());
+    assert_eq!(image::open(&out).unwrap().width(), 8);
+}
+
+#[test]
+fn bad_output_path_fails_before_rendering() {
+    let dir = tempfile::tempdir().unwrap();
+    let bad = [
+        dir.path().join("nodir/x.png"),
+        dir.path().join("x.jpeg"),
+        dir.path().to_path_buf(),
+    ];
+    for target in bad {
+        let t0 = Instant::now();
+        let o = ember()
+            .args(["-s", "4096", "-m", "5", "-r", "480", "360", "-f"])
+            .arg(&target)
+            .arg(shared("scenes/cs184/sky/CBspheres_lambertian.dae"))
+            .output()
+            .unwrap();
+        // A render of this size takes minutes; a preflight failure takes milliseconds.
+        assert!(
+            t0.elapsed() < Duration::from_secs(1),
+            "{target:?}: too slow"
+        );
+        assert_no_panic(&o);
+        assert_eq!(o.status.code(), Some(1), "{}", stderr(&o));
+    }
+    assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 0);
+}
+
+#[test]
+fn output_equal_to_input_is_refused() {
+    let dir = tempfile::tempdir().unwrap();
+    let same = dir.path().join("same.png");
+    std::fs::copy(scene(), &same).unwrap();
+    let before = std::fs::read(&same).unwrap();
+    let o = ember()
+        .args(["-s", "1", "-r", "8", "6", "-f"])
+        .arg(&same)
+        .arg(&same)
+        .output()
+        .unwrap();
+    assert_no_panic(&o);
+    assert!(!o.status.success());
+    assert!(stderr(&o).contains("input"), "{}", stderr(&o));
+    assert_eq!(
+        std::fs::read(&same).unwrap(),
+        before,
+        "the scene was changed"
+    );
+    // Another spelling of the same file is caught through canonical paths.
+    let o = ember()
+        .args(["-s", "1", "-r", "8", "6", "-f"])
+        .arg(dir.path().join(".").join("same.png"))
+        .arg(&same)
+        .output()
+        .unwrap();
+    assert!(!o.status.success());
+    assert_eq!(std::fs::read(&same).unwrap(), before);
+    assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 1);
+}
+
+/// Every ": "-separated part of the message appears once.
+fn assert_said_once(o: &Output) {
+    let err = stderr(o);
+    assert!(!o.status.success());
+    let line = err.lines().next().unwrap_or_default();
+    let parts: Vec<&str> = line.split(": ").collect();
+    for (i, p) in parts.iter().enumerate() {
+        assert!(
+            !parts[i + 1..].contains(p),
+            "repeated cause {p:?} in {line:?}"
+        );
+    }
+}
+
+#[test]
+fn errors_say_each_cause_once() {
+    let dir = tempfile::tempdir().unwrap();
+    let render = |out: PathBuf, scene: PathBuf| {
+        ember()
+            .args(["-s", "1", "-r", "8", "6", "-f"])
+            .arg(out)
+            .arg(scene)
+            .output()
+            .unwrap()
+    };
+    assert_said_once(&render(dir.path().join("nodir/out.png"), scene()));
+    let out = dir.path().join("out.png");
+    assert_said_once(&render(out.clone(), dir.path().join("missing.dae")));
+    assert_said_once(&render(out, dir.path().to_path_buf()));
+    assert_said_once(
+        &ember()
+            .arg("info")
+            .arg(dir.path().join("missing.dae"))
+            .output()
+            .unwrap(),
+    );
+}
