@@ -18,7 +18,7 @@ use std::time::Instant;
 /// Accepts the CS184 pathtracer command line verbatim, e.g.
 ///   ember -t 8 -s 64 -l 16 -m 5 -r 480 360 -f out.png scene.dae
 #[derive(Parser, Debug)]
-#[command(name = "ember", version, about, long_about = None, args_conflicts_with_subcommands = true)]
+#[command(name = "ember", version, about, long_about = None, args_conflicts_with_subcommands = true, args_override_self = true)]
 pub struct Cli {
     #[command(subcommand)]
     pub command: Option<Command>,
@@ -33,7 +33,7 @@ pub enum Command {
         /// The .dae scene file.
         scene: PathBuf,
         /// Resolution at which to report the camera's field of view.
-        #[arg(short = 'r', num_args = 2, value_names = ["WIDTH", "HEIGHT"], default_values_t = [480, 360])]
+        #[arg(short = 'r', num_args = 2, action = clap::ArgAction::Set, value_names = ["WIDTH", "HEIGHT"], default_values_t = [480, 360])]
         resolution: Vec<u32>,
     },
     /// Measure speed: `ember bench render` (samples/s of full renders).
@@ -101,7 +101,7 @@ pub enum BenchCommand {
         #[arg(short = 'm', default_value_t = 1)]
         max_depth: u32,
         /// Resolution.
-        #[arg(short = 'r', num_args = 2, value_names = ["WIDTH", "HEIGHT"], default_values_t = [160, 120])]
+        #[arg(short = 'r', num_args = 2, action = clap::ArgAction::Set, value_names = ["WIDTH", "HEIGHT"], default_values_t = [160, 120])]
         resolution: Vec<u32>,
         /// Largest spp of the doubling sequence 1, 2, 4, ...
         #[arg(long, default_value_t = 1024)]
@@ -167,7 +167,7 @@ pub struct RenderArgs {
     pub accumulate: u8,
 
     /// Adaptive sampling: after every BATCH samples stop a pixel once 1.96·σ/√n ≤ TOL·μ. `-a` alone means 32 0.05.
-    #[arg(short = 'a', num_args = 0..=2, value_names = ["BATCH", "TOL"])]
+    #[arg(short = 'a', num_args = 0..=2, action = clap::ArgAction::Set, value_names = ["BATCH", "TOL"])]
     pub adaptive: Option<Vec<String>>,
 
     /// Direct lighting by uniform hemisphere sampling instead of light sampling (cannot see point/directional lights).
@@ -179,7 +179,7 @@ pub struct RenderArgs {
     pub output: Option<PathBuf>,
 
     /// Resolution of the image.
-    #[arg(short = 'r', num_args = 2, value_names = ["WIDTH", "HEIGHT"], default_values_t = [480, 360])]
+    #[arg(short = 'r', num_args = 2, action = clap::ArgAction::Set, value_names = ["WIDTH", "HEIGHT"], default_values_t = [480, 360])]
     pub resolution: Vec<u32>,
 
     /// Intersection backend.
@@ -282,6 +282,12 @@ fn load_scene(path: &Path) -> Result<Scene> {
 }
 
 fn info(path: &Path, w: u32, h: u32) -> Result<()> {
+    // Hook (issue 12, item 8): an image prints the metadata it was written with.
+    if ember::image_io::OutputFormat::from_path(path).is_ok() {
+        let meta = ember::image_io::read_metadata(path)?;
+        ember::outln!("{}", path.display())?;
+        return Ok(ember::out!("{}", meta.to_text())?);
+    }
     check_resolution(w, h)?;
     let scene = load_scene(path)?;
     ember::outln!("{}", path.display())?;
@@ -479,10 +485,17 @@ fn render_command(mut args: RenderArgs) -> Result<()> {
         pool.install(|| render::render(&scene, accel.as_ref(), &camera, &settings, &|n| pb.inc(n)));
     let t_render = t2.elapsed();
     pb.finish_and_clear();
-    pending.write(&output.image)?;
+    // Hook (issue 12, item 8): record how the image was made.
+    let meta = ember::image_metadata::ImageMetadata::for_render(
+        &scene_path,
+        &settings,
+        &accel.name(),
+        t_render.as_secs_f64(),
+    );
+    pending.write_with_metadata(&output.image, &meta)?;
     if let Some(pending_rate) = pending_rate {
         let rate = pending_rate.path().to_path_buf();
-        pending_rate.write(&output.rate_image(settings.spp))?;
+        pending_rate.write_with_metadata(&output.rate_image(settings.spp), &meta)?;
         if !args.quiet {
             ember::errln!("ember: sample rate map written to {}", rate.display());
         }

@@ -3,7 +3,7 @@
 //! so a failure never leaves a partial file.
 
 use crate::film::Image;
-use image::{ImageFormat, Rgb32FImage, RgbImage};
+use crate::image_metadata::ImageMetadata;
 use std::fs::{File, OpenOptions};
 use std::io::{BufWriter, Write};
 use std::path::{Path, PathBuf};
@@ -123,10 +123,19 @@ impl PendingImage {
     }
 
     /// Encodes `img` into the temporary, syncs it and renames it into place.
-    pub fn write(mut self, img: &Image) -> Result<(), ImageIoError> {
+    pub fn write(self, img: &Image) -> Result<(), ImageIoError> {
+        self.write_with_metadata(img, &ImageMetadata::default())
+    }
+
+    /// As [`PendingImage::write`], recording `meta` in the file (EXR attributes, PNG text).
+    pub fn write_with_metadata(
+        mut self,
+        img: &Image,
+        meta: &ImageMetadata,
+    ) -> Result<(), ImageIoError> {
         let display = self.path.display().to_string();
         let file = self.file.take().expect("a pending image is written once");
-        write_to_file(img, file, self.format, &display)?;
+        write_to_file(img, meta, file, self.format, &display)?;
         std::fs::rename(&self.tmp, &self.path).map_err(|source| ImageIoError::Write {
             path: display,
             source,
@@ -154,6 +163,7 @@ fn temp_sibling(path: &Path) -> PathBuf {
 
 fn write_to_file(
     img: &Image,
+    meta: &ImageMetadata,
     file: File,
     format: OutputFormat,
     display: &str,
@@ -162,31 +172,119 @@ fn write_to_file(
         path: display.to_string(),
         source,
     };
-    let mut out = BufWriter::new(file);
-    let enc = |e: image::ImageError| ImageIoError::Encode {
+    let enc = |msg: String| ImageIoError::Encode {
         path: display.to_string(),
-        msg: e.to_string(),
+        msg,
     };
+    let mut out = BufWriter::new(file);
     match format {
-        OutputFormat::Png => {
-            let buf: Vec<u8> = img
-                .pixels
-                .iter()
-                .flat_map(|p| [srgb8(p.x), srgb8(p.y), srgb8(p.z)])
-                .collect();
-            let rgb = RgbImage::from_raw(img.width, img.height, buf).expect("buffer size matches");
-            rgb.write_to(&mut out, ImageFormat::Png).map_err(enc)?;
-        }
-        OutputFormat::Exr => {
-            let buf: Vec<f32> = img.pixels.iter().flat_map(|p| [p.x, p.y, p.z]).collect();
-            let rgb =
-                Rgb32FImage::from_raw(img.width, img.height, buf).expect("buffer size matches");
-            rgb.write_to(&mut out, ImageFormat::OpenExr).map_err(enc)?;
-        }
+        OutputFormat::Png => write_png(img, meta, &mut out).map_err(|e| match e {
+            png::EncodingError::IoError(io) => werr(io),
+            e => enc(e.to_string()),
+        })?,
+        OutputFormat::Exr => write_exr(img, meta, &mut out).map_err(|e| match e {
+            exr::error::Error::Io(io) => werr(io),
+            e => enc(e.to_string()),
+        })?,
     }
     out.flush().map_err(werr)?;
     let file = out.into_inner().map_err(|e| werr(e.into_error()))?;
     file.sync_all().map_err(werr)
+}
+
+/// 8-bit sRGB PNG with one iTXt chunk per metadata entry (UTF-8 keys and values).
+fn write_png(
+    img: &Image,
+    meta: &ImageMetadata,
+    out: &mut impl Write,
+) -> Result<(), png::EncodingError> {
+    let mut encoder = png::Encoder::new(out, img.width, img.height);
+    encoder.set_color(png::ColorType::Rgb);
+    encoder.set_depth(png::BitDepth::Eight);
+    for (k, v) in &meta.entries {
+        encoder.add_itxt_chunk(k.clone(), v.clone())?;
+    }
+    let mut writer = encoder.write_header()?;
+    let buf: Vec<u8> = img
+        .pixels
+        .iter()
+        .flat_map(|p| [srgb8(p.x), srgb8(p.y), srgb8(p.z)])
+        .collect();
+    writer.write_image_data(&buf)?;
+    writer.finish()
+}
+
+/// Linear 32-bit float RGB EXR with one string attribute per metadata entry.
+fn write_exr(
+    img: &Image,
+    meta: &ImageMetadata,
+    out: &mut (impl Write + std::io::Seek),
+) -> exr::error::Result<()> {
+    use exr::prelude::*;
+    let mut attributes = LayerAttributes::default();
+    for (k, v) in &meta.entries {
+        attributes.other.insert(
+            Text::from_slice_unchecked(k.as_bytes()),
+            AttributeValue::Text(Text::from_slice_unchecked(v.as_bytes())),
+        );
+    }
+    let width = img.width as usize;
+    let channels = SpecificChannels::rgb(|Vec2(x, y): Vec2<usize>| {
+        let p = img.pixels[y * width + x];
+        (p.x, p.y, p.z)
+    });
+    let layer = Layer::new(
+        (width, img.height as usize),
+        attributes,
+        Encoding::SMALL_LOSSLESS,
+        channels,
+    );
+    Image::from_layer(layer).write().to_buffered(out)
+}
+
+/// The metadata stored in a PNG's text chunks or an EXR's string attributes (EXR
+/// headers keep no order, so its entries come back sorted by key).
+pub fn read_metadata(path: &Path) -> Result<ImageMetadata, ImageIoError> {
+    let err = |msg: String| ImageIoError::Read {
+        path: path.display().to_string(),
+        msg,
+    };
+    let file = std::io::BufReader::new(File::open(path).map_err(|e| err(e.to_string()))?);
+    let mut meta = ImageMetadata::default();
+    match OutputFormat::from_path(path)? {
+        OutputFormat::Png => {
+            let reader = png::Decoder::new(file)
+                .read_info()
+                .map_err(|e| err(e.to_string()))?;
+            let info = reader.info();
+            for t in &info.uncompressed_latin1_text {
+                meta.push(t.keyword.clone(), &t.text);
+            }
+            for t in &info.utf8_text {
+                let text = t.get_text().map_err(|e| err(e.to_string()))?;
+                meta.push(t.keyword.clone(), text);
+            }
+        }
+        OutputFormat::Exr => {
+            let header = exr::meta::MetaData::read_from_buffered(file, false)
+                .map_err(|e| err(e.to_string()))?;
+            let mut entries: Vec<(String, String)> = header
+                .headers
+                .iter()
+                .flat_map(|h| h.own_attributes.other.iter())
+                .filter_map(|(k, v)| match v {
+                    exr::meta::attribute::AttributeValue::Text(t) => Some((
+                        String::from_utf8_lossy(k.bytes()).into_owned(),
+                        String::from_utf8_lossy(t.bytes()).into_owned(),
+                    )),
+                    _ => None,
+                })
+                .collect();
+            entries.sort();
+            meta.entries = entries;
+        }
+    }
+    Ok(meta)
 }
 
 /// Reads a linear float image (EXR) or a PNG (decoded back to linear).

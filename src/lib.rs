@@ -10,6 +10,7 @@ pub mod color;
 pub mod film;
 pub mod geometry;
 pub mod image_io;
+pub mod image_metadata;
 pub mod info;
 pub mod integrators;
 pub mod lights;

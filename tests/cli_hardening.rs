@@ -191,3 +191,60 @@ fn errors_say_each_cause_once() {
             .unwrap(),
     );
 }
+
+#[test]
+fn metadata_round_trips_through_info() {
+    let dir = tempfile::tempdir().unwrap();
+    for name in ["m.exr", "m.png"] {
+        let out = dir.path().join(name);
+        let o = ember()
+            .args(["-s", "3", "-l", "2", "-m", "4", "-r", "8", "6", "-f"])
+            .arg(&out)
+            .arg(scene())
+            .output()
+            .unwrap();
+        assert!(o.status.success(), "{}", stderr(&o));
+        let info = ember().arg("info").arg(&out).output().unwrap();
+        assert!(info.status.success(), "{}", stderr(&info));
+        let text = String::from_utf8(info.stdout).unwrap();
+        let bytes = std::fs::read(scene()).unwrap();
+        let hash = ember::image_metadata::fnv1a64(&bytes);
+        for line in [
+            "ember.spp: 3".to_string(),
+            "ember.light_samples: 2".into(),
+            "ember.max_depth: 4".into(),
+            "ember.resolution: 8x6".into(),
+            "ember.seed: 0".into(),
+            format!("ember.scene: {}", scene().display()),
+            format!("ember.scene.fnv1a64: {hash:016x}"),
+            format!("ember.version: {}", env!("CARGO_PKG_VERSION")),
+        ] {
+            assert!(
+                text.lines().any(|l| l == line),
+                "{name}: no {line:?} in\n{text}"
+            );
+        }
+        let cmd = text
+            .lines()
+            .find(|l| l.starts_with("ember.command_line: "))
+            .unwrap();
+        assert!(cmd.contains("-s 3 -l 2 -m 4"), "{cmd}");
+        assert_eq!(ember::image_io::read_image(&out).unwrap().width, 8);
+    }
+}
+
+#[test]
+fn a_repeated_flag_takes_its_last_value() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("r.exr");
+    let o = ember()
+        .args(["-s", "1", "-s", "2", "-r", "4", "3", "-r", "8", "6", "-f"])
+        .arg(&out)
+        .arg(scene())
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", stderr(&o));
+    let meta = ember::image_io::read_metadata(&out).unwrap();
+    assert_eq!(meta.get("ember.spp"), Some("2"));
+    assert_eq!(meta.get("ember.resolution"), Some("8x6"));
+}
