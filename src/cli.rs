@@ -4,9 +4,8 @@
 use anyhow::{bail, Context, Result};
 use clap::{Args, Parser, Subcommand, ValueEnum};
 use ember::accel::{self, AccelKind, BvhBuilder, EmbreeQuality};
-use ember::camera::Camera;
 use ember::integrators::{DirectStrategy, Roulette};
-use ember::render::{self, Adaptive, RenderSettings, Shading};
+use ember::render::{Adaptive, RenderJob, RenderSettings, Shading};
 use ember::scene::{collada, Scene};
 use indicatif::{ProgressBar, ProgressStyle};
 use std::io::IsTerminal;
@@ -367,19 +366,15 @@ fn strategy(args: &RenderArgs) -> Option<DirectStrategy> {
 }
 
 fn settings_from(args: &RenderArgs) -> Result<RenderSettings> {
-    let (w, h) = (args.resolution[0], args.resolution[1]);
-    check_resolution(w, h)?;
     if args.spp == 0 {
         bail!("-s: samples per pixel must be at least 1");
     }
     Ok(RenderSettings {
-        width: w,
-        height: h,
         spp: args.spp,
         light_samples: args.light_samples.max(1),
         max_depth: args.max_depth,
         accumulate: args.accumulate == 1,
-        strategy: strategy(args).unwrap_or(DirectStrategy::Light),
+        strategy: strategy(args),
         roulette: parse_roulette(&args.rr, args.rr_start)?,
         adaptive: parse_adaptive(&args.adaptive)?,
         shading: match args.shading {
@@ -441,6 +436,8 @@ fn render_command(mut args: RenderArgs) -> Result<()> {
     let Some(scene_path) = args.scene.clone() else {
         bail!("no scene given; usage: ember [OPTIONS] SCENE.dae (see ember --help)");
     };
+    let (width, height) = (args.resolution[0], args.resolution[1]);
+    check_resolution(width, height)?;
     let settings = settings_from(&args)?;
     let out = output_path(&args, &scene_path)?;
     let kind = accel_kind(args.accel, args.bvh, args.embree_quality);
@@ -448,26 +445,16 @@ fn render_command(mut args: RenderArgs) -> Result<()> {
     let t0 = Instant::now();
     let scene = load_scene(&scene_path)?;
     let t_load = t0.elapsed();
-    let settings = RenderSettings {
-        strategy: strategy(&args).unwrap_or_else(|| DirectStrategy::auto_for(&scene)),
-        ..settings
-    };
     let t1 = Instant::now();
-    let accel = pool.install(|| accel::build(&scene, kind))?;
+    let job = pool.install(|| RenderJob::new(scene, kind, width, height))?;
     let t_build = t1.elapsed();
-    let camera = Camera::new(
-        &scene.camera,
-        &scene.bounds,
-        settings.width,
-        settings.height,
-    );
-    for w in render::render_warnings(&scene, &settings) {
+    for w in job.warnings(&settings) {
         eprintln!("ember: warning: {w}");
     }
-    let pb = progress_bar((settings.width * settings.height) as u64, args.quiet);
+    let frame = job.full_frame();
+    let pb = progress_bar(frame.area(), args.quiet);
     let t2 = Instant::now();
-    let output =
-        pool.install(|| render::render(&scene, accel.as_ref(), &camera, &settings, &|n| pb.inc(n)));
+    let output = pool.install(|| job.render_rect(&settings, frame, &|n| pb.inc(n)));
     let t_render = t2.elapsed();
     pb.finish_and_clear();
     ember::image_io::write_image(&output.image, &out)?;
@@ -490,7 +477,7 @@ fn render_command(mut args: RenderArgs) -> Result<()> {
             "ember: {}: loaded in {:.1} ms, {} built in {:.1} ms, {} samples in {:.3} s ({:.2} M samples/s), wrote {}",
             scene_path.display(),
             t_load.as_secs_f64() * 1e3,
-            accel.name(),
+            job.accel.name(),
             t_build.as_secs_f64() * 1e3,
             samples,
             t_render.as_secs_f64(),
@@ -685,15 +672,9 @@ fn bench(which: BenchCommand) -> Result<()> {
 
 fn bench_render_one(path: &Path, spp: u32, m: u32, repeat: u32, a: AccelArg) -> Result<String> {
     let settings = RenderSettings {
-        width: 480,
-        height: 360,
         spp,
         max_depth: m,
-        strategy: if m > 1 {
-            DirectStrategy::Mis
-        } else {
-            DirectStrategy::Light
-        },
+        strategy: None,
         ..Default::default()
     };
     let mut runs = Vec::new();
@@ -702,15 +683,11 @@ fn bench_render_one(path: &Path, spp: u32, m: u32, repeat: u32, a: AccelArg) -> 
         let scene = collada::load(path)?;
         let t_load = t0.elapsed().as_secs_f64();
         let t1 = Instant::now();
-        let acc = accel::build(&scene, accel_kind(a, BvhArg::Sah, QualityArg::Medium))?;
+        let kind = accel_kind(a, BvhArg::Sah, QualityArg::Medium);
+        let job = RenderJob::new(scene, kind, 480, 360)?;
         let t_build = t1.elapsed().as_secs_f64();
-        let cam = Camera::new(&scene.camera, &scene.bounds, 480, 360);
-        let settings = RenderSettings {
-            strategy: DirectStrategy::auto_for(&scene),
-            ..settings.clone()
-        };
         let t2 = Instant::now();
-        let out = render::render(&scene, acc.as_ref(), &cam, &settings, &|_| {});
+        let out = job.render(&settings);
         let t_render = t2.elapsed().as_secs_f64();
         runs.push((t_render, t_load, t_build, out.total_samples()));
     }

@@ -64,12 +64,10 @@ const CASES: &[Case] = &[
 fn render_hash(case: &Case, threads: usize) -> u64 {
     let scene = load(case.scene);
     let s = RenderSettings {
-        width: 64,
-        height: 48,
         spp: 4,
         light_samples: 2,
         max_depth: case.max_depth,
-        strategy: case.strategy,
+        strategy: Some(case.strategy),
         seed: 7,
         ..Default::default()
     };
@@ -77,7 +75,7 @@ fn render_hash(case: &Case, threads: usize) -> u64 {
         .num_threads(threads)
         .build()
         .expect("thread pool");
-    let out = pool.install(|| render_scene(&scene, &s));
+    let out = pool.install(|| render_scene(&scene, (64, 48), &s));
     assert_eq!(out.nonfinite_samples, 0, "{}", case.scene);
     image_hash(&out.image)
 }

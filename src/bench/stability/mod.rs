@@ -56,7 +56,7 @@ pub struct StabilityReport {
 
 /// What ember does about each case, for the report.
 pub const EMBER_DOES: [(&str, &str); 8] = [
-    ("1", "Hemisphere and BSDF-only sampling cannot see delta lights; `render_warnings` says so in RenderOutput.warnings (the CLI prints it). The default strategies sample lights."),
+    ("1", "Hemisphere and BSDF-only sampling cannot see delta lights; `RenderJob::warnings` says so (the CLI prints it). The default strategies sample lights."),
     ("2", "Light sampling and MIS (the defaults: MIS for glossy or ambient-lit scenes, light sampling otherwise) sample the light's area: their noise does not grow as the light shrinks; -H's grows as √(2π/Ω)."),
     ("3", "MIS (power heuristic) is the default whenever the scene has glossy surfaces: never much worse than the better of light and BSDF sampling."),
     ("4", "Specular chains are followed by BSDF sampling with weight 1 at delta vertices; exact Fresnel; non-finite samples are counted and dropped (0 here)."),
