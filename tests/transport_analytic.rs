@@ -5,7 +5,7 @@ use ember::accel::{self, AccelKind, BvhBuilder};
 use ember::camera::Camera;
 use ember::geometry::{Aabb, Ray};
 use ember::integrators::{DirectStrategy, PathIntegrator, PathSettings, Roulette};
-use ember::lights::Light;
+use ember::lights::{AreaLight, Light};
 use ember::materials::Material;
 use ember::render::{RenderJob, RenderSettings};
 use ember::sampling::Sampler;
@@ -204,14 +204,13 @@ fn lit_floor(albedo: f32, le: f32) -> (Scene, [Vec3; 4]) {
                 radiance: Color::splat(le),
             },
         ],
-        lights: vec![Light::Area {
+        lights: vec![Light::Area(AreaLight {
             centre: c,
             ex,
             ey,
             normal,
-            area: 0.8,
             radiance: Color::splat(le),
-        }],
+        })],
         bounds: Aabb::new(Vec3::new(-f, 0.0, -f), Vec3::new(f, 0.0, f)),
         ..Default::default()
     };
@@ -318,14 +317,13 @@ fn tilted_shading_normals_do_not_leak_light() {
                 radiance: Color::splat(50.0),
             },
         ],
-        lights: vec![Light::Area {
+        lights: vec![Light::Area(AreaLight {
             centre: c,
             ex,
             ey,
             normal: Vec3::Y,
-            area: 1.0,
             radiance: Color::splat(50.0),
-        }],
+        })],
         bounds: Aabb::new(Vec3::new(-f, -0.3, -f), Vec3::new(f, 0.0, f)),
         ..Default::default()
     };

@@ -40,6 +40,9 @@ pub enum Material {
     Emission {
         radiance: Color,
     },
+    /// Absorbs everything and emits nothing itself: the surface of an area light,
+    /// whose radiance the light gives (`AreaLight::emitted`).
+    Black,
 }
 
 impl Default for Material {
@@ -104,7 +107,7 @@ impl Material {
                 valid_ior(ior).and_then(|ior| specular::sample_refraction(ior, transmittance, wo))
             }
             Material::Microfacet { alpha, eta, k } => Conductor::new(alpha, eta, k).sample(wo, u),
-            Material::Emission { .. } => None,
+            Material::Emission { .. } | Material::Black => None,
         }
     }
 
@@ -119,7 +122,7 @@ impl Material {
 
     /// True when the material scatters no light at all (emitters).
     pub fn is_black(&self) -> bool {
-        matches!(self, Material::Emission { .. })
+        matches!(self, Material::Emission { .. } | Material::Black)
     }
 
     /// Radiance emitted toward local direction `wo` (front side only).

@@ -7,7 +7,7 @@ use super::scenes::embedded;
 use super::Row;
 use crate::color::luminance;
 use crate::integrators::{DirectStrategy, Roulette};
-use crate::lights::Light;
+use crate::lights::{AreaLight, Light};
 use crate::materials::Material;
 use crate::render::{RenderJob, RenderSettings};
 use crate::scene::Scene;
@@ -228,7 +228,7 @@ impl SmallLightCase {
 
 pub fn small_light(b: &Budget, size: f32) -> Result<SmallLightCase> {
     let scene = scale_area_lights(embedded("small_light.dae")?, size);
-    let Some(&Light::Area { centre, ex, ey, .. }) = scene.lights.first() else {
+    let Some(&Light::Area(AreaLight { centre, ex, ey, .. })) = scene.lights.first() else {
         bail!("small_light.dae: no area light")
     };
     let h = centre.y as f64; // the floor is y = 0
@@ -244,32 +244,19 @@ pub fn small_light(b: &Budget, size: f32) -> Result<SmallLightCase> {
 /// Every area light (and its emitting triangles) scaled by `k` about its centre, its
 /// radiance by `1/k²`: the same power from a smaller or larger source.
 pub fn scale_area_lights(mut scene: Scene, k: f32) -> Scene {
-    for (li, light) in scene.lights.iter_mut().enumerate() {
-        let Light::Area {
-            centre,
-            ex,
-            ey,
-            area,
-            radiance,
-            ..
-        } = light
-        else {
+    for li in 0..scene.lights.len() as u32 {
+        let Some(&a) = scene.lights[li as usize].as_area() else {
             continue;
         };
-        *ex *= k;
-        *ey *= k;
-        *area *= k * k;
-        *radiance /= k * k;
-        let (c, new_radiance) = (*centre, *radiance);
-        for t in scene.triangles.iter().filter(|t| t.light == li as u32) {
-            for &v in &t.v {
-                let p = &mut scene.positions[v as usize];
-                *p = c + k * (*p - c);
-            }
-            scene.materials[t.material as usize] = Material::Emission {
-                radiance: new_radiance,
-            };
-        }
+        scene.set_area_light(
+            li,
+            AreaLight {
+                ex: k * a.ex,
+                ey: k * a.ey,
+                radiance: a.radiance / (k * k),
+                ..a
+            },
+        );
     }
     scene
 }
