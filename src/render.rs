@@ -288,10 +288,7 @@ fn render_warnings(scene: &Scene, s: &RenderSettings) -> Vec<String> {
     }
     if s.shading == Shading::Radiance
         && scene.lights.is_empty()
-        && !scene
-            .materials
-            .iter()
-            .any(|m| matches!(m, crate::materials::Material::Emission { .. }))
+        && !scene.materials.iter().any(|m| m.flags().emissive)
     {
         w.push("the scene has no lights and no emissive surfaces: the image will be black".into());
     }

@@ -46,6 +46,12 @@ impl Light {
         matches!(self, Light::Point { .. } | Light::Directional { .. })
     }
 
+    /// True for a light that surrounds the scene (ambient), whose
+    /// cosine-about-+Y sampling is poor near the horizon.
+    pub fn is_environment(&self) -> bool {
+        matches!(self, Light::Ambient { .. })
+    }
+
     /// Draws a direction toward the light from `p`; `None` when `p` receives
     /// nothing from that sample (behind an area light, degenerate light).
     pub fn sample_li(&self, p: Vec3, u: Vec2) -> Option<LightSample> {

@@ -175,18 +175,12 @@ impl Scene {
     pub fn has_unsampled_emitters(&self) -> bool {
         !self.surface_emission.is_empty()
             || self.triangles.iter().any(|t| {
-                t.light == NO_LIGHT
-                    && matches!(
-                        self.materials[t.material as usize],
-                        Material::Emission { .. }
-                    )
+                t.light == NO_LIGHT && self.materials[t.material as usize].flags().emissive
             })
-            || self.spheres.iter().any(|s| {
-                matches!(
-                    self.materials[s.material as usize],
-                    Material::Emission { .. }
-                )
-            })
+            || self
+                .spheres
+                .iter()
+                .any(|s| self.materials[s.material as usize].flags().emissive)
     }
 
     pub fn num_prims(&self) -> usize {
