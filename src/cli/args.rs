@@ -27,12 +27,14 @@ pub enum Command {
         resolution: Vec<u32>,
     },
     /// Measure speed: `ember bench render` (samples/s of full renders).
+    #[cfg(feature = "bench")]
     Bench {
         #[command(subcommand)]
         which: BenchCommand,
     },
 }
 
+#[cfg(feature = "bench")]
 #[derive(Subcommand, Debug)]
 pub enum BenchCommand {
     /// Where methods fail: a row per case (delta lights, tiny lights, glossy vs rough, caustics, scale, grazing rays,

@@ -132,6 +132,7 @@ pub(super) fn adopt_scene_from_adaptive(args: &mut RenderArgs) {
     }
 }
 
+#[cfg(feature = "bench")]
 pub(super) fn threads_invalid(t: &[usize]) -> bool {
     t.is_empty() || t.contains(&0)
 }

@@ -3,6 +3,8 @@
 //! one short function per subcommand. Nothing in the library depends on this module.
 
 mod args;
+#[cfg(feature = "bench")]
+mod bench;
 mod commands;
 mod convert;
 
@@ -14,7 +16,8 @@ pub fn run(cli: Cli) -> anyhow::Result<()> {
         Some(Command::Info { scene, resolution }) => {
             commands::info(&scene, resolution[0], resolution[1])
         }
-        Some(Command::Bench { which }) => commands::bench(which),
+        #[cfg(feature = "bench")]
+        Some(Command::Bench { which }) => bench::run(which),
         None => commands::render(cli.render),
     }
 }
