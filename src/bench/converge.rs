@@ -8,6 +8,7 @@
 //! two halves so that its own noise variance can be subtracted from every MSE.
 
 use super::chart::{write_chart, ChartSpec, Series};
+use super::table::Table;
 use crate::accel::{AccelKind, BvhBuilder, EmbreeQuality};
 use crate::film::Image;
 use crate::image_io::{read_image, write_image};
@@ -15,7 +16,6 @@ use crate::integrators::{DirectStrategy, Roulette};
 use crate::render::{average, Adaptive, RenderJob, RenderSettings};
 use crate::scene::{collada, Scene};
 use anyhow::{bail, Context, Result};
-use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
@@ -394,15 +394,21 @@ pub fn time_to_reach(points: &[Point], target: f64) -> Vec<(String, Option<f64>)
 
 impl ConvergeReport {
     pub fn to_csv(&self, scene: &str) -> String {
-        let mut s = String::from("scene,method,spp,samples,seconds,rmse,relmse\n");
+        let mut t = Table::new([
+            "scene", "method", "spp", "samples", "seconds", "rmse", "relmse",
+        ]);
         for p in &self.points {
-            let _ = writeln!(
-                s,
-                "{scene},{},{},{},{:.6},{:.6e},{:.6e}",
-                p.method, p.spp, p.samples, p.seconds, p.rmse, p.rel_mse
-            );
+            t.push(vec![
+                scene.to_string(),
+                p.method.clone(),
+                p.spp.to_string(),
+                p.samples.to_string(),
+                format!("{:.6}", p.seconds),
+                format!("{:.6e}", p.rmse),
+                format!("{:.6e}", p.rel_mse),
+            ]);
         }
-        s
+        t.to_csv()
     }
 
     /// Time each method needs to reach the target RMSE, and its ratio to the fastest.
@@ -412,21 +418,21 @@ impl ConvergeReport {
             .iter()
             .filter_map(|(_, t)| *t)
             .fold(f64::INFINITY, f64::min);
-        let mut s = format!(
-            "| method | seconds to RMSE {:.4} (from median RMSE²·time) | × fastest |\n|---|---|---|\n",
-            self.target_rmse
-        );
+        let mut table = Table::new([
+            "method".to_string(),
+            format!(
+                "seconds to RMSE {:.4} (from median RMSE²·time)",
+                self.target_rmse
+            ),
+            "× fastest".to_string(),
+        ]);
         for (name, t) in &self.time_to_target {
-            match t {
-                Some(t) => {
-                    let _ = writeln!(s, "| {name} | {t:.3} | {:.2} |", t / best);
-                }
-                None => {
-                    let _ = writeln!(s, "| {name} | not reached | – |");
-                }
-            }
+            table.push(match t {
+                Some(t) => vec![name.clone(), format!("{t:.3}"), format!("{:.2}", t / best)],
+                None => vec![name.clone(), "not reached".into(), "–".into()],
+            });
         }
-        s
+        table.to_markdown()
     }
 
     fn series(&self, y: impl Fn(&Point) -> f64) -> Vec<Series> {
