@@ -23,7 +23,7 @@ pub(crate) struct SahBinnedBuilder {
 
 impl Default for SahBinnedBuilder {
     fn default() -> Self {
-        SahBinnedBuilder { max_leaf: 8 }
+        SahBinnedBuilder { max_leaf: 4 }
     }
 }
 
