@@ -144,6 +144,11 @@ impl Accel for Bvh {
         }
     }
 
+    fn bvh_stats(&self) -> Option<BvhStats> {
+        Some(self.stats)
+    }
+
+    /// Only what traversal reads: nodes, leaf blocks and spheres.
     fn memory_bytes(&self) -> usize {
         std::mem::size_of::<Self>()
             + self.nodes.capacity() * std::mem::size_of::<WideNode>()
