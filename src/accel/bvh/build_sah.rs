@@ -107,11 +107,11 @@ impl SplitRule for SahBinnedBuilder {
         // One pass over the primitives fills the bins of all three axes.
         let bins = reduce_chunks(prims, |c| fill_bins(c, binning), merge_bins);
         let mut best: Option<(f32, usize, usize)> = None;
-        for axis in 0..3 {
+        for (axis, axis_bins) in bins.iter().enumerate() {
             if binning.scale[axis] == 0.0 {
                 continue;
             }
-            if let Some((cost, boundary)) = best_boundary(&bins[axis][..count]) {
+            if let Some((cost, boundary)) = best_boundary(&axis_bins[..count]) {
                 if best.is_none_or(|(c, _, _)| cost < c) {
                     best = Some((cost, axis, boundary));
                 }

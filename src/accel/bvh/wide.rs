@@ -189,7 +189,7 @@ impl BoxTest for ScalarBoxes {
     #[inline(always)]
     fn hits(ray: &WideRay, node: &WideNode, t_max: f32, entry: &mut [f32; WIDTH]) -> u32 {
         let mut mask = 0;
-        for c in 0..WIDTH {
+        for (c, entry_c) in entry.iter_mut().enumerate() {
             let mut t0 = ray.t_min;
             let mut t1 = t_max;
             for a in 0..3 {
@@ -198,7 +198,7 @@ impl BoxTest for ScalarBoxes {
                 t0 = t0.max((near - ray.o[a]) * ray.inv[a]);
                 t1 = t1.min((far - ray.o[a]) * ray.inv[a]);
             }
-            entry[c] = t0;
+            *entry_c = t0;
             if t0 <= t1 * EXIT_SLACK {
                 mask |= 1 << c;
             }
