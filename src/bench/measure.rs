@@ -163,11 +163,21 @@ pub struct Measurement {
     pub camera_mrays: f64,
     pub incoherent_mrays: f64,
     pub shadow_mrays: f64,
+    /// The native tree's shape (`None` for Embree).
+    pub tree: Option<crate::accel::BvhStats>,
 }
 
 impl Measurement {
     /// The five Markdown table cells `| build | memory | camera | incoherent | shadow`
     /// shared by the accel and scaling tables.
+    /// `| nodes | leaves | SAH cost` of the native tree, dashes for Embree.
+    pub fn tree_cells(&self) -> String {
+        self.tree.map_or_else(
+            || "| — | — | —".to_string(),
+            |t| format!("| {} | {} | {:.2}", t.nodes, t.leaves, t.sah_cost),
+        )
+    }
+
     pub fn markdown_cells(&self) -> String {
         format!(
             "| {} | {} | {:.2} | {:.2} | {:.2}",
@@ -217,6 +227,7 @@ pub(crate) fn measure(
         camera_mrays: throughput(&rays.camera, false)?,
         incoherent_mrays: throughput(&rays.incoherent, false)?,
         shadow_mrays: throughput(&rays.shadow, true)?,
+        tree: accel.bvh_stats(),
     })
 }
 
