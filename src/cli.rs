@@ -435,7 +435,7 @@ fn progress_bar(total: u64, quiet: bool) -> ProgressBar {
 
 fn render_command(mut args: RenderArgs) -> Result<()> {
     adopt_scene_from_adaptive(&mut args);
-    if args.accel == AccelArg::Embree && !cfg!(feature = "embree") {
+    if args.accel == AccelArg::Embree && !cfg!(any(feature = "embree", feature = "embree4")) {
         bail!("{}", accel::AccelError::EmbreeUnavailable);
     }
     let Some(scene_path) = args.scene.clone() else {
