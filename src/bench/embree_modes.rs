@@ -4,8 +4,7 @@
 //! names the Embree it ran (version and ISA) and the flags it used, so tables of an
 //! `embree` (Embree 3) and an `embree4` build can be merged.
 
-use super::measure::{quality_name, three_digits, tracing_pool};
-use super::median;
+use super::measure::{quality_name, three_digits};
 use crate::accel::{AccelError, EmbreeQuality};
 use crate::camera::Camera;
 use crate::geometry::Ray;
@@ -103,6 +102,8 @@ pub fn embree_modes(
     scene: &Scene,
     opts: &EmbreeModesOptions,
 ) -> Result<Vec<EmbreeModeRow>, AccelError> {
+    use super::measure::tracing_pool;
+    use super::median;
     use crate::accel::embree::{EmbreeAccel, EmbreeDevice, EmbreeMode};
     use std::sync::Arc;
     use std::time::Instant;
