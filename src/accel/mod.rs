@@ -3,7 +3,7 @@
 
 pub mod brute;
 pub mod bvh;
-#[cfg(feature = "embree")]
+#[cfg(any(feature = "embree", feature = "embree4"))]
 pub mod embree;
 mod prims;
 
@@ -82,9 +82,9 @@ pub enum AccelError {
 pub fn build(scene: &Scene, kind: AccelKind) -> Result<Box<dyn Accel>, AccelError> {
     match kind {
         AccelKind::Native(b) => Ok(Box::new(bvh::Bvh::build(scene, b))),
-        #[cfg(feature = "embree")]
+        #[cfg(any(feature = "embree", feature = "embree4"))]
         AccelKind::Embree(q) => Ok(Box::new(embree::EmbreeAccel::build(scene, q)?)),
-        #[cfg(not(feature = "embree"))]
+        #[cfg(not(any(feature = "embree", feature = "embree4")))]
         AccelKind::Embree(_) => Err(AccelError::EmbreeUnavailable),
     }
 }
@@ -139,12 +139,12 @@ fn choose_auto_for(prims: usize, embree_available: bool) -> AutoChoice {
 /// The backends this build can use, for `ember info`.
 pub fn backends_info() -> String {
     let native = "native BVH (midpoint, binned SAH)";
-    #[cfg(feature = "embree")]
+    #[cfg(any(feature = "embree", feature = "embree4"))]
     let embree = match embree::info() {
         Ok(info) => info.to_string(),
         Err(e) => format!("Embree compiled in but unusable: {e}"),
     };
-    #[cfg(not(feature = "embree"))]
+    #[cfg(not(any(feature = "embree", feature = "embree4")))]
     let embree = "Embree not compiled in (rebuild with --features embree)".to_string();
     format!("{native}; {embree}")
 }

@@ -104,7 +104,7 @@ fn backends(opts: &AccelBenchOptions) -> Vec<Backend> {
         Backend::Native(BvhBuilder::Midpoint),
         Backend::Native(BvhBuilder::Sah),
     ];
-    if cfg!(feature = "embree") {
+    if cfg!(any(feature = "embree", feature = "embree4")) {
         list.push(Backend::Embree(opts.embree_quality));
     }
     list

@@ -151,7 +151,7 @@ pub fn methods(base: &RenderSettings, compare_backends: bool) -> Vec<Method> {
             ..base.clone()
         },
     ));
-    if compare_backends && cfg!(feature = "embree") {
+    if compare_backends && cfg!(any(feature = "embree", feature = "embree4")) {
         v.push(Method {
             name: "Embree backend".into(),
             settings: RenderSettings {

@@ -4,6 +4,7 @@
 pub mod accel;
 pub mod chart;
 pub mod converge;
+pub mod embree_modes;
 pub mod fit;
 pub mod measure;
 pub mod meshes;

@@ -16,7 +16,7 @@ use std::time::Instant;
 /// `ember [OPTIONS] SCENE`: one render to an image file.
 pub(super) fn render(mut args: RenderArgs) -> Result<()> {
     adopt_scene_from_adaptive(&mut args);
-    if args.accel == AccelArg::Embree && !cfg!(feature = "embree") {
+    if args.accel == AccelArg::Embree && !cfg!(any(feature = "embree", feature = "embree4")) {
         bail!("{}", accel::AccelError::EmbreeUnavailable);
     }
     let Some(scene_path) = args.scene.clone() else {
