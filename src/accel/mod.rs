@@ -107,7 +107,10 @@ pub struct AutoChoice {
 /// Picks the backend for `scene` from its primitive count against the measured
 /// crossover [`AUTO_EMBREE_MIN_PRIMS`].
 pub fn choose_auto(scene: &Scene) -> AutoChoice {
-    choose_auto_for(scene.num_prims(), cfg!(any(feature = "embree", feature = "embree4")))
+    choose_auto_for(
+        scene.num_prims(),
+        cfg!(any(feature = "embree", feature = "embree4")),
+    )
 }
 
 fn choose_auto_for(prims: usize, embree_available: bool) -> AutoChoice {

@@ -69,7 +69,10 @@ pub(crate) struct Builder {
 }
 
 impl Builder {
-    #[cfg_attr(not(any(feature = "embree", feature = "embree4")), allow(unused_variables))]
+    #[cfg_attr(
+        not(any(feature = "embree", feature = "embree4")),
+        allow(unused_variables)
+    )]
     pub fn new(threads: usize) -> Result<Builder, AccelError> {
         Ok(Builder {
             #[cfg(any(feature = "embree", feature = "embree4"))]

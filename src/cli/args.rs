@@ -26,12 +26,42 @@ pub enum Command {
         #[arg(short = 'r', num_args = 2, value_names = ["WIDTH", "HEIGHT"], default_values_t = [480, 360])]
         resolution: Vec<u32>,
     },
+    /// Write the scene for another renderer, meaning exactly what ember renders
+    /// (spec semantics): `ember export --format mitsuba SCENE.dae -r W H -s SPP -m M --out DIR`.
+    Export(ExportArgs),
     /// Measure speed: `ember bench render` (samples/s of full renders).
     #[cfg(feature = "bench")]
     Bench {
         #[command(subcommand)]
         which: BenchCommand,
     },
+}
+
+#[derive(Args, Debug)]
+pub struct ExportArgs {
+    /// The .dae scene file.
+    pub scene: PathBuf,
+    /// Target renderer.
+    #[arg(long, value_enum, default_value_t = ExportFormat::Mitsuba)]
+    pub format: ExportFormat,
+    /// Image resolution.
+    #[arg(short = 'r', num_args = 2, value_names = ["WIDTH", "HEIGHT"], default_values_t = [480, 360])]
+    pub resolution: Vec<u32>,
+    /// Samples per pixel.
+    #[arg(short = 's', default_value_t = 64)]
+    pub spp: u32,
+    /// Max ray depth (bounces), as ember's -m; Mitsuba's max_depth is m + 1.
+    #[arg(short = 'm', default_value_t = 5)]
+    pub max_depth: u32,
+    /// Output folder (created if missing); files are named after the scene.
+    #[arg(long = "out", default_value = ".")]
+    pub out: PathBuf,
+}
+
+#[derive(Clone, Copy, Debug, ValueEnum)]
+pub enum ExportFormat {
+    /// Mitsuba 3 XML with PLY meshes.
+    Mitsuba,
 }
 
 #[cfg(feature = "bench")]

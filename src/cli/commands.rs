@@ -1,6 +1,6 @@
 //! One short function per subcommand: convert the flags, call the library, report.
 
-use super::args::{AccelArg, RenderArgs};
+use super::args::{AccelArg, ExportArgs, ExportFormat, RenderArgs};
 use super::convert::{
     accel_kind, adopt_scene_from_adaptive, check_resolution, output_path, settings_from,
 };
@@ -129,4 +129,37 @@ fn rate_path(out: &Path) -> PathBuf {
         .map(|s| s.to_string_lossy().into_owned())
         .unwrap_or_default();
     out.with_file_name(format!("{stem}_rate.png"))
+}
+
+/// `ember export`: the scene in another renderer's format, for side-by-side measurements.
+pub(super) fn export(a: ExportArgs) -> Result<()> {
+    let (w, h) = (a.resolution[0], a.resolution[1]);
+    check_resolution(w, h)?;
+    if a.spp == 0 {
+        bail!("-s must be at least 1");
+    }
+    let scene = load_scene(&a.scene)?;
+    let camera = ember::camera::Camera::new(&scene.camera, &scene.bounds, w, h);
+    std::fs::create_dir_all(&a.out)
+        .map_err(|e| anyhow::anyhow!("{}: cannot create folder: {e}", a.out.display()))?;
+    let stem = a
+        .scene
+        .file_stem()
+        .map_or("scene".into(), |s| s.to_string_lossy().into_owned());
+    let ExportFormat::Mitsuba = a.format;
+    let settings = ember::export::MitsubaSettings {
+        spp: a.spp,
+        max_depth: a.max_depth,
+        roulette_start: match ember::integrators::Roulette::default() {
+            ember::integrators::Roulette::Throughput { start, .. }
+            | ember::integrators::Roulette::Fixed { start, .. } => Some(start),
+            ember::integrators::Roulette::Off => None,
+        },
+    };
+    let summary = ember::export::write_mitsuba(&scene, &camera, &settings, &a.out, &stem)?;
+    for w in &summary.warnings {
+        eprintln!("ember: warning: {w}");
+    }
+    println!("{}", summary.files[0].display());
+    Ok(())
 }

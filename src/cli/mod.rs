@@ -16,6 +16,7 @@ pub fn run(cli: Cli) -> anyhow::Result<()> {
         Some(Command::Info { scene, resolution }) => {
             commands::info(&scene, resolution[0], resolution[1])
         }
+        Some(Command::Export(args)) => commands::export(args),
         #[cfg(feature = "bench")]
         Some(Command::Bench { which }) => bench::run(which),
         None => commands::render(cli.render),
