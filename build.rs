@@ -1,29 +1,56 @@
-//! Compiles the Embree shim and generates its bindings, only with the `embree`
-//! feature: a default build needs neither a C toolchain nor libclang.
+//! Compiles the Embree shim and generates its bindings, only with the `embree` or
+//! `embree4` feature: a default build needs neither a C toolchain nor libclang.
+//!
+//! `embree` takes Embree 3 or 4 from the system. `embree4` takes Embree 4: headers
+//! from the system when present, else the ones the `embree4-sys` crate ships; the
+//! library from the system, or from `EMBREE4_LIB_DIR` with an rpath to it.
 
 fn main() {
     println!("cargo:rerun-if-changed=build.rs");
-    #[cfg(feature = "embree")]
+    // Both on is refused by a compile_error! in src/accel/embree.rs.
+    #[cfg(all(
+        any(feature = "embree", feature = "embree4"),
+        not(all(feature = "embree", feature = "embree4"))
+    ))]
     embree::build();
 }
 
-#[cfg(feature = "embree")]
+#[cfg(all(
+    any(feature = "embree", feature = "embree4"),
+    not(all(feature = "embree", feature = "embree4"))
+))]
 mod embree {
     use std::env;
     use std::path::{Path, PathBuf};
+    use std::process::Command;
 
+    #[cfg(feature = "embree")]
     const PACKAGE_HINT: &str =
         "on Debian/Ubuntu install them with `apt-get install libembree-dev libclang-dev`";
+    #[cfg(feature = "embree4")]
+    const PACKAGE_HINT: &str = "on Debian 13 / Ubuntu 24.04 install `libembree-dev \
+         libclang-dev`; elsewhere run `scripts/install-deps --embree4` and set \
+         EMBREE4_LIB_DIR to the folder it prints";
 
     /// Where Embree was found, and which major version its headers are.
     struct Embree {
         include_dir: Option<PathBuf>,
         lib_dirs: Vec<PathBuf>,
+        /// The library file when its name is not `libembree<major>.so` (the wheel's
+        /// hashed names): linked verbatim.
+        lib_file: Option<String>,
+        /// Embed an rpath to `lib_dirs`, for libraries outside the loader's paths.
+        rpath: bool,
         major: u32,
     }
 
     pub fn build() {
-        for var in ["EMBREE_INCLUDE_DIR", "EMBREE_LIB_DIR", "LIBCLANG_PATH"] {
+        for var in [
+            "EMBREE_INCLUDE_DIR",
+            "EMBREE_LIB_DIR",
+            "EMBREE4_LIB_DIR",
+            "LIBCLANG_PATH",
+        ] {
             println!("cargo:rerun-if-env-changed={var}");
         }
         println!("cargo:rerun-if-changed=embree-shim/shim.h");
@@ -38,6 +65,7 @@ mod embree {
         panic!("{msg}");
     }
 
+    #[cfg(feature = "embree")]
     fn locate() -> Result<Embree, String> {
         if let Ok(dir) = env::var("EMBREE_INCLUDE_DIR") {
             let dir = PathBuf::from(dir);
@@ -48,23 +76,13 @@ mod embree {
                     dir.display()
                 )
             })?;
-            return Ok(Embree {
-                include_dir: Some(dir),
-                lib_dirs: env_lib_dir(),
-                major,
-            });
+            return Ok(system(Some(dir), env_dirs("EMBREE_LIB_DIR"), major));
         }
-        if let Some(found) = from_pkg_config() {
+        if let Some(found) = from_pkg_config(&[4, 3]) {
             return Ok(found);
         }
-        for dir in ["/usr/include", "/usr/local/include"] {
-            if let Some(major) = header_major(Path::new(dir)) {
-                return Ok(Embree {
-                    include_dir: Some(PathBuf::from(dir)),
-                    lib_dirs: env_lib_dir(),
-                    major,
-                });
-            }
+        if let Some((dir, major)) = standard_headers(&[4, 3]) {
+            return Ok(system(Some(dir), env_dirs("EMBREE_LIB_DIR"), major));
         }
         Err(format!(
             "the `embree` feature needs Embree 3 or 4 headers (embree4/rtcore.h or \
@@ -74,21 +92,172 @@ mod embree {
         ))
     }
 
+    #[cfg(feature = "embree4")]
+    fn locate() -> Result<Embree, String> {
+        let include_dir = match from_pkg_config(&[4]).and_then(|e| e.include_dir) {
+            Some(dir) => dir,
+            None => match standard_headers(&[4]) {
+                Some((dir, _)) => dir,
+                None => embree4_sys_headers()?,
+            },
+        };
+        let Some(dir) = env_dirs("EMBREE4_LIB_DIR").pop() else {
+            return system_embree4(include_dir);
+        };
+        // Absolute, for the rpath; a relative one is taken from the project root.
+        let dir = std::fs::canonicalize(&dir)
+            .map_err(|e| format!("EMBREE4_LIB_DIR={}: {e}", dir.display()))?;
+        let lib_file = lib_in(&dir)?;
+        Ok(Embree {
+            include_dir: Some(include_dir),
+            lib_dirs: vec![dir],
+            lib_file,
+            rpath: true,
+            major: 4,
+        })
+    }
+
+    /// The system's libembree4.so, where the loader finds it without help.
+    #[cfg(feature = "embree4")]
+    fn system_embree4(include_dir: PathBuf) -> Result<Embree, String> {
+        let pc = from_pkg_config(&[4])
+            .map(|e| e.lib_dirs)
+            .unwrap_or_default();
+        let standard = [
+            "/usr/lib/x86_64-linux-gnu",
+            "/usr/lib64",
+            "/usr/lib",
+            "/usr/local/lib",
+        ];
+        let found = pc
+            .iter()
+            .map(PathBuf::as_path)
+            .chain(standard.iter().map(Path::new))
+            .any(|d| d.join("libembree4.so").exists());
+        if !found {
+            return Err(format!(
+                "the `embree4` feature found no libembree4.so in the system's library \
+                 folders and EMBREE4_LIB_DIR is not set; {PACKAGE_HINT}"
+            ));
+        }
+        Ok(system(Some(include_dir), pc, 4))
+    }
+
+    /// How to link the Embree 4 library in `dir`: `libembree4.so` by its usual name,
+    /// else the one `libembree4*.so*` file there (the wheel's SONAME-named file).
+    #[cfg(feature = "embree4")]
+    fn lib_in(dir: &Path) -> Result<Option<String>, String> {
+        if dir.join("libembree4.so").exists() {
+            return Ok(None);
+        }
+        let entries = std::fs::read_dir(dir)
+            .map_err(|e| format!("EMBREE4_LIB_DIR={}: {e}", dir.display()))?;
+        let mut names: Vec<String> = entries
+            .filter_map(|e| e.ok()?.file_name().into_string().ok())
+            .filter(|n| n.starts_with("libembree4") && n.contains(".so"))
+            .collect();
+        names.sort();
+        match names.as_slice() {
+            [one] => Ok(Some(one.clone())),
+            [] => Err(format!(
+                "EMBREE4_LIB_DIR={} holds no libembree4*.so*; {PACKAGE_HINT}",
+                dir.display()
+            )),
+            many => Err(format!(
+                "EMBREE4_LIB_DIR={} holds several Embree 4 libraries ({}) and no \
+                 libembree4.so to say which one to link",
+                dir.display(),
+                many.join(", ")
+            )),
+        }
+    }
+
+    /// The headers embree4-sys ships in its source (`lib/embree4/`), found through
+    /// `cargo metadata` so vendored or patched copies work too.
+    #[cfg(feature = "embree4")]
+    fn embree4_sys_headers() -> Result<PathBuf, String> {
+        let cargo = env::var("CARGO").unwrap_or_else(|_| "cargo".into());
+        let manifest = PathBuf::from(env::var("CARGO_MANIFEST_DIR").expect("cargo sets it"));
+        let out = Command::new(cargo)
+            .args([
+                "metadata",
+                "--format-version",
+                "1",
+                "--offline",
+                "--features",
+            ])
+            .arg("embree4")
+            .arg("--manifest-path")
+            .arg(manifest.join("Cargo.toml"))
+            .output()
+            .map_err(|e| format!("cannot run `cargo metadata` to find embree4-sys: {e}"))?;
+        let json = String::from_utf8_lossy(&out.stdout);
+        let dir = package_dir(&json, "embree4-sys")
+            .map(|d| d.join("lib"))
+            .filter(|d| header_major(d) == Some(4))
+            .ok_or_else(|| {
+                format!(
+                    "no Embree 4 headers: none in /usr/include, and `cargo metadata` did not \
+                     locate embree4-sys's lib/embree4/rtcore.h ({}); {PACKAGE_HINT}",
+                    String::from_utf8_lossy(&out.stderr).trim()
+                )
+            })?;
+        println!(
+            "cargo:rerun-if-changed={}",
+            dir.join("embree4/rtcore.h").display()
+        );
+        Ok(dir)
+    }
+
+    /// The folder of `name`'s Cargo.toml in `cargo metadata` output. Cargo writes
+    /// each package as `{"name":...,"version":...,...,"manifest_path":...}`.
+    #[cfg(feature = "embree4")]
+    fn package_dir(json: &str, name: &str) -> Option<PathBuf> {
+        let start = json.find(&format!("{{\"name\":\"{name}\",\"version\":"))?;
+        let key = "\"manifest_path\":\"";
+        let rest = &json[start..];
+        let path_start = rest.find(key)? + key.len();
+        let path_len = rest[path_start..].find('"')?;
+        let manifest = PathBuf::from(&rest[path_start..path_start + path_len]);
+        manifest.parent().map(Path::to_path_buf)
+    }
+
+    fn system(include_dir: Option<PathBuf>, lib_dirs: Vec<PathBuf>, major: u32) -> Embree {
+        Embree {
+            include_dir,
+            lib_dirs,
+            lib_file: None,
+            rpath: false,
+            major,
+        }
+    }
+
+    fn standard_headers(majors: &[u32]) -> Option<(PathBuf, u32)> {
+        ["/usr/include", "/usr/local/include"]
+            .into_iter()
+            .find_map(|dir| {
+                let major = header_major(Path::new(dir)).filter(|m| majors.contains(m))?;
+                Some((PathBuf::from(dir), major))
+            })
+    }
+
     fn header_major(dir: &Path) -> Option<u32> {
         [4, 3]
             .into_iter()
             .find(|m| dir.join(format!("embree{m}/rtcore.h")).is_file())
     }
 
-    fn env_lib_dir() -> Vec<PathBuf> {
-        env::var("EMBREE_LIB_DIR")
+    fn env_dirs(var: &str) -> Vec<PathBuf> {
+        env::var(var)
+            .ok()
+            .filter(|d| !d.is_empty())
             .map(|d| vec![PathBuf::from(d)])
             .unwrap_or_default()
     }
 
     /// pkg-config, when the distribution ships a .pc file (Debian 12 does not).
-    fn from_pkg_config() -> Option<Embree> {
-        for major in [4, 3] {
+    fn from_pkg_config(majors: &[u32]) -> Option<Embree> {
+        for &major in majors {
             let name = format!("embree{major}");
             let Some(cflags) = pkg_config(&["--cflags-only-I", &name]) else {
                 continue;
@@ -102,20 +271,13 @@ mod embree {
             let include_dir = strip(&cflags, "-I")
                 .into_iter()
                 .find(|d| header_major(d) == Some(major));
-            return Some(Embree {
-                include_dir,
-                lib_dirs: strip(&libs, "-L"),
-                major,
-            });
+            return Some(system(include_dir, strip(&libs, "-L"), major));
         }
         None
     }
 
     fn pkg_config(args: &[&str]) -> Option<String> {
-        let out = std::process::Command::new("pkg-config")
-            .args(args)
-            .output()
-            .ok()?;
+        let out = Command::new("pkg-config").args(args).output().ok()?;
         out.status
             .success()
             .then(|| String::from_utf8_lossy(&out.stdout).into_owned())
@@ -137,8 +299,15 @@ mod embree {
     fn link(embree: &Embree) {
         for dir in &embree.lib_dirs {
             println!("cargo:rustc-link-search=native={}", dir.display());
+            if embree.rpath {
+                // Every binary of the package (ember, tests, benches) finds it at run time.
+                println!("cargo:rustc-link-arg=-Wl,-rpath,{}", dir.display());
+            }
         }
-        println!("cargo:rustc-link-lib=dylib=embree{}", embree.major);
+        match &embree.lib_file {
+            Some(file) => println!("cargo:rustc-link-lib=dylib:+verbatim={file}"),
+            None => println!("cargo:rustc-link-lib=dylib=embree{}", embree.major),
+        }
     }
 
     fn generate_bindings() {

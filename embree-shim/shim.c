@@ -15,6 +15,13 @@
 #include <stdlib.h>
 #include <string.h>
 
+/* Bytes of room after every ray-hit record handed to Embree. Embree 4.3 and newer,
+ * built with instance arrays (its default, and the embreex4 wheel's 4.4), append
+ * instPrimID[levels][lanes] to the hit and write it on every hit; embree4-sys ships
+ * 4.2's headers, whose records end before it. Every field the shim reads or writes
+ * keeps its offset, so trailing room is all the difference needs. */
+#define EMBER_HIT_SLACK 256
+
 #define EMBER_TRI_GEOM_ID 0u
 #define EMBER_SPH_GEOM_ID 1u
 
@@ -31,6 +38,7 @@ struct ember_device {
 struct ember_scene {
   RTCScene scene;
   uint32_t ntri;
+  int flags;
 };
 
 static void lock_device(ember_device *d) {
@@ -193,7 +201,8 @@ ember_scene *ember_scene_new(ember_device *d, const float *vertices, size_t nver
   RTCScene scene = rtcNewScene(dev);
   if (!scene) return NULL;
   rtcSetSceneBuildQuality(scene, to_quality(quality));
-  rtcSetSceneFlags(scene, robust ? RTC_SCENE_FLAG_ROBUST : RTC_SCENE_FLAG_NONE);
+  enum RTCSceneFlags flags = robust ? RTC_SCENE_FLAG_ROBUST : RTC_SCENE_FLAG_NONE;
+  rtcSetSceneFlags(scene, flags);
   int ok = 1;
   if (ntri > 0 && nvert > 0) ok = ok && attach_triangles(dev, scene, vertices, nvert, indices, ntri);
   if (nsph > 0) ok = ok && attach_spheres(dev, scene, spheres, nsph);
@@ -210,8 +219,13 @@ ember_scene *ember_scene_new(ember_device *d, const float *vertices, size_t nver
   }
   s->scene = scene;
   s->ntri = (uint32_t)ntri;
+  s->flags = (int)rtcGetSceneFlags(scene);
   return s;
 }
+
+int ember_scene_flags(const ember_scene *s) { return s->flags; }
+
+_Static_assert(RTC_SCENE_FLAG_ROBUST == EMBER_SCENE_FLAG_ROBUST, "shim.h mirrors the flag");
 
 void ember_scene_release(ember_scene *s) {
   if (!s) return;
@@ -239,39 +253,122 @@ static void fill_ray(struct RTCRay *r, const ember_ray *in) {
   r->flags = 0;
 }
 
-int ember_intersect1(const ember_scene *s, const ember_ray *ray, ember_hit *hit) {
-  struct RTCRayHit rh;
-  fill_ray(&rh.ray, ray);
-  rh.hit.geomID = RTC_INVALID_GEOMETRY_ID;
-  rh.hit.primID = RTC_INVALID_GEOMETRY_ID;
-  rh.hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
-#if RTC_VERSION_MAJOR >= 4
-  struct RTCIntersectArguments args;
-  rtcInitIntersectArguments(&args);
-  rtcIntersect1(s->scene, &rh, &args);
-#else
-  struct RTCIntersectContext ctx;
-  rtcInitIntersectContext(&ctx);
-  rtcIntersect1(s->scene, &ctx, &rh);
-#endif
-  if (rh.hit.geomID == RTC_INVALID_GEOMETRY_ID) {
+/* Embree fills a hit from its ray and hit records: shared by single rays and packets. */
+static int fill_hit(const ember_scene *s, unsigned geom, unsigned prim, float t, float ngx,
+                    float ngy, float ngz, float u, float v, ember_hit *hit) {
+  if (geom == RTC_INVALID_GEOMETRY_ID) {
     hit->prim = EMBER_NO_PRIM;
     return 0;
   }
-  hit->t = rh.ray.tfar;
-  hit->ng[0] = rh.hit.Ng_x;
-  hit->ng[1] = rh.hit.Ng_y;
-  hit->ng[2] = rh.hit.Ng_z;
-  if (rh.hit.geomID == EMBER_TRI_GEOM_ID) {
-    hit->prim = rh.hit.primID;
-    hit->u = rh.hit.u;
-    hit->v = rh.hit.v;
+  hit->t = t;
+  hit->ng[0] = ngx;
+  hit->ng[1] = ngy;
+  hit->ng[2] = ngz;
+  if (geom == EMBER_TRI_GEOM_ID) {
+    hit->prim = prim;
+    hit->u = u;
+    hit->v = v;
   } else {
-    hit->prim = s->ntri + rh.hit.primID;
+    hit->prim = s->ntri + prim;
     hit->u = 0.0f;
     hit->v = 0.0f;
   }
   return 1;
+}
+
+int ember_intersect1(const ember_scene *s, const ember_ray *ray, ember_hit *hit) {
+  union {
+    struct RTCRayHit rh;
+    char room[sizeof(struct RTCRayHit) + EMBER_HIT_SLACK];
+  } record;
+  struct RTCRayHit *rhp = &record.rh;
+  fill_ray(&rhp->ray, ray);
+  rhp->hit.geomID = RTC_INVALID_GEOMETRY_ID;
+  rhp->hit.primID = RTC_INVALID_GEOMETRY_ID;
+  rhp->hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
+#if RTC_VERSION_MAJOR >= 4
+  struct RTCIntersectArguments args;
+  rtcInitIntersectArguments(&args);
+  rtcIntersect1(s->scene, rhp, &args);
+#else
+  struct RTCIntersectContext ctx;
+  rtcInitIntersectContext(&ctx);
+  rtcIntersect1(s->scene, &ctx, rhp);
+#endif
+  return fill_hit(s, rhp->hit.geomID, rhp->hit.primID, rhp->ray.tfar, rhp->hit.Ng_x,
+                  rhp->hit.Ng_y, rhp->hit.Ng_z, rhp->hit.u, rhp->hit.v, hit);
+}
+
+/* One packet function per width: structure-of-arrays rays, a valid mask (-1 on,
+ * 0 off), then the same read-out as a single ray. Embree 3 takes a context before the
+ * ray, Embree 4 optional arguments after it. */
+#if RTC_VERSION_MAJOR >= 4
+#define EMBER_TRACE_PACKET(N, valid, scene, rh)                                            \
+  do {                                                                                     \
+    struct RTCIntersectArguments args;                                                     \
+    rtcInitIntersectArguments(&args);                                                      \
+    rtcIntersect##N(valid, scene, rh, &args);                                              \
+  } while (0)
+#else
+#define EMBER_TRACE_PACKET(N, valid, scene, rh)                                            \
+  do {                                                                                     \
+    struct RTCIntersectContext ctx;                                                        \
+    rtcInitIntersectContext(&ctx);                                                         \
+    rtcIntersect##N(valid, scene, &ctx, rh);                                               \
+  } while (0)
+#endif
+
+#define EMBER_PACKET_FN(N)                                                                 \
+  static int intersect_packet##N(const ember_scene *s, const ember_ray *rays, size_t n,   \
+                                 ember_hit *hits) {                                        \
+    union {                                                                                \
+      struct RTCRayHit##N rh;                                                              \
+      char room[sizeof(struct RTCRayHit##N) + EMBER_HIT_SLACK];                            \
+    } record;                                                                              \
+    struct RTCRayHit##N *rhp = &record.rh;                                                 \
+    int valid[N];                                                                          \
+    for (size_t i = 0; i < N; i++) {                                                       \
+      struct RTCRay r;                                                                     \
+      fill_ray(&r, &rays[i < n ? i : 0]);                                                  \
+      valid[i] = i < n ? -1 : 0;                                                           \
+      rhp->ray.org_x[i] = r.org_x;                                                         \
+      rhp->ray.org_y[i] = r.org_y;                                                         \
+      rhp->ray.org_z[i] = r.org_z;                                                         \
+      rhp->ray.tnear[i] = r.tnear;                                                         \
+      rhp->ray.dir_x[i] = r.dir_x;                                                         \
+      rhp->ray.dir_y[i] = r.dir_y;                                                         \
+      rhp->ray.dir_z[i] = r.dir_z;                                                         \
+      rhp->ray.time[i] = r.time;                                                           \
+      rhp->ray.tfar[i] = r.tfar;                                                           \
+      rhp->ray.mask[i] = r.mask;                                                           \
+      rhp->ray.id[i] = (unsigned)i;                                                        \
+      rhp->ray.flags[i] = r.flags;                                                         \
+      rhp->hit.geomID[i] = RTC_INVALID_GEOMETRY_ID;                                        \
+      rhp->hit.primID[i] = RTC_INVALID_GEOMETRY_ID;                                        \
+      rhp->hit.instID[0][i] = RTC_INVALID_GEOMETRY_ID;                                     \
+    }                                                                                      \
+    EMBER_TRACE_PACKET(N, valid, s->scene, rhp);                                           \
+    int count = 0;                                                                         \
+    for (size_t i = 0; i < n; i++)                                                         \
+      count += fill_hit(s, rhp->hit.geomID[i], rhp->hit.primID[i], rhp->ray.tfar[i],       \
+                        rhp->hit.Ng_x[i], rhp->hit.Ng_y[i], rhp->hit.Ng_z[i],              \
+                        rhp->hit.u[i], rhp->hit.v[i], &hits[i]);                           \
+    return count;                                                                          \
+  }
+
+EMBER_PACKET_FN(4)
+EMBER_PACKET_FN(8)
+EMBER_PACKET_FN(16)
+
+int ember_intersect_packet(const ember_scene *s, int width, const ember_ray *rays, size_t n,
+                           ember_hit *hits) {
+  if (n == 0 || n > (size_t)width) return -1;
+  switch (width) {
+  case 4: return intersect_packet4(s, rays, n, hits);
+  case 8: return intersect_packet8(s, rays, n, hits);
+  case 16: return intersect_packet16(s, rays, n, hits);
+  default: return -1;
+  }
 }
 
 int ember_occluded1(const ember_scene *s, const ember_ray *ray) {

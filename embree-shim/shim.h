@@ -78,6 +78,11 @@ ember_scene *ember_scene_new(ember_device *device, const float *vertices, size_t
                              const uint32_t *indices, size_t ntri, const float *spheres,
                              size_t nsph, int quality, int robust);
 
+/* The scene flags a scene was built with, as RTC_SCENE_FLAG_* bits (0: none,
+ * EMBER_SCENE_FLAG_ROBUST: robust traversal). */
+#define EMBER_SCENE_FLAG_ROBUST 4
+int ember_scene_flags(const ember_scene *scene);
+
 void ember_scene_release(ember_scene *scene);
 
 /* Nearest hit in [tnear, tfar]. Returns 1 and fills `hit` on a hit, else 0. */
@@ -85,6 +90,13 @@ int ember_intersect1(const ember_scene *scene, const ember_ray *ray, ember_hit *
 
 /* Returns 1 when anything lies on the ray in [tnear, tfar]. */
 int ember_occluded1(const ember_scene *scene, const ember_ray *ray);
+
+/* Nearest hits of `n` rays (1 <= n <= width) traced as one Embree packet of `width`
+ * lanes (4, 8 or 16: rtcIntersect4/8/16); lanes past `n` are masked off. Fills
+ * hits[0..n] (prim EMBER_NO_PRIM on a miss) and returns the number of hits, or -1 for
+ * a bad width or n. */
+int ember_intersect_packet(const ember_scene *scene, int width, const ember_ray *rays,
+                           size_t n, ember_hit *hits);
 
 #ifdef __cplusplus
 }

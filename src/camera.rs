@@ -65,6 +65,21 @@ impl Camera {
             + self.forward;
         Ray::new(self.eye, d.normalize())
     }
+
+    /// Pixel `(x, y)` whose centre sees world point `p`, if it is in front of the camera and in the image.
+    pub fn project(&self, p: Vec3) -> Option<(u32, u32)> {
+        let d = p - self.eye;
+        let depth = d.dot(self.forward);
+        if depth <= 0.0 {
+            return None;
+        }
+        let sx = d.dot(self.right) / depth / self.tan_half_x;
+        let sy = d.dot(self.up) / depth / self.tan_half_y;
+        let u = 0.5 * (sx + 1.0) * self.width as f32;
+        let v = 0.5 * (1.0 - sy) * self.height as f32;
+        (u >= 0.0 && v >= 0.0 && u < self.width as f32 && v < self.height as f32)
+            .then_some((u as u32, v as u32))
+    }
 }
 
 /// The smallest field of view with aspect `a` containing the file's (spec §4).

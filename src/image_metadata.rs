@@ -2,7 +2,7 @@
 //! headers as string attributes and into PNG files as text chunks, read back by
 //! `ember info IMAGE`. Shard headers and merges reuse the same list.
 
-use crate::render::RenderSettings;
+use crate::render::{RenderJob, RenderSettings};
 use std::path::Path;
 
 /// Ordered key/value strings describing how an image was made.
@@ -26,24 +26,30 @@ impl ImageMetadata {
     /// resolved setting, the backend, and the render time.
     pub fn for_render(
         scene: &Path,
+        job: &RenderJob,
         settings: &RenderSettings,
-        backend: &str,
         render_seconds: f64,
     ) -> Self {
         let mut m = ImageMetadata::provenance();
         m.push_file("ember.scene", scene);
         let s = settings;
-        m.push("ember.resolution", format!("{}x{}", s.width, s.height));
+        m.push(
+            "ember.resolution",
+            format!("{}x{}", job.camera.width, job.camera.height),
+        );
         m.push("ember.spp", s.spp);
         m.push("ember.light_samples", s.light_samples);
         m.push("ember.max_depth", s.max_depth);
         m.push("ember.accumulate", s.accumulate);
-        m.push("ember.estimator", format!("{:?}", s.strategy));
+        m.push(
+            "ember.estimator",
+            format!("{:?}", s.strategy_for(&job.scene)),
+        );
         m.push("ember.roulette", format!("{:?}", s.roulette));
         m.push("ember.adaptive", format!("{:?}", s.adaptive));
         m.push("ember.shading", format!("{:?}", s.shading));
         m.push("ember.seed", s.seed);
-        m.push("ember.backend", backend);
+        m.push("ember.backend", job.accel.name());
         m.push("ember.render_seconds", format!("{render_seconds:.3}"));
         m
     }

@@ -69,20 +69,14 @@ fn write_camera(out: &mut String, scene: &Scene, width: u32, height: u32) -> std
 
 fn describe_light(l: &Light) -> String {
     match *l {
-        Light::Area {
-            centre,
-            ex,
-            ey,
-            normal,
-            area,
-            radiance,
-        } => format!(
-            "area: radiance {}, centre {}, size {:.6} x {:.6} (area {area:.6}), normal {}",
-            v(radiance),
-            v(centre),
-            ex.length(),
-            ey.length(),
-            v(normal)
+        Light::Area(a) => format!(
+            "area: radiance {}, centre {}, size {:.6} x {:.6} (area {:.6}), normal {}",
+            v(a.radiance),
+            v(a.centre),
+            a.ex.length(),
+            a.ey.length(),
+            a.area(),
+            v(a.normal)
         ),
         Light::Point {
             position,
@@ -126,6 +120,7 @@ fn describe_material(m: &Material) -> String {
             format!("microfacet: alpha {alpha}, eta {}, k {}", v(eta), v(k))
         }
         Material::Emission { radiance } => format!("emission: radiance {}", v(radiance)),
+        Material::Black => "black (an area light's surface)".into(),
     }
 }
 

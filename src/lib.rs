@@ -4,9 +4,11 @@
 //! Scene semantics follow `shared/docs/scene-semantics.md`.
 
 pub mod accel;
+#[cfg(feature = "bench")]
 pub mod bench;
 pub mod camera;
 pub mod color;
+pub mod export;
 pub mod film;
 pub mod geometry;
 pub mod image_io;

@@ -1,8 +1,10 @@
 //! The render driver: tiles over rayon, per-pixel deterministic sampling,
-//! plain or adaptive sample counts.
+//! plain or adaptive sample counts. `RenderJob` (job.rs) owns what is rendered.
 
-use crate::accel::Accel;
-use crate::camera::Camera;
+mod job;
+
+pub use job::{average, Halves, PixelRect, RenderJob};
+
 use crate::color::{is_finite, luminance};
 use crate::film::{heat_map, Image};
 use crate::integrators::{debug, DirectStrategy, PathIntegrator, PathSettings, Roulette};
@@ -43,15 +45,16 @@ impl Adaptive {
     }
 }
 
+/// How to render; the resolution belongs to the camera (`RenderJob`).
 #[derive(Clone, Debug)]
 pub struct RenderSettings {
-    pub width: u32,
-    pub height: u32,
     pub spp: u32,
     pub light_samples: u32,
     pub max_depth: u32,
     pub accumulate: bool,
-    pub strategy: DirectStrategy,
+    /// Direct-lighting estimator; `None` chooses one for the scene (`DirectStrategy::auto_for`)
+    /// where the integrator is built.
+    pub strategy: Option<DirectStrategy>,
     pub roulette: Roulette,
     pub adaptive: Option<Adaptive>,
     pub shading: Shading,
@@ -59,12 +62,18 @@ pub struct RenderSettings {
 }
 
 impl RenderSettings {
-    pub fn path_settings(&self) -> PathSettings {
+    /// The estimator these settings use for `scene`.
+    pub fn strategy_for(&self, scene: &Scene) -> DirectStrategy {
+        self.strategy
+            .unwrap_or_else(|| DirectStrategy::auto_for(scene))
+    }
+
+    pub fn path_settings(&self, scene: &Scene) -> PathSettings {
         PathSettings {
             max_depth: self.max_depth,
             accumulate: self.accumulate,
             light_samples: self.light_samples,
-            strategy: self.strategy,
+            strategy: self.strategy_for(scene),
             roulette: self.roulette,
         }
     }
@@ -73,13 +82,11 @@ impl RenderSettings {
 impl Default for RenderSettings {
     fn default() -> Self {
         RenderSettings {
-            width: 480,
-            height: 360,
             spp: 1,
             light_samples: 1,
             max_depth: 1,
             accumulate: true,
-            strategy: DirectStrategy::Light,
+            strategy: Some(DirectStrategy::Light),
             roulette: Roulette::default(),
             adaptive: None,
             shading: Shading::Radiance,
@@ -96,8 +103,6 @@ pub struct RenderOutput {
     pub nonfinite_samples: u64,
     /// For `Shading::BvhCost`: the count that maps to red.
     pub cost_scale: Option<f32>,
-    /// Things the user should know about this render (e.g. lights a strategy cannot see).
-    pub warnings: Vec<String>,
 }
 
 impl RenderOutput {
@@ -114,41 +119,48 @@ impl RenderOutput {
 
 const TILE: u32 = 16;
 
-/// Renders `scene` through `accel`. `progress` is called with the number of pixels finished.
-pub fn render(
-    scene: &Scene,
-    accel: &dyn Accel,
-    camera: &Camera,
+/// The tiles covering `rect`, as their top-left pixels.
+fn tiles(rect: PixelRect) -> Vec<(u32, u32)> {
+    (rect.y0..rect.y1)
+        .step_by(TILE as usize)
+        .flat_map(|y| {
+            (rect.x0..rect.x1)
+                .step_by(TILE as usize)
+                .map(move |x| (x, y))
+        })
+        .collect()
+}
+
+/// The pixels of the tile at `(x0, y0)` inside `rect`, row by row.
+fn tile_pixels(rect: PixelRect, (x0, y0): (u32, u32)) -> impl Iterator<Item = (u32, u32)> {
+    (y0..(y0 + TILE).min(rect.y1))
+        .flat_map(move |y| (x0..(x0 + TILE).min(rect.x1)).map(move |x| (x, y)))
+}
+
+/// Renders pixels `rect` of `job`. `progress` is called with the number of pixels finished.
+fn render_rect(
+    job: &RenderJob,
     settings: &RenderSettings,
+    rect: PixelRect,
     progress: &(dyn Fn(u64) + Sync),
 ) -> RenderOutput {
-    let (w, h) = (settings.width, settings.height);
-    let tiles: Vec<(u32, u32)> = (0..h.div_ceil(TILE))
-        .flat_map(|ty| (0..w.div_ceil(TILE)).map(move |tx| (tx, ty)))
-        .collect();
-    let integrator = PathIntegrator::new(scene, accel, settings.path_settings());
+    let tiles = tiles(rect);
+    let integrator = PathIntegrator::new(
+        &job.scene,
+        job.accel.as_ref(),
+        settings.path_settings(&job.scene),
+    );
     let results: Vec<Vec<PixelResult>> = tiles
         .par_iter()
-        .map(|&(tx, ty)| {
-            let mut out = Vec::with_capacity((TILE * TILE) as usize);
-            for y in ty * TILE..((ty + 1) * TILE).min(h) {
-                for x in tx * TILE..((tx + 1) * TILE).min(w) {
-                    out.push(render_pixel(
-                        scene,
-                        accel,
-                        camera,
-                        settings,
-                        &integrator,
-                        x,
-                        y,
-                    ));
-                }
-            }
+        .map(|&tile| {
+            let out: Vec<PixelResult> = tile_pixels(rect, tile)
+                .map(|(x, y)| render_pixel(job, settings, &integrator, x, y))
+                .collect();
             progress(out.len() as u64);
             out
         })
         .collect();
-    assemble(&tiles, results, settings, scene)
+    assemble(rect, &tiles, results, settings)
 }
 
 struct PixelResult {
@@ -158,15 +170,14 @@ struct PixelResult {
 }
 
 fn render_pixel(
-    scene: &Scene,
-    accel: &dyn Accel,
-    camera: &Camera,
+    job: &RenderJob,
     s: &RenderSettings,
     integrator: &PathIntegrator,
     x: u32,
     y: u32,
 ) -> PixelResult {
-    let mut sampler = Sampler::new(s.seed, (y as u64) * (s.width as u64) + x as u64, 0);
+    let (camera, scene, accel) = (&job.camera, &job.scene, job.accel.as_ref());
+    let mut sampler = Sampler::new(s.seed, (y as u64) * (camera.width as u64) + x as u64, 0);
     let (mut sum, mut s1, mut s2) = (Color::ZERO, 0f64, 0f64);
     let (mut n, mut nonfinite) = (0u32, 0u32);
     let batch = s.adaptive.map_or(s.spp.max(1), |a| a.batch);
@@ -215,26 +226,23 @@ fn converged(a: Adaptive, n: u32, s1: f64, s2: f64) -> bool {
     1.96 * var.sqrt() / nf.sqrt() <= a.tol as f64 * mu
 }
 
+/// The image of `rect` (its own size, row-major) from the tiles' pixels.
 fn assemble(
+    rect: PixelRect,
     tiles: &[(u32, u32)],
     results: Vec<Vec<PixelResult>>,
     s: &RenderSettings,
-    scene: &Scene,
 ) -> RenderOutput {
-    let (w, h) = (s.width, s.height);
+    let (w, h) = (rect.width(), rect.height());
     let mut image = Image::new(w, h);
     let mut samples = vec![0u32; (w * h) as usize];
     let mut nonfinite = 0u64;
-    for (&(tx, ty), tile) in tiles.iter().zip(results) {
-        let mut it = tile.into_iter();
-        for y in ty * TILE..((ty + 1) * TILE).min(h) {
-            for x in tx * TILE..((tx + 1) * TILE).min(w) {
-                let p = it.next().expect("tile pixel count");
-                let i = (y * w + x) as usize;
-                image.pixels[i] = p.value;
-                samples[i] = p.samples;
-                nonfinite += p.nonfinite as u64;
-            }
+    for (&tile, pixels) in tiles.iter().zip(results) {
+        for ((x, y), p) in tile_pixels(rect, tile).zip(pixels) {
+            let i = ((y - rect.y0) * w + (x - rect.x0)) as usize;
+            image.pixels[i] = p.value;
+            samples[i] = p.samples;
+            nonfinite += p.nonfinite as u64;
         }
     }
     let mut cost_scale = None;
@@ -249,7 +257,6 @@ fn assemble(
         samples,
         nonfinite_samples: nonfinite,
         cost_scale,
-        warnings: render_warnings(scene, s),
     }
 }
 
@@ -263,9 +270,9 @@ fn percentile(v: &[f32], q: f32) -> f32 {
 }
 
 /// Cases where the chosen estimator cannot converge to the right image, said out loud.
-pub fn render_warnings(scene: &Scene, s: &RenderSettings) -> Vec<String> {
+fn render_warnings(scene: &Scene, s: &RenderSettings) -> Vec<String> {
     let mut w = Vec::new();
-    let blind = match s.strategy {
+    let blind = match s.strategy_for(scene) {
         DirectStrategy::Hemisphere => Some("hemisphere sampling (-H)"),
         DirectStrategy::Bsdf => Some("BSDF sampling alone"),
         DirectStrategy::Light | DirectStrategy::Mis => None,
@@ -281,10 +288,7 @@ pub fn render_warnings(scene: &Scene, s: &RenderSettings) -> Vec<String> {
     }
     if s.shading == Shading::Radiance
         && scene.lights.is_empty()
-        && !scene
-            .materials
-            .iter()
-            .any(|m| matches!(m, crate::materials::Material::Emission { .. }))
+        && !scene.materials.iter().any(|m| m.flags().emissive)
     {
         w.push("the scene has no lights and no emissive surfaces: the image will be black".into());
     }

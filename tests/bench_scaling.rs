@@ -17,7 +17,11 @@ fn tiny_scaling_run_reports_every_row_and_writes_files() {
     let mut lines = 0;
     let report = run_scaling(&opts, |_| lines += 1).unwrap();
 
-    let backends = if cfg!(feature = "embree") { 5 } else { 2 };
+    let backends = if cfg!(any(feature = "embree", feature = "embree4")) {
+        5
+    } else {
+        2
+    };
     assert_eq!(report.rows.len(), 2 * 2 * backends);
     assert_eq!(lines, report.rows.len());
     for mesh in ScalingMesh::ALL {

@@ -135,7 +135,7 @@ fn malformed_scene_is_an_error_naming_the_file() {
 
 #[test]
 fn embree_request_without_feature_says_how_to_get_it() {
-    if cfg!(feature = "embree") {
+    if cfg!(any(feature = "embree", feature = "embree4")) {
         return;
     }
     let st = ember()

@@ -10,7 +10,7 @@
 //! bounded; every other disagreement fails the test and is printed with the full ray,
 //! float bits included, so it can be replayed. `EMBER_CROSSCHECK_ONLY=<scene>` runs
 //! one scene, `EMBER_SHOW_EXCUSED=1` prints excused rays too.
-#![cfg(feature = "embree")]
+#![cfg(any(feature = "embree", feature = "embree4"))]
 
 use ember::accel::bvh::Bvh;
 use ember::accel::embree::EmbreeAccel;
@@ -662,4 +662,41 @@ fn embree_matches_native_bvh_on_course_and_generated_scenes() {
         "disagreements (rays printed above):\n{}",
         failures.join("\n")
     );
+}
+
+/// Camera rays of every course scene, traced by `rtcIntersect4/8/16` packets over
+/// compact pixel tiles, hit what single rays hit: triangles bit for bit, spheres the
+/// same sphere at a t within 1e-6 (Embree's packet sphere kernels round differently).
+#[test]
+fn camera_packets_hit_what_single_rays_hit_on_course_scenes() {
+    use ember::accel::embree::PacketWidth;
+    use ember::bench::embree_modes::tiled_camera_rays;
+    for path in course_scenes() {
+        let scene = ember::scene::collada::load(&path).expect("course scene loads");
+        let embree = EmbreeAccel::build(&scene, EmbreeQuality::Medium).expect("Embree builds");
+        let rays = tiled_camera_rays(&scene, 160, 120);
+        let single: Vec<_> = rays.iter().map(|r| embree.intersect(r)).collect();
+        let ntri = scene.triangles.len() as u32;
+        for width in PacketWidth::ALL {
+            let mut packed = vec![None; rays.len()];
+            embree.intersect_packets(width, &rays, &mut packed);
+            let differ = (0..rays.len())
+                .filter(|&i| match (packed[i], single[i]) {
+                    (Some(p), Some(s)) if p.prim >= ntri => {
+                        p.prim != s.prim || (p.t - s.t).abs() > 1e-6 * s.t
+                    }
+                    (p, s) => p != s,
+                })
+                .map(|i| describe(&rays[i], "packet vs single", &packed[i], &single[i]))
+                .collect::<Vec<_>>();
+            assert!(
+                differ.is_empty(),
+                "{} {width:?}: {} of {} rays differ, e.g. {}",
+                path.display(),
+                differ.len(),
+                rays.len(),
+                differ[0]
+            );
+        }
+    }
 }

@@ -1,7 +1,7 @@
 //! Whole-image agreement of the native BVH and Embree: the same render, same seed,
 //! through both backends. Paths diverge only where the backends legitimately differ
 //! (edge hits, ties), so the images agree to far below their own noise.
-#![cfg(feature = "embree")]
+#![cfg(any(feature = "embree", feature = "embree4"))]
 
 mod common;
 
@@ -13,16 +13,19 @@ use ember::render::RenderSettings;
 fn agree(scene_rel: &str) {
     let scene = load(scene_rel);
     let s = RenderSettings {
-        width: 160,
-        height: 120,
         spp: 32,
         max_depth: 5,
-        strategy: DirectStrategy::Mis,
+        strategy: Some(DirectStrategy::Mis),
         seed: 17,
         ..Default::default()
     };
-    let native = render_halves(&scene, &s, AccelKind::Native(BvhBuilder::Sah));
-    let embree = render_halves(&scene, &s, AccelKind::Embree(EmbreeQuality::Medium));
+    let native = render_halves(&scene, (160, 120), &s, AccelKind::Native(BvhBuilder::Sah));
+    let embree = render_halves(
+        &scene,
+        (160, 120),
+        &s,
+        AccelKind::Embree(EmbreeQuality::Medium),
+    );
     let (mn, me) = (native.avg.mean(), embree.avg.mean());
     // Means: within 3 standard errors of one render's mean (the renders share seeds, so
     // they are strongly correlated and usually much closer than that).

@@ -5,7 +5,7 @@ mod common;
 
 use common::mean_and_stderr;
 use ember::geometry::Frame;
-use ember::lights::Light;
+use ember::lights::{AreaLight, Light};
 use ember::sampling::{uniform_hemisphere, uniform_hemisphere_pdf, uniform_sphere, Sampler};
 use ember::{Color, Vec3};
 use std::f64::consts::PI;
@@ -13,31 +13,29 @@ use std::f64::consts::PI;
 /// The Cornell-box light: 0.6 × 0.8 at height 1.49, facing down, L = 10.
 fn cornell_light() -> Light {
     let (ex, ey) = (Vec3::new(0.6, 0.0, 0.0), Vec3::new(0.0, 0.0, 0.8));
-    Light::Area {
+    Light::Area(AreaLight {
         centre: Vec3::new(0.0, 1.49, 0.0),
         ex,
         ey,
         normal: Vec3::NEG_Y,
-        area: ex.cross(ey).length(),
         radiance: Color::splat(10.0),
-    }
+    })
 }
 
 /// A sheared, tilted parallelogram light (emitting along ex × ey).
 fn sheared_light() -> Light {
     let (ex, ey) = (Vec3::new(0.5, 0.1, 0.0), Vec3::new(0.2, 0.05, 0.7));
-    Light::Area {
+    Light::Area(AreaLight {
         centre: Vec3::new(0.3, 2.0, -0.2),
         ex,
         ey,
         normal: ex.cross(ey).normalize(),
-        area: ex.cross(ey).length(),
         radiance: Color::new(1.0, 2.0, 3.0),
-    }
+    })
 }
 
 fn corners(light: &Light) -> [Vec3; 4] {
-    let Light::Area { centre, ex, ey, .. } = *light else {
+    let Light::Area(AreaLight { centre, ex, ey, .. }) = *light else {
         panic!("not an area light")
     };
     let (hx, hy) = (0.5 * ex, 0.5 * ey);
@@ -111,7 +109,7 @@ fn area_light_irradiance_matches_lambert_formula() {
 
 fn light_radiance_x(light: &Light) -> f64 {
     match *light {
-        Light::Area { radiance, .. } => radiance.x as f64,
+        Light::Area(AreaLight { radiance, .. }) => radiance.x as f64,
         _ => 0.0,
     }
 }

@@ -3,7 +3,7 @@
 
 use ember::camera::Camera;
 use ember::info::scene_info;
-use ember::lights::Light;
+use ember::lights::{AreaLight, Light};
 use ember::materials::Material;
 use ember::scene::collada::load;
 use ember::scene::{Scene, NO_LIGHT};
@@ -140,19 +140,16 @@ fn check_invariants(name: &str, s: &Scene) {
 }
 
 /// Each area light owns exactly two triangles whose winding normal is the
-/// emitting normal, whose material emits the light's radiance, and which
+/// emitting normal, which emit the light's radiance from the front, and which
 /// cover the light's rectangle.
 fn check_area_light_quads(name: &str, s: &Scene) {
     for (li, light) in s.lights.iter().enumerate() {
         let tris: Vec<usize> = (0..s.triangles.len())
             .filter(|&i| s.triangles[i].light == li as u32)
             .collect();
-        let Light::Area {
-            normal,
-            area,
-            radiance,
-            ..
-        } = *light
+        let Light::Area(AreaLight {
+            normal, radiance, ..
+        }) = *light
         else {
             assert!(
                 tris.is_empty(),
@@ -160,6 +157,7 @@ fn check_area_light_quads(name: &str, s: &Scene) {
             );
             continue;
         };
+        let area = light.as_area().expect("area light").area();
         assert_eq!(tris.len(), 2, "{name}: area light {li}");
         let mut total = 0.0;
         for &i in &tris {
@@ -173,8 +171,20 @@ fn check_area_light_quads(name: &str, s: &Scene) {
             assert_eq!(s.triangles[i].n, None);
             assert_eq!(
                 s.materials[s.triangles[i].material as usize],
-                Material::Emission { radiance }
+                Material::Black,
+                "{name}: the light, not the material, emits"
             );
+            let si = s.interaction(
+                &ember::geometry::Ray::new(p0 + normal, -normal),
+                &ember::scene::PrimHit {
+                    t: 1.0,
+                    prim: i as u32,
+                    b1: 0.25,
+                    b2: 0.25,
+                },
+            );
+            assert_eq!(s.emission(&si, normal), radiance, "{name}: front");
+            assert_eq!(s.emission(&si, -normal), ember::Color::ZERO, "{name}: back");
         }
         assert!(
             (total - area).abs() < 1e-5 * area.max(1.0),
@@ -198,7 +208,7 @@ fn check_directory(dir: &str) {
         let area_lights = s
             .lights
             .iter()
-            .filter(|l| matches!(l, Light::Area { .. }))
+            .filter(|l| matches!(l, Light::Area(AreaLight { .. })))
             .count();
         let got = Expected {
             mesh_triangles: s.triangles.len() - 2 * area_lights,
@@ -225,16 +235,16 @@ fn cbspheres_has_two_spheres_one_area_light_and_a_ten_triangle_box() {
     assert_eq!(s.spheres.len(), 2);
     assert_eq!(s.triangles.len(), 10 + 2);
     assert_eq!(s.lights.len(), 1);
-    let Light::Area {
+    let Light::Area(AreaLight {
         centre,
         normal,
-        area,
         radiance,
         ..
-    } = s.lights[0]
+    }) = s.lights[0]
     else {
         panic!("expected an area light, got {:?}", s.lights[0]);
     };
+    let area = s.lights[0].as_area().expect("area light").area();
     // Spec §5: 0.6 × 0.8 at height 1.49, facing down, c = 10.
     assert!((centre - Vec3::new(0.0, 1.49, 0.0)).length() < 1e-5);
     assert!((normal - Vec3::NEG_Y).length() < 1e-6);

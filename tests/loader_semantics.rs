@@ -5,7 +5,7 @@
 mod common;
 
 use common::{geometry_instance, parse_ok, quad_instance, scene_doc};
-use ember::lights::Light;
+use ember::lights::{AreaLight, Light};
 use ember::materials::Material;
 use ember::scene::Scene;
 use ember::Vec3;
@@ -194,17 +194,17 @@ fn area_light_geometry_and_bounds() {
         quad_instance()
     );
     let s = parse_ok(&scene_doc("Y_UP", PANEL, &nodes));
-    let Light::Area {
+    let Light::Area(AreaLight {
         centre,
         ex,
         ey,
         normal,
-        area,
         radiance,
-    } = s.lights[0]
+    }) = s.lights[0]
     else {
         panic!("{:?}", s.lights[0]);
     };
+    let area = s.lights[0].as_area().expect("area light").area();
     assert_eq!(
         radiance,
         Vec3::new(4.0, 5.0, 6.0),

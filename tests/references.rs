@@ -121,20 +121,23 @@ fn check(scene_rel: &str, file: &str, m: u32, spp: u32, mean_of: MeanOf) {
     let r = reference(file);
     let scene = load(scene_rel);
     let settings = RenderSettings {
-        width: 160,
-        height: 120,
         spp,
         max_depth: m,
-        strategy: if m > 1 {
+        strategy: Some(if m > 1 {
             DirectStrategy::Mis
         } else {
             DirectStrategy::Light
-        },
+        }),
         roulette: Roulette::default(),
         seed: 1234,
         ..Default::default()
     };
-    let h = render_halves(&scene, &settings, AccelKind::Native(BvhBuilder::Sah));
+    let h = render_halves(
+        &scene,
+        (160, 120),
+        &settings,
+        AccelKind::Native(BvhBuilder::Sah),
+    );
     assert!(h.avg.all_finite());
     assert_eq!((r.image.width, r.image.height), (160, 120));
 
@@ -279,15 +282,13 @@ fn cbempty_m5_high_spp_probe() {
     let r = reference("CBempty_m5.exr");
     let scene = load("scenes/cs184/sky/CBempty.dae");
     let s = RenderSettings {
-        width: 160,
-        height: 120,
         spp,
         max_depth: 5,
-        strategy: DirectStrategy::Mis,
+        strategy: Some(DirectStrategy::Mis),
         seed: 99,
         ..Default::default()
     };
-    let h = render_halves(&scene, &s, AccelKind::Native(BvhBuilder::Sah));
+    let h = render_halves(&scene, (160, 120), &s, AccelKind::Native(BvhBuilder::Sah));
     let (ours, n) = masked_mean(&h.avg, &r.image, 20.0);
     let (want, _) = masked_mean(&r.image, &r.image, 20.0);
     eprintln!(

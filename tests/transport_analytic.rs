@@ -5,9 +5,9 @@ use ember::accel::{self, AccelKind, BvhBuilder};
 use ember::camera::Camera;
 use ember::geometry::{Aabb, Ray};
 use ember::integrators::{DirectStrategy, PathIntegrator, PathSettings, Roulette};
-use ember::lights::Light;
+use ember::lights::{AreaLight, Light};
 use ember::materials::Material;
-use ember::render::{render, RenderSettings};
+use ember::render::{RenderJob, RenderSettings};
 use ember::sampling::Sampler;
 use ember::scene::{Scene, Sphere, Triangle, NO_LIGHT};
 use ember::{Color, Vec3};
@@ -51,19 +51,17 @@ fn furnace_image(
     spp: u32,
 ) -> ember::film::Image {
     let (scene, cam) = furnace(a, 1.0);
-    let accel = accel::build(&scene, AccelKind::Native(BvhBuilder::Sah)).unwrap();
+    let job = RenderJob::with_camera(scene, AccelKind::Native(BvhBuilder::Sah), cam).unwrap();
     let s = RenderSettings {
-        width: 16,
-        height: 16,
         spp,
         max_depth: m,
         accumulate,
-        strategy,
+        strategy: Some(strategy),
         roulette,
         seed: 7,
         ..Default::default()
     };
-    let out = render(&scene, accel.as_ref(), &cam, &s, &|_| {});
+    let out = job.render(&s);
     assert_eq!(out.nonfinite_samples, 0);
     out.image
 }
@@ -206,14 +204,13 @@ fn lit_floor(albedo: f32, le: f32) -> (Scene, [Vec3; 4]) {
                 radiance: Color::splat(le),
             },
         ],
-        lights: vec![Light::Area {
+        lights: vec![Light::Area(AreaLight {
             centre: c,
             ex,
             ey,
             normal,
-            area: 0.8,
             radiance: Color::splat(le),
-        }],
+        })],
         bounds: Aabb::new(Vec3::new(-f, 0.0, -f), Vec3::new(f, 0.0, f)),
         ..Default::default()
     };
@@ -320,14 +317,13 @@ fn tilted_shading_normals_do_not_leak_light() {
                 radiance: Color::splat(50.0),
             },
         ],
-        lights: vec![Light::Area {
+        lights: vec![Light::Area(AreaLight {
             centre: c,
             ex,
             ey,
             normal: Vec3::Y,
-            area: 1.0,
             radiance: Color::splat(50.0),
-        }],
+        })],
         bounds: Aabb::new(Vec3::new(-f, -0.3, -f), Vec3::new(f, 0.0, f)),
         ..Default::default()
     };
@@ -336,12 +332,12 @@ fn tilted_shading_normals_do_not_leak_light() {
         (p1 - p0).cross(p2 - p0).y > 0.0,
         "the light faces up, toward the floor's underside"
     );
-    let accel = accel::build(&scene, AccelKind::Native(BvhBuilder::Sah)).unwrap();
     let mut cam = Camera::new(&scene.camera, &scene.bounds, 24, 24);
     cam.eye = Vec3::new(0.1, 1.0, 0.05);
     cam.forward = Vec3::NEG_Y;
     cam.up = Vec3::Z;
     cam.right = cam.forward.cross(cam.up);
+    let job = RenderJob::with_camera(scene, AccelKind::Native(BvhBuilder::Sah), cam).unwrap();
     for strategy in [
         DirectStrategy::Light,
         DirectStrategy::Mis,
@@ -350,15 +346,13 @@ fn tilted_shading_normals_do_not_leak_light() {
     ] {
         for m in [1, 5] {
             let s = RenderSettings {
-                width: 24,
-                height: 24,
                 spp: 16,
                 max_depth: m,
-                strategy,
+                strategy: Some(strategy),
                 roulette: Roulette::Off,
                 ..Default::default()
             };
-            let out = render(&scene, accel.as_ref(), &cam, &s, &|_| {});
+            let out = job.render(&s);
             let max = out
                 .image
                 .pixels

@@ -13,8 +13,6 @@ use std::path::Path;
 fn hemisphere_and_light_sampling_agree_on_cbspheres_lambertian() {
     let scene = load("scenes/cs184/sky/CBspheres_lambertian.dae");
     let base = RenderSettings {
-        width: 80,
-        height: 60,
         max_depth: 1,
         light_samples: 1,
         seed: 3,
@@ -23,10 +21,10 @@ fn hemisphere_and_light_sampling_agree_on_cbspheres_lambertian() {
     let run = |spp, strategy| {
         let s = RenderSettings {
             spp,
-            strategy,
+            strategy: Some(strategy),
             ..base.clone()
         };
-        render_halves(&scene, &s, AccelKind::Native(BvhBuilder::Sah))
+        render_halves(&scene, (80, 60), &s, AccelKind::Native(BvhBuilder::Sah))
     };
     let light = run(32, DirectStrategy::Light);
     let hemi = run(256, DirectStrategy::Hemisphere);
@@ -69,14 +67,12 @@ fn no_nan_or_inf_in_any_cs184_scene_at_m5() {
     for p in scenes {
         let scene = ember::scene::collada::load(&p).unwrap();
         let s = RenderSettings {
-            width: 40,
-            height: 30,
             spp: 4,
             max_depth: 5,
-            strategy: DirectStrategy::Mis,
+            strategy: Some(DirectStrategy::Mis),
             ..Default::default()
         };
-        let out = render_scene(&scene, &s);
+        let out = render_scene(&scene, (40, 30), &s);
         assert_eq!(out.nonfinite_samples, 0, "{}", p.display());
         assert!(out.image.all_finite(), "{}", p.display());
     }
@@ -91,7 +87,7 @@ fn render_threads(
         .num_threads(threads)
         .build()
         .unwrap();
-    pool.install(|| render_scene(scene, s).image)
+    pool.install(|| render_scene(scene, (48, 36), s).image)
 }
 
 #[test]
@@ -99,17 +95,13 @@ fn renders_are_identical_for_one_and_two_threads() {
     let scene = load("scenes/cs184/sky/CBspheres.dae");
     for s in [
         RenderSettings {
-            width: 48,
-            height: 36,
             spp: 8,
             max_depth: 5,
-            strategy: DirectStrategy::Mis,
+            strategy: Some(DirectStrategy::Mis),
             seed: 5,
             ..Default::default()
         },
         RenderSettings {
-            width: 48,
-            height: 36,
             spp: 64,
             max_depth: 2,
             adaptive: Some(Adaptive::new(8, 0.05)),
@@ -117,8 +109,6 @@ fn renders_are_identical_for_one_and_two_threads() {
             ..Default::default()
         },
         RenderSettings {
-            width: 48,
-            height: 36,
             spp: 2,
             shading: Shading::Normals,
             ..Default::default()
@@ -132,15 +122,13 @@ fn renders_are_identical_for_one_and_two_threads() {
 fn adaptive_sampling_spends_more_samples_in_penumbrae_than_on_walls() {
     let scene = load("scenes/cs184/sky/CBspheres_lambertian.dae");
     let s = RenderSettings {
-        width: 64,
-        height: 48,
         spp: 512,
         max_depth: 1,
         adaptive: Some(Adaptive::new(32, 0.05)),
         seed: 2,
         ..Default::default()
     };
-    let out = render_scene(&scene, &s);
+    let out = render_scene(&scene, (64, 48), &s);
     let max = *out.samples.iter().max().unwrap();
     let min = *out.samples.iter().min().unwrap();
     assert!(min >= 32 && max <= 512);
@@ -164,11 +152,9 @@ fn adaptive_sampling_spends_more_samples_in_penumbrae_than_on_walls() {
 fn flush_to_zero_does_not_change_native_images() {
     let scene = load("scenes/cs184/sky/CBbunny.dae");
     let s = RenderSettings {
-        width: 40,
-        height: 30,
         spp: 4,
         max_depth: 5,
-        strategy: DirectStrategy::Mis,
+        strategy: Some(DirectStrategy::Mis),
         seed: 1,
         ..Default::default()
     };
@@ -181,7 +167,7 @@ fn flush_to_zero_does_not_change_native_images() {
         .start_handler(|_| ember::accel::set_flush_denormals())
         .build()
         .unwrap();
-    let a = plain.install(|| render_scene(&scene, &s).image);
-    let b = ftz.install(|| render_scene(&scene, &s).image);
+    let a = plain.install(|| render_scene(&scene, (40, 30), &s).image);
+    let b = ftz.install(|| render_scene(&scene, (40, 30), &s).image);
     assert_eq!(a, b);
 }

@@ -3,7 +3,7 @@
 
 pub mod brute;
 pub mod bvh;
-#[cfg(feature = "embree")]
+#[cfg(any(feature = "embree", feature = "embree4"))]
 pub mod embree;
 mod prims;
 
@@ -38,6 +38,11 @@ pub trait Accel: Send + Sync {
 
     /// Bytes held by the structure.
     fn memory_bytes(&self) -> usize;
+
+    /// Shape of the tree, for backends that expose it (the native BVH).
+    fn bvh_stats(&self) -> Option<BvhStats> {
+        None
+    }
 }
 
 /// How the native BVH is built.
@@ -77,22 +82,72 @@ pub enum AccelError {
 pub fn build(scene: &Scene, kind: AccelKind) -> Result<Box<dyn Accel>, AccelError> {
     match kind {
         AccelKind::Native(b) => Ok(Box::new(bvh::Bvh::build(scene, b))),
-        #[cfg(feature = "embree")]
+        #[cfg(any(feature = "embree", feature = "embree4"))]
         AccelKind::Embree(q) => Ok(Box::new(embree::EmbreeAccel::build(scene, q)?)),
-        #[cfg(not(feature = "embree"))]
+        #[cfg(not(any(feature = "embree", feature = "embree4")))]
         AccelKind::Embree(_) => Err(AccelError::EmbreeUnavailable),
+    }
+}
+
+/// `--accel auto`: scenes with at least this many primitives go to Embree (when
+/// compiled in), smaller ones to the native BVH. Measured with `ember bench accel`
+/// (incoherent and shadow rays, 1 and 2 threads): the native wide BVH is ahead on
+/// CBspheres_lambertian (14 primitives) and CBbunny (28.6k) and behind on the
+/// displaced spheres of 249k and 998k triangles; the crossover lies between, and
+/// this is its geometric middle until a finer sweep pins it down.
+pub const AUTO_EMBREE_MIN_PRIMS: usize = 85_000;
+
+/// What `--accel auto` picks for a scene, and why (for `ember info`).
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct AutoChoice {
+    pub kind: AccelKind,
+    pub reason: String,
+}
+
+/// Picks the backend for `scene` from its primitive count against the measured
+/// crossover [`AUTO_EMBREE_MIN_PRIMS`].
+pub fn choose_auto(scene: &Scene) -> AutoChoice {
+    choose_auto_for(
+        scene.num_prims(),
+        cfg!(any(feature = "embree", feature = "embree4")),
+    )
+}
+
+fn choose_auto_for(prims: usize, embree_available: bool) -> AutoChoice {
+    let native = AccelKind::Native(BvhBuilder::Sah);
+    if !embree_available {
+        return AutoChoice {
+            kind: native,
+            reason: "native BVH: this build has no Embree".into(),
+        };
+    }
+    if prims >= AUTO_EMBREE_MIN_PRIMS {
+        AutoChoice {
+            kind: AccelKind::Embree(EmbreeQuality::default()),
+            reason: format!(
+                "Embree: {prims} primitives, at or above the measured crossover of {AUTO_EMBREE_MIN_PRIMS}"
+            ),
+        }
+    } else {
+        AutoChoice {
+            kind: native,
+            reason: format!(
+                "native BVH (SAH): {prims} primitives, below the measured crossover of \
+                 {AUTO_EMBREE_MIN_PRIMS} where Embree starts to trace faster"
+            ),
+        }
     }
 }
 
 /// The backends this build can use, for `ember info`.
 pub fn backends_info() -> String {
     let native = "native BVH (midpoint, binned SAH)";
-    #[cfg(feature = "embree")]
+    #[cfg(any(feature = "embree", feature = "embree4"))]
     let embree = match embree::info() {
         Ok(info) => info.to_string(),
         Err(e) => format!("Embree compiled in but unusable: {e}"),
     };
-    #[cfg(not(feature = "embree"))]
+    #[cfg(not(any(feature = "embree", feature = "embree4")))]
     let embree = "Embree not compiled in (rebuild with --features embree)".to_string();
     format!("{native}; {embree}")
 }
@@ -115,5 +170,21 @@ pub fn set_flush_denormals() {
             csr |= FTZ | DAZ;
             std::arch::asm!("ldmxcsr [{}]", in(reg) &csr, options(nostack, preserves_flags));
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn auto_picks_by_primitive_count() {
+        let small = choose_auto_for(14, true);
+        assert_eq!(small.kind, AccelKind::Native(BvhBuilder::Sah));
+        assert!(small.reason.contains("14 primitives"), "{}", small.reason);
+        let big = choose_auto_for(AUTO_EMBREE_MIN_PRIMS, true);
+        assert_eq!(big.kind, AccelKind::Embree(EmbreeQuality::Medium));
+        let without = choose_auto_for(10 * AUTO_EMBREE_MIN_PRIMS, false);
+        assert_eq!(without.kind, AccelKind::Native(BvhBuilder::Sah));
     }
 }

@@ -3,7 +3,7 @@
 //! triangle corners copied next to each other so tests never chase scene indices.
 
 use crate::geometry::sphere::{intersect_sphere, sphere_is_hittable};
-use crate::geometry::triangle::{triangle_is_hittable, PackedTriangle, TriangleRay};
+use crate::geometry::triangle::{triangle_is_hittable, PackedTriangle, Triangle4, TriangleRay};
 use crate::geometry::{Aabb, Ray};
 use crate::scene::{PrimHit, PrimId, Scene};
 use glam::Vec3;
@@ -75,44 +75,6 @@ impl PrimStore {
         self.intersect_slot(&self.tris[i], self.ids[i], r, t_max)
     }
 
-    /// Closest hit with `t ≤ t_max` among `count` slots from `first` (a leaf).
-    #[inline(always)]
-    pub fn intersect_closest(
-        &self,
-        first: usize,
-        count: usize,
-        r: &PrimRay,
-        mut t_max: f32,
-    ) -> Option<PrimHit> {
-        let mut best = None;
-        // One bounds check per leaf instead of two per primitive.
-        let ids = &self.ids[first..first + count];
-        let tris = &self.tris[first..first + count];
-        for (tri, &prim) in tris.iter().zip(ids) {
-            if let Some(hit) = self.intersect_slot(tri, prim, r, t_max) {
-                t_max = hit.t;
-                best = Some(hit);
-            }
-        }
-        best
-    }
-
-    /// Some hit with `t ≤ t_max` among `count` slots from `first` (a leaf).
-    #[inline(always)]
-    pub fn intersect_any(
-        &self,
-        first: usize,
-        count: usize,
-        r: &PrimRay,
-        t_max: f32,
-    ) -> Option<PrimHit> {
-        let ids = &self.ids[first..first + count];
-        let tris = &self.tris[first..first + count];
-        tris.iter()
-            .zip(ids)
-            .find_map(|(tri, &prim)| self.intersect_slot(tri, prim, r, t_max))
-    }
-
     #[inline(always)]
     fn intersect_slot(
         &self,
@@ -145,6 +107,140 @@ impl PrimStore {
             b1: 0.0,
             b2: 0.0,
         })
+    }
+}
+
+/// A BVH leaf: up to four primitives, the triangles among them stored as one
+/// [`Triangle4`] and tested together; sphere lanes (rare) are tested one by one.
+#[derive(Clone, Copy, Debug, PartialEq)]
+#[repr(C, align(16))]
+pub(crate) struct TriBlock {
+    tris: Triangle4,
+    ids: [PrimId; 4],
+    tri_lanes: u32,
+    sphere_lanes: u32,
+}
+
+/// The spheres a leaf's sphere lanes refer to (ids `≥ num_triangles`).
+#[derive(Clone, Debug, Default, PartialEq)]
+pub(crate) struct SphereStore {
+    spheres: Vec<(Vec3, f32)>,
+    num_triangles: u32,
+}
+
+impl SphereStore {
+    pub fn new(scene: &Scene) -> Self {
+        SphereStore {
+            spheres: scene.spheres.iter().map(|s| (s.centre, s.radius)).collect(),
+            num_triangles: scene.triangles.len() as u32,
+        }
+    }
+
+    pub fn memory_bytes(&self) -> usize {
+        self.spheres.capacity() * std::mem::size_of::<(Vec3, f32)>()
+    }
+
+    #[inline(never)]
+    fn intersect(&self, prim: PrimId, ray: &Ray, t_max: f32) -> Option<PrimHit> {
+        let (centre, radius) = self.spheres[(prim - self.num_triangles) as usize];
+        let ray = Ray { t_max, ..*ray };
+        let t = intersect_sphere(&ray, centre, radius)?;
+        Some(PrimHit {
+            t,
+            prim,
+            b1: 0.0,
+            b2: 0.0,
+        })
+    }
+}
+
+impl TriBlock {
+    /// The primitives `ids` (at most four, hittable) of `scene`.
+    pub fn new(scene: &Scene, ids: &[PrimId]) -> Self {
+        let ntri = scene.triangles.len();
+        let mut corners = [[Vec3::ZERO; 3]; 4];
+        let mut block_ids = [0; 4];
+        let (mut tri_lanes, mut sphere_lanes) = (0, 0);
+        for (lane, &id) in ids.iter().enumerate() {
+            block_ids[lane] = id;
+            if (id as usize) < ntri {
+                corners[lane] = scene.triangle_positions(id as usize);
+                tri_lanes |= 1 << lane;
+            } else {
+                sphere_lanes |= 1 << lane;
+            }
+        }
+        TriBlock {
+            tris: Triangle4::new(&corners),
+            ids: block_ids,
+            tri_lanes,
+            sphere_lanes,
+        }
+    }
+
+    /// Closest hit with `t ≤ t_max`. Lanes are taken in order with `≤`, as a
+    /// loop of scalar tests would, so ties go to the later lane.
+    #[inline(always)]
+    pub fn intersect_closest(
+        &self,
+        spheres: &SphereStore,
+        r: &PrimRay,
+        mut t_max: f32,
+    ) -> Option<PrimHit> {
+        let h = self.tris.intersect(&r.tri, t_max, self.tri_lanes);
+        let mut best = None;
+        if self.sphere_lanes == 0 {
+            let mut mask = h.mask;
+            while mask != 0 {
+                let lane = mask.trailing_zeros() as usize;
+                mask &= mask - 1;
+                if h.t[lane] <= t_max {
+                    t_max = h.t[lane];
+                    best = Some(self.hit(&h, lane));
+                }
+            }
+            return best;
+        }
+        for lane in 0..4 {
+            if h.mask & 1 << lane != 0 && h.t[lane] <= t_max {
+                t_max = h.t[lane];
+                best = Some(self.hit(&h, lane));
+            } else if self.sphere_lanes & 1 << lane != 0 {
+                if let Some(hit) = spheres.intersect(self.ids[lane], r.ray, t_max) {
+                    t_max = hit.t;
+                    best = Some(hit);
+                }
+            }
+        }
+        best
+    }
+
+    /// Some hit with `t ≤ t_max`.
+    #[inline(always)]
+    pub fn intersect_any(&self, spheres: &SphereStore, r: &PrimRay, t_max: f32) -> Option<PrimHit> {
+        let h = self.tris.intersect(&r.tri, t_max, self.tri_lanes);
+        if h.mask != 0 {
+            return Some(self.hit(&h, h.mask.trailing_zeros() as usize));
+        }
+        let mut lanes = self.sphere_lanes;
+        while lanes != 0 {
+            let lane = lanes.trailing_zeros() as usize;
+            lanes &= lanes - 1;
+            if let Some(hit) = spheres.intersect(self.ids[lane], r.ray, t_max) {
+                return Some(hit);
+            }
+        }
+        None
+    }
+
+    #[inline(always)]
+    fn hit(&self, h: &crate::geometry::triangle::Hits4, lane: usize) -> PrimHit {
+        PrimHit {
+            t: h.t[lane],
+            prim: self.ids[lane],
+            b1: h.b1[lane],
+            b2: h.b2[lane],
+        }
     }
 }
 

@@ -104,7 +104,7 @@ fn backends(opts: &AccelBenchOptions) -> Vec<Backend> {
         Backend::Native(BvhBuilder::Midpoint),
         Backend::Native(BvhBuilder::Sah),
     ];
-    if cfg!(feature = "embree") {
+    if cfg!(any(feature = "embree", feature = "embree4")) {
         list.push(Backend::Embree(opts.embree_quality));
     }
     list
@@ -153,8 +153,9 @@ impl AccelBenchReport {
     pub fn to_markdown(&self) -> String {
         let mut s = String::from(
             "| scene | prims | backend | threads | build (ms) | memory (MB) | camera (Mrays/s) \
-             | incoherent (Mrays/s) | shadow (Mrays/s) | native/Embree (cam / inc / shadow) |\n\
-             |---|---:|---|---:|---:|---:|---:|---:|---:|---|\n",
+             | incoherent (Mrays/s) | shadow (Mrays/s) | nodes | leaves | SAH cost \
+             | native/Embree (cam / inc / shadow) |\n\
+             |---|---:|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---|\n",
         );
         for r in &self.rows {
             let ratio = self.embree_row(r).filter(|_| !r.is_embree).map_or_else(
@@ -170,12 +171,13 @@ impl AccelBenchReport {
             );
             let _ = writeln!(
                 s,
-                "| {} | {} | {} | {} {} | {} |",
+                "| {} | {} | {} | {} {} {} | {} |",
                 r.scene,
                 r.prims,
                 r.backend,
                 r.threads,
                 r.measured.markdown_cells(),
+                r.measured.tree_cells(),
                 ratio
             );
         }
@@ -207,6 +209,7 @@ mod tests {
                 camera_mrays: mrays,
                 incoherent_mrays: mrays,
                 shadow_mrays: mrays,
+                tree: None,
             },
         };
         let report = AccelBenchReport {

@@ -8,15 +8,14 @@
 //! two halves so that its own noise variance can be subtracted from every MSE.
 
 use super::chart::{write_chart, ChartSpec, Series};
-use crate::accel::{self, AccelKind, BvhBuilder, EmbreeQuality};
-use crate::camera::Camera;
+use super::table::Table;
+use crate::accel::{AccelKind, BvhBuilder, EmbreeQuality};
 use crate::film::Image;
 use crate::image_io::{read_image, write_image};
 use crate::integrators::{DirectStrategy, Roulette};
-use crate::render::{render, Adaptive, RenderSettings};
+use crate::render::{average, Adaptive, RenderJob, RenderSettings};
 use crate::scene::{collada, Scene};
 use anyhow::{bail, Context, Result};
-use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
@@ -73,7 +72,7 @@ pub struct ConvergeReport {
 /// The methods compared for depth `m`: the direct-lighting estimators at `m = 1`,
 /// MIS with and without roulette and at several `-l` beyond; adaptive sampling and
 /// (optionally) Embree with the scene's default (`DirectStrategy::auto_for`).
-pub fn methods(base: &RenderSettings, scene: &Scene, compare_backends: bool) -> Vec<Method> {
+pub fn methods(base: &RenderSettings, compare_backends: bool) -> Vec<Method> {
     let native = AccelKind::Native(BvhBuilder::Sah);
     let m = |name: &str, s: RenderSettings| Method {
         name: name.to_string(),
@@ -81,26 +80,26 @@ pub fn methods(base: &RenderSettings, scene: &Scene, compare_backends: bool) -> 
         accel: native,
     };
     let mut v = Vec::new();
-    let default_strategy = DirectStrategy::auto_for(scene);
+    let default_strategy = None;
     if base.max_depth <= 1 {
         v.push(m(
             "hemisphere",
             RenderSettings {
-                strategy: DirectStrategy::Hemisphere,
+                strategy: Some(DirectStrategy::Hemisphere),
                 ..base.clone()
             },
         ));
         v.push(m(
             "light sampling",
             RenderSettings {
-                strategy: DirectStrategy::Light,
+                strategy: Some(DirectStrategy::Light),
                 ..base.clone()
             },
         ));
         v.push(m(
             "MIS",
             RenderSettings {
-                strategy: DirectStrategy::Mis,
+                strategy: Some(DirectStrategy::Mis),
                 ..base.clone()
             },
         ));
@@ -108,21 +107,21 @@ pub fn methods(base: &RenderSettings, scene: &Scene, compare_backends: bool) -> 
         v.push(m(
             "light sampling, RR",
             RenderSettings {
-                strategy: DirectStrategy::Light,
+                strategy: Some(DirectStrategy::Light),
                 ..base.clone()
             },
         ));
         v.push(m(
             "MIS, RR",
             RenderSettings {
-                strategy: DirectStrategy::Mis,
+                strategy: Some(DirectStrategy::Mis),
                 ..base.clone()
             },
         ));
         v.push(m(
             "MIS, no RR",
             RenderSettings {
-                strategy: DirectStrategy::Mis,
+                strategy: Some(DirectStrategy::Mis),
                 roulette: Roulette::Off,
                 ..base.clone()
             },
@@ -130,7 +129,7 @@ pub fn methods(base: &RenderSettings, scene: &Scene, compare_backends: bool) -> 
         v.push(m(
             "MIS, RR, -l 4",
             RenderSettings {
-                strategy: DirectStrategy::Mis,
+                strategy: Some(DirectStrategy::Mis),
                 light_samples: 4,
                 ..base.clone()
             },
@@ -138,7 +137,7 @@ pub fn methods(base: &RenderSettings, scene: &Scene, compare_backends: bool) -> 
         v.push(m(
             "MIS, RR, -l 16",
             RenderSettings {
-                strategy: DirectStrategy::Mis,
+                strategy: Some(DirectStrategy::Mis),
                 light_samples: 16,
                 ..base.clone()
             },
@@ -152,7 +151,7 @@ pub fn methods(base: &RenderSettings, scene: &Scene, compare_backends: bool) -> 
             ..base.clone()
         },
     ));
-    if compare_backends && cfg!(feature = "embree") {
+    if compare_backends && cfg!(any(feature = "embree", feature = "embree4")) {
         v.push(Method {
             name: "Embree backend".into(),
             settings: RenderSettings {
@@ -175,15 +174,13 @@ struct Reference {
 pub fn run(opts: &ConvergeOptions, log: &mut dyn FnMut(&str)) -> Result<ConvergeReport> {
     let scene = collada::load(&opts.scene)?;
     let base = RenderSettings {
-        width: opts.width,
-        height: opts.height,
         max_depth: opts.max_depth,
         seed: opts.seed,
         ..Default::default()
     };
     let reference = reference(opts, &scene, &base, log)?;
     let mut points = Vec::new();
-    for method in methods(&base, &scene, opts.compare_backends) {
+    for method in methods(&base, opts.compare_backends) {
         log(&format!("method: {}", method.name));
         points.extend(run_method(&scene, &method, opts, &reference)?);
     }
@@ -203,8 +200,7 @@ fn run_method(
     opts: &ConvergeOptions,
     r: &Reference,
 ) -> Result<Vec<Point>> {
-    let accel = accel::build(scene, method.accel)?;
-    let cam = Camera::new(&scene.camera, &scene.bounds, opts.width, opts.height);
+    let job = RenderJob::new(scene.clone(), method.accel, opts.width, opts.height)?;
     let mut out = Vec::new();
     let mut spp = 1;
     while spp <= opts.max_spp {
@@ -214,7 +210,7 @@ fn run_method(
             ..method.settings.clone()
         };
         let t = Instant::now();
-        let o = render(scene, accel.as_ref(), &cam, &s, &|_| {});
+        let o = job.render(&s);
         let seconds = t.elapsed().as_secs_f64();
         let (rmse, rel_mse) = errors(&o.image, r);
         out.push(Point {
@@ -284,6 +280,9 @@ fn reference(
     own_reference(opts, scene, base, log)
 }
 
+/// Seed of ember's own reference.
+const REFERENCE_SEED: u64 = 0x607FF7;
+
 fn own_reference(
     opts: &ConvergeOptions,
     scene: &Scene,
@@ -313,38 +312,30 @@ fn own_reference(
             "reference: rendering {} spp (two halves) with MIS, no roulette",
             opts.reference_spp
         ));
-        let accel = accel::build(scene, AccelKind::Native(BvhBuilder::Sah))?;
-        let cam = Camera::new(&scene.camera, &scene.bounds, opts.width, opts.height);
-        let mut halves = Vec::new();
-        for (k, p) in [(1u64, &pa), (2, &pb)] {
-            let s = RenderSettings {
-                spp: (opts.reference_spp / 2).max(1),
-                strategy: if base.max_depth > 1 {
-                    DirectStrategy::Mis
-                } else {
-                    DirectStrategy::Light
-                },
-                roulette: Roulette::Off,
-                seed: 0xC0FFEE + k,
-                ..base.clone()
-            };
-            let img = render(scene, accel.as_ref(), &cam, &s, &|_| {}).image;
-            write_image(&img, p)?;
-            halves.push(img);
-        }
-        let b = halves.pop().expect("two halves");
-        (halves.pop().expect("two halves"), b)
+        let job = RenderJob::new(
+            scene.clone(),
+            AccelKind::Native(BvhBuilder::Sah),
+            opts.width,
+            opts.height,
+        )?;
+        let h = job.halves(&RenderSettings {
+            spp: opts.reference_spp,
+            strategy: Some(if base.max_depth > 1 {
+                DirectStrategy::Mis
+            } else {
+                DirectStrategy::Light
+            }),
+            roulette: Roulette::Off,
+            // The halves' seeds 2·seed + 1 and 2·seed + 2 are 0xC0FFEE + 1 and + 2.
+            seed: REFERENCE_SEED,
+            ..base.clone()
+        });
+        write_image(&h.a.image, &pa)?;
+        write_image(&h.b.image, &pb)?;
+        (h.a.image, h.b.image)
     };
     let noise_var = a.rmse(&b).powi(2) / 4.0;
-    let image = Image {
-        pixels: a
-            .pixels
-            .iter()
-            .zip(&b.pixels)
-            .map(|(x, y)| 0.5 * (*x + *y))
-            .collect(),
-        ..a
-    };
+    let image = average(&a, &b);
     let note = format!(
         "ember's own reference, {} spp in two halves; its per-pixel noise {:.2e} (from the halves) is subtracted from every MSE",
         opts.reference_spp,
@@ -403,15 +394,21 @@ pub fn time_to_reach(points: &[Point], target: f64) -> Vec<(String, Option<f64>)
 
 impl ConvergeReport {
     pub fn to_csv(&self, scene: &str) -> String {
-        let mut s = String::from("scene,method,spp,samples,seconds,rmse,relmse\n");
+        let mut t = Table::new([
+            "scene", "method", "spp", "samples", "seconds", "rmse", "relmse",
+        ]);
         for p in &self.points {
-            let _ = writeln!(
-                s,
-                "{scene},{},{},{},{:.6},{:.6e},{:.6e}",
-                p.method, p.spp, p.samples, p.seconds, p.rmse, p.rel_mse
-            );
+            t.push(vec![
+                scene.to_string(),
+                p.method.clone(),
+                p.spp.to_string(),
+                p.samples.to_string(),
+                format!("{:.6}", p.seconds),
+                format!("{:.6e}", p.rmse),
+                format!("{:.6e}", p.rel_mse),
+            ]);
         }
-        s
+        t.to_csv()
     }
 
     /// Time each method needs to reach the target RMSE, and its ratio to the fastest.
@@ -421,21 +418,21 @@ impl ConvergeReport {
             .iter()
             .filter_map(|(_, t)| *t)
             .fold(f64::INFINITY, f64::min);
-        let mut s = format!(
-            "| method | seconds to RMSE {:.4} (from median RMSE²·time) | × fastest |\n|---|---|---|\n",
-            self.target_rmse
-        );
+        let mut table = Table::new([
+            "method".to_string(),
+            format!(
+                "seconds to RMSE {:.4} (from median RMSE²·time)",
+                self.target_rmse
+            ),
+            "× fastest".to_string(),
+        ]);
         for (name, t) in &self.time_to_target {
-            match t {
-                Some(t) => {
-                    let _ = writeln!(s, "| {name} | {t:.3} | {:.2} |", t / best);
-                }
-                None => {
-                    let _ = writeln!(s, "| {name} | not reached | – |");
-                }
-            }
+            table.push(match t {
+                Some(t) => vec![name.clone(), format!("{t:.3}"), format!("{:.2}", t / best)],
+                None => vec![name.clone(), "not reached".into(), "–".into()],
+            });
         }
-        s
+        table.to_markdown()
     }
 
     fn series(&self, y: impl Fn(&Point) -> f64) -> Vec<Series> {

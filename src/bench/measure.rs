@@ -16,7 +16,7 @@ use std::time::Instant;
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub(crate) enum Backend {
     Native(BvhBuilder),
-    #[cfg_attr(not(feature = "embree"), allow(dead_code))]
+    #[cfg_attr(not(any(feature = "embree", feature = "embree4")), allow(dead_code))]
     Embree(EmbreeQuality),
 }
 
@@ -64,15 +64,18 @@ pub(crate) fn tracing_pool(
 /// Builds backends for one thread count. Embree builds on its own TBB pool, so it
 /// gets a device limited to the same number of threads, created before any timing.
 pub(crate) struct Builder {
-    #[cfg(feature = "embree")]
+    #[cfg(any(feature = "embree", feature = "embree4"))]
     device: std::sync::Arc<accel::embree::EmbreeDevice>,
 }
 
 impl Builder {
-    #[cfg_attr(not(feature = "embree"), allow(unused_variables))]
+    #[cfg_attr(
+        not(any(feature = "embree", feature = "embree4")),
+        allow(unused_variables)
+    )]
     pub fn new(threads: usize) -> Result<Builder, AccelError> {
         Ok(Builder {
-            #[cfg(feature = "embree")]
+            #[cfg(any(feature = "embree", feature = "embree4"))]
             device: std::sync::Arc::new(accel::embree::EmbreeDevice::new(threads)?),
         })
     }
@@ -80,13 +83,13 @@ impl Builder {
     fn build(&self, scene: &Scene, backend: Backend) -> Result<Box<dyn Accel>, AccelError> {
         match backend {
             Backend::Native(b) => accel::build(scene, AccelKind::Native(b)),
-            #[cfg(feature = "embree")]
+            #[cfg(any(feature = "embree", feature = "embree4"))]
             Backend::Embree(q) => Ok(Box::new(accel::embree::EmbreeAccel::build_on(
                 self.device.clone(),
                 scene,
                 q,
             )?)),
-            #[cfg(not(feature = "embree"))]
+            #[cfg(not(any(feature = "embree", feature = "embree4")))]
             Backend::Embree(q) => accel::build(scene, AccelKind::Embree(q)),
         }
     }
@@ -163,11 +166,21 @@ pub struct Measurement {
     pub camera_mrays: f64,
     pub incoherent_mrays: f64,
     pub shadow_mrays: f64,
+    /// The native tree's shape (`None` for Embree).
+    pub tree: Option<crate::accel::BvhStats>,
 }
 
 impl Measurement {
     /// The five Markdown table cells `| build | memory | camera | incoherent | shadow`
     /// shared by the accel and scaling tables.
+    /// `| nodes | leaves | SAH cost` of the native tree, dashes for Embree.
+    pub fn tree_cells(&self) -> String {
+        self.tree.map_or_else(
+            || "| — | — | —".to_string(),
+            |t| format!("| {} | {} | {:.2}", t.nodes, t.leaves, t.sah_cost),
+        )
+    }
+
     pub fn markdown_cells(&self) -> String {
         format!(
             "| {} | {} | {:.2} | {:.2} | {:.2}",
@@ -217,6 +230,7 @@ pub(crate) fn measure(
         camera_mrays: throughput(&rays.camera, false)?,
         incoherent_mrays: throughput(&rays.incoherent, false)?,
         shadow_mrays: throughput(&rays.shadow, true)?,
+        tree: accel.bvh_stats(),
     })
 }
 

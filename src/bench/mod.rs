@@ -4,11 +4,14 @@
 pub mod accel;
 pub mod chart;
 pub mod converge;
+pub mod embree_modes;
 pub mod fit;
 pub mod measure;
 pub mod meshes;
+pub mod render;
 pub mod scaling;
 pub mod stability;
+pub mod table;
 
 /// Median of `samples` (mean of the middle two for an even count); 0 when empty.
 pub fn median(samples: &mut [f64]) -> f64 {

@@ -116,7 +116,7 @@ fn backends(include_embree: bool) -> Vec<Backend> {
         Backend::Native(BvhBuilder::Midpoint),
         Backend::Native(BvhBuilder::Sah),
     ];
-    if include_embree && cfg!(feature = "embree") {
+    if include_embree && cfg!(any(feature = "embree", feature = "embree4")) {
         list.extend(
             [
                 EmbreeQuality::Low,

@@ -155,6 +155,138 @@ impl PackedTriangle {
     }
 }
 
+/// Four triangles stored per corner and axis with one triangle per lane, so the
+/// watertight test runs on four triangles in one pass (glam's `Vec4`, SSE on
+/// x86-64). Every lane performs the same operations in the same order as
+/// [`PackedTriangle::intersect`] (no fused multiply-add, an exact division), so a
+/// lane's result is bit for bit the scalar test's; lanes whose edge functions
+/// round to zero are handed to the scalar test and its `f64` fallback.
+#[derive(Clone, Copy, Debug, PartialEq)]
+#[repr(C, align(16))]
+pub struct Triangle4 {
+    /// `p[corner][axis]`, lane `i` = triangle `i`.
+    p: [[Vec4; 3]; 3],
+}
+
+/// Per-lane results of [`Triangle4::intersect`]: bit `i` of `mask` set when
+/// triangle `i` is hit, at `t[i]` with barycentrics `b1[i]`, `b2[i]`.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Hits4 {
+    pub mask: u32,
+    pub t: [f32; 4],
+    pub b1: [f32; 4],
+    pub b2: [f32; 4],
+}
+
+impl Triangle4 {
+    /// Up to four triangles; missing lanes are zero (callers mask them off).
+    pub fn new(tris: &[[Vec3; 3]]) -> Self {
+        assert!(tris.len() <= 4);
+        let mut p = [[[0.0f32; 4]; 3]; 3];
+        for (lane, corners) in tris.iter().enumerate() {
+            for (k, c) in corners.iter().enumerate() {
+                for axis in 0..3 {
+                    p[k][axis][lane] = c[axis];
+                }
+            }
+        }
+        Triangle4 {
+            p: p.map(|rows| rows.map(Vec4::from_array)),
+        }
+    }
+
+    /// Triangle `lane` in the scalar layout.
+    pub fn lane(&self, lane: usize) -> PackedTriangle {
+        let c = |k: usize| Vec3::new(self.p[k][0][lane], self.p[k][1][lane], self.p[k][2][lane]);
+        PackedTriangle::new(c(0), c(1), c(2))
+    }
+
+    /// The watertight test of the triangles in `lanes` (a bit mask) for
+    /// `t ∈ [ray.t_min, t_max]`, with the same results as the scalar test per lane.
+    #[inline(always)]
+    pub fn intersect(&self, ray: &TriangleRay, t_max: f32, lanes: u32) -> Hits4 {
+        let (kx, ky, kz) = (ray.kx, ray.ky, ray.kz);
+        let shear = |k: usize| {
+            let x = self.p[k][kx] - ray.ox;
+            let y = self.p[k][ky] - ray.oy;
+            let z = self.p[k][kz] - ray.oz;
+            (x + ray.sx * z, y + ray.sy * z, ray.sz * z)
+        };
+        let (x0, y0, z0) = shear(0);
+        let (x1, y1, z1) = shear(1);
+        let (x2, y2, z2) = shear(2);
+        let e0 = x1 * y2 - y1 * x2;
+        let e1 = x2 * y0 - y2 * x0;
+        let e2 = x0 * y1 - y0 * x1;
+        let zero = Vec4::ZERO;
+        let neg = (e0.cmplt(zero) | e1.cmplt(zero) | e2.cmplt(zero)).bitmask();
+        let pos = (e0.cmpgt(zero) | e1.cmpgt(zero) | e2.cmpgt(zero)).bitmask();
+        let rounded = (e0.cmpeq(zero) | e1.cmpeq(zero) | e2.cmpeq(zero)).bitmask();
+        let mixed = neg & pos;
+        let exact = lanes & rounded & !mixed;
+        let mut out = Hits4 {
+            mask: 0,
+            t: [0.0; 4],
+            b1: [0.0; 4],
+            b2: [0.0; 4],
+        };
+        if lanes & !mixed & !rounded != 0 {
+            let det = e0 + e1 + e2;
+            let t_scaled = e0 * z0 + e1 * z1 + e2 * z2;
+            let inv_det = Vec4::ONE / det;
+            let t = t_scaled * inv_det;
+            let in_range = t.cmpge(Vec4::splat(ray.t_min)) & t.cmple(Vec4::splat(t_max));
+            let max3 = |a: Vec4, b: Vec4, c: Vec4| a.abs().max(b.abs()).max(c.abs());
+            let (max_xt, max_yt, max_zt) = (max3(x0, x1, x2), max3(y0, y1, y2), max3(z0, z1, z2));
+            let max_e = max3(e0, e1, e2);
+            let bound = conservative_t_bound4(max_xt, max_yt, max_zt, max_e, inv_det);
+            let ok = in_range & det.cmpne(zero) & t.cmpgt(bound);
+            out.mask = ok.bitmask() & lanes & !mixed & !rounded;
+            out.t = t.to_array();
+            out.b1 = (e1 * inv_det).to_array();
+            out.b2 = (e2 * inv_det).to_array();
+        }
+        if exact != 0 {
+            self.intersect_exact_lanes(ray, t_max, exact, &mut out);
+        }
+        out
+    }
+
+    /// The lanes where an edge function rounded to zero, through the scalar test.
+    #[cold]
+    #[inline(never)]
+    fn intersect_exact_lanes(&self, ray: &TriangleRay, t_max: f32, lanes: u32, out: &mut Hits4) {
+        for lane in 0..4 {
+            if lanes & 1 << lane == 0 {
+                continue;
+            }
+            if let Some(h) = self.lane(lane).intersect(ray, t_max) {
+                out.mask |= 1 << lane;
+                out.t[lane] = h.t;
+                out.b1[lane] = h.b1;
+                out.b2[lane] = h.b2;
+            }
+        }
+    }
+}
+
+/// [`conservative_t_bound`] on four lanes, with the same operation order.
+#[inline(always)]
+fn conservative_t_bound4(
+    max_xt: Vec4,
+    max_yt: Vec4,
+    max_zt: Vec4,
+    max_e: Vec4,
+    inv_det: Vec4,
+) -> Vec4 {
+    let s = Vec4::splat;
+    let delta_z = s(gamma(3)) * max_zt;
+    let delta_x = s(gamma(5)) * (max_xt + max_zt);
+    let delta_y = s(gamma(5)) * (max_yt + max_zt);
+    let delta_e = s(2.0) * (s(gamma(2)) * max_xt * max_yt + delta_y * max_xt + delta_x * max_yt);
+    s(3.0) * (s(gamma(3)) * max_e * max_zt + delta_e * max_zt + delta_z * max_e) * inv_det.abs()
+}
+
 /// Edge functions in `f64`, where products of two floats are exact: used when an
 /// f32 edge function rounded to zero, i.e. the ray passes (nearly) through an edge.
 #[cold]
@@ -256,6 +388,84 @@ mod tests {
         for p in [a, b, c, 0.5 * (a + b), 0.5 * (b + c), 0.5 * (a + c)] {
             let ray = Ray::new(p + Vec3::new(0.0, 0.0, 3.0), Vec3::new(0.0, 0.0, -1.0));
             assert!(intersect_triangle(&ray, a, b, c).is_some(), "{p}");
+        }
+    }
+}
+
+#[cfg(test)]
+mod simd_tests {
+    use super::*;
+    use crate::sampling::Sampler;
+
+    /// Every lane of the four-wide test equals the scalar test, bit for bit.
+    fn check(tris: &[[Vec3; 3]; 4], ray: &Ray) {
+        let t4 = Triangle4::new(tris);
+        let tr = TriangleRay::new(ray);
+        for t_max in [ray.t_max, 1.0] {
+            let h = t4.intersect(&tr, t_max, 0b1111);
+            for (lane, c) in tris.iter().enumerate() {
+                let s = PackedTriangle::new(c[0], c[1], c[2]).intersect(&tr, t_max);
+                let v = (h.mask & 1 << lane != 0).then(|| TriangleHit {
+                    t: h.t[lane],
+                    b1: h.b1[lane],
+                    b2: h.b2[lane],
+                });
+                assert_eq!(s, v, "lane {lane} {ray:?} {c:?}");
+            }
+        }
+    }
+
+    #[test]
+    fn four_wide_test_matches_scalar_on_random_and_adversarial_rays() {
+        let mut rng = Sampler::from_seed(9);
+        let mut f = move || rng.next_f32();
+        let mut hits = 0;
+        for _ in 0..5000 {
+            let mut v = || Vec3::new(f(), f(), f()) * 2.0 - 1.0;
+            let tris: [[Vec3; 3]; 4] = std::array::from_fn(|_| [v(), v(), v()]);
+            let [a, b, c] = tris[0];
+            let o = v() * 3.0;
+            let targets = [a, b, 0.5 * (a + b), 0.5 * (b + c), (a + b + c) / 3.0, v()];
+            for p in targets {
+                check(&tris, &Ray::new(o, p - o));
+                // Axis-aligned through the target.
+                for axis in [Vec3::X, Vec3::Y, Vec3::Z] {
+                    check(&tris, &Ray::new(p - 2.0 * axis, axis));
+                }
+            }
+            // Along an edge, and grazing the plane.
+            check(&tris, &Ray::new(a - (b - a), b - a));
+            let n = (b - a).cross(c - a).normalize();
+            check(&tris, &Ray::new(a + 1e-6 * n - (c - a), c - a));
+            let h =
+                Triangle4::new(&tris).intersect(&TriangleRay::new(&Ray::new(o, a - o)), 1e30, 15);
+            hits += h.mask.count_ones();
+        }
+        assert!(
+            hits > 1000,
+            "the rays must hit often enough to test something"
+        );
+    }
+
+    #[test]
+    fn shared_edge_rays_hit_one_of_two_lanes() {
+        let (a, b) = (Vec3::new(0.0, 0.0, 0.0), Vec3::new(1.0, 1.0, 0.0));
+        let tris = [
+            [a, Vec3::new(1.0, 0.0, 0.0), b],
+            [a, b, Vec3::new(0.0, 1.0, 0.0)],
+            [a, b, Vec3::new(0.0, 1.0, 0.0)],
+            [a, Vec3::new(1.0, 0.0, 0.0), b],
+        ];
+        // Interior points of the edge (at its ends the rounded crossing may leave the square).
+        for i in 1..64 {
+            let p = a + (b - a) * (i as f32 / 64.0);
+            let ray = Ray::new(p + Vec3::new(0.1, 0.3, 1.0), Vec3::new(-0.1, -0.3, -1.0));
+            check(&tris, &ray);
+            let h = Triangle4::new(&tris).intersect(&TriangleRay::new(&ray), f32::INFINITY, 3);
+            assert_ne!(
+                h.mask, 0,
+                "ray through the shared edge at {p} slipped through"
+            );
         }
     }
 }

@@ -29,14 +29,8 @@ impl DirectStrategy {
     /// magnitude better as soon as glossy surfaces reflect a light, or when an ambient
     /// light is sampled by a cosine about +Y that is poor near the horizon.
     pub fn auto_for(scene: &crate::scene::Scene) -> DirectStrategy {
-        let glossy = scene
-            .materials
-            .iter()
-            .any(|m| matches!(m, crate::materials::Material::Microfacet { .. }));
-        let ambient = scene
-            .lights
-            .iter()
-            .any(|l| matches!(l, crate::lights::Light::Ambient { .. }));
+        let glossy = scene.materials.iter().any(|m| m.flags().glossy);
+        let ambient = scene.lights.iter().any(|l| l.is_environment());
         if glossy || ambient {
             DirectStrategy::Mis
         } else {

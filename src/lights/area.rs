@@ -1,22 +1,54 @@
 //! One-sided parallelogram (rectangle in every scene) emitting constant radiance
-//! toward `normal`, sampled uniformly by area and converted to solid angle.
+//! toward `normal`, sampled uniformly by area and converted to solid angle. The light
+//! owns its surface: `Scene::add_area_light` emits its triangles from `quad`, and a
+//! ray hitting them reads the radiance here (`emitted`).
 
 use super::LightSample;
 use crate::sampling::uniform_parallelogram;
 use crate::Color;
 use glam::{Vec2, Vec3};
 
-#[derive(Clone, Copy, Debug)]
+/// The parallelogram `centre + s·ex + t·ey`, `s,t ∈ [−½,½]`, emitting `radiance` toward unit `normal`
+/// (±`ex × ey`).
+#[derive(Clone, Copy, Debug, PartialEq)]
 pub struct AreaLight {
     pub centre: Vec3,
     pub ex: Vec3,
     pub ey: Vec3,
     pub normal: Vec3,
-    pub area: f32,
     pub radiance: Color,
 }
 
 impl AreaLight {
+    /// Area of the parallelogram (the density of uniform sampling is its inverse).
+    pub fn area(&self) -> f32 {
+        self.ex.cross(self.ey).length()
+    }
+
+    /// Radiance leaving the surface at cosine `cos_out` with `normal` (front side only).
+    pub fn emitted(&self, cos_out: f32) -> Color {
+        if cos_out > 0.0 {
+            self.radiance
+        } else {
+            Color::ZERO
+        }
+    }
+
+    /// The two triangles of the light's surface, wound so that their geometric
+    /// normal `(p1−p0)×(p2−p0)` is the emitting normal.
+    pub fn quad(&self) -> [[Vec3; 3]; 2] {
+        let (hx, hy) = (0.5 * self.ex, 0.5 * self.ey);
+        let p00 = self.centre - hx - hy;
+        let p10 = self.centre + hx - hy;
+        let p11 = self.centre + hx + hy;
+        let p01 = self.centre - hx + hy;
+        if self.ex.cross(self.ey).dot(self.normal) > 0.0 {
+            [[p00, p10, p11], [p00, p11, p01]]
+        } else {
+            [[p00, p11, p10], [p00, p01, p11]]
+        }
+    }
+
     pub fn sample_li(&self, p: Vec3, u: Vec2) -> Option<LightSample> {
         let p_light = uniform_parallelogram(u, self.centre, self.ex, self.ey);
         let to_light = p_light - p;
@@ -75,10 +107,11 @@ impl AreaLight {
     /// `None` from behind or for a degenerate light.
     fn solid_angle_pdf(&self, wi: Vec3, dist: f32) -> Option<f32> {
         let cos_light = -wi.dot(self.normal);
-        if !(cos_light > 0.0 && self.area > 0.0) {
+        let area = self.area();
+        if !(cos_light > 0.0 && area > 0.0) {
             return None;
         }
-        let pdf = dist * dist / (self.area * cos_light);
+        let pdf = dist * dist / (area * cos_light);
         (pdf.is_finite() && pdf > 0.0).then_some(pdf)
     }
 }

@@ -8,21 +8,14 @@ pub mod point;
 
 use crate::color::luminance;
 use crate::Color;
-use area::AreaLight;
+pub use area::AreaLight;
 use glam::{Vec2, Vec3};
 use std::f32::consts::PI;
 
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum Light {
-    /// One-sided rectangle `centre + s·ex + t·ey`, `s,t ∈ [−½,½]`, emitting `radiance` toward `normal`.
-    Area {
-        centre: Vec3,
-        ex: Vec3,
-        ey: Vec3,
-        normal: Vec3,
-        area: f32,
-        radiance: Color,
-    },
+    /// One-sided parallelogram owning its surface and its radiance.
+    Area(AreaLight),
     /// Isotropic point light of radiant intensity `intensity` (W/sr).
     Point { position: Vec3, intensity: Color },
     /// Light travelling along unit `direction`; `irradiance` on a surface facing it.
@@ -53,11 +46,17 @@ impl Light {
         matches!(self, Light::Point { .. } | Light::Directional { .. })
     }
 
+    /// True for a light that surrounds the scene (ambient), whose
+    /// cosine-about-+Y sampling is poor near the horizon.
+    pub fn is_environment(&self) -> bool {
+        matches!(self, Light::Ambient { .. })
+    }
+
     /// Draws a direction toward the light from `p`; `None` when `p` receives
     /// nothing from that sample (behind an area light, degenerate light).
     pub fn sample_li(&self, p: Vec3, u: Vec2) -> Option<LightSample> {
         match *self {
-            Light::Area { .. } => self.as_area()?.sample_li(p, u),
+            Light::Area(a) => a.sample_li(p, u),
             Light::Point {
                 position,
                 intensity,
@@ -73,7 +72,7 @@ impl Light {
     /// Solid-angle pdf with which `sample_li(p, ·)` returns `wi` (0 for delta lights).
     pub fn pdf_li(&self, p: Vec3, wi: Vec3) -> f32 {
         match *self {
-            Light::Area { .. } => self.as_area().map_or(0.0, |a| a.pdf_li(p, wi)),
+            Light::Area(a) => a.pdf_li(p, wi),
             Light::Ambient { .. } => ambient::pdf_li(wi),
             Light::Point { .. } | Light::Directional { .. } => 0.0,
         }
@@ -91,7 +90,7 @@ impl Light {
         let disk = PI * scene_radius * scene_radius;
         let value = match *self {
             // Lambertian emitter: π·L per unit area.
-            Light::Area { area, radiance, .. } => PI * area * luminance(radiance),
+            Light::Area(a) => PI * a.area() * luminance(a.radiance),
             Light::Point { intensity, .. } => 4.0 * PI * luminance(intensity),
             Light::Directional { irradiance, .. } => disk * luminance(irradiance),
             // Half of pbrt's uniform-sphere 4π·πr²·L.
@@ -112,24 +111,10 @@ impl Light {
         }
     }
 
-    fn as_area(&self) -> Option<AreaLight> {
-        match *self {
-            Light::Area {
-                centre,
-                ex,
-                ey,
-                normal,
-                radiance,
-                ..
-            } => Some(AreaLight {
-                centre,
-                ex,
-                ey,
-                normal,
-                // The density of uniform sampling, whatever the stored field says.
-                area: ex.cross(ey).length(),
-                radiance,
-            }),
+    /// The area light this is, if it is one.
+    pub fn as_area(&self) -> Option<&AreaLight> {
+        match self {
+            Light::Area(a) => Some(a),
             _ => None,
         }
     }

@@ -10,6 +10,28 @@ pub mod specular;
 use crate::Color;
 use glam::{Vec2, Vec3};
 use microfacet::Conductor;
+use std::fmt;
+
+/// What kind of scattering (and emission) a material has, as pbrt-v4's `BxDFFlags`:
+/// the integrators and the scene ask these instead of matching on variants.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct BsdfFlags {
+    /// Every lobe is a delta distribution: light sampling is pointless there.
+    pub delta: bool,
+    /// A non-delta lobe narrow enough that BSDF sampling beats light sampling on it.
+    pub glossy: bool,
+    /// A broad non-delta lobe.
+    pub diffuse: bool,
+    /// The surface emits light itself.
+    pub emissive: bool,
+}
+
+impl BsdfFlags {
+    /// Nothing is scattered.
+    pub fn is_black(&self) -> bool {
+        !(self.delta || self.glossy || self.diffuse)
+    }
+}
 
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum Material {
@@ -40,6 +62,9 @@ pub enum Material {
     Emission {
         radiance: Color,
     },
+    /// Absorbs everything and emits nothing itself: the surface of an area light,
+    /// whose radiance the light gives (`AreaLight::emitted`).
+    Black,
 }
 
 impl Default for Material {
@@ -104,22 +129,45 @@ impl Material {
                 valid_ior(ior).and_then(|ior| specular::sample_refraction(ior, transmittance, wo))
             }
             Material::Microfacet { alpha, eta, k } => Conductor::new(alpha, eta, k).sample(wo, u),
-            Material::Emission { .. } => None,
+            Material::Emission { .. } | Material::Black => None,
+        }
+    }
+
+    /// What kind of scattering and emission this material has.
+    pub fn flags(&self) -> BsdfFlags {
+        let none = BsdfFlags::default();
+        match self {
+            Material::Lambertian { .. } => BsdfFlags {
+                diffuse: true,
+                ..none
+            },
+            Material::Mirror { .. } | Material::Glass { .. } | Material::Refraction { .. } => {
+                BsdfFlags {
+                    delta: true,
+                    ..none
+                }
+            }
+            Material::Microfacet { .. } => BsdfFlags {
+                glossy: true,
+                ..none
+            },
+            Material::Emission { .. } => BsdfFlags {
+                emissive: true,
+                ..none
+            },
+            Material::Black => none,
         }
     }
 
     /// True when every lobe is a delta distribution (mirror, glass, refraction):
     /// light sampling is pointless there.
     pub fn is_delta(&self) -> bool {
-        matches!(
-            self,
-            Material::Mirror { .. } | Material::Glass { .. } | Material::Refraction { .. }
-        )
+        self.flags().delta
     }
 
-    /// True when the material scatters no light at all (emitters).
+    /// True when the material scatters no light at all (emitters, light surfaces).
     pub fn is_black(&self) -> bool {
-        matches!(self, Material::Emission { .. })
+        self.flags().is_black()
     }
 
     /// Radiance emitted toward local direction `wo` (front side only).
@@ -134,4 +182,19 @@ impl Material {
 /// A dielectric index must be positive and finite for Snell's law to mean anything.
 fn valid_ior(ior: f32) -> Option<f32> {
     (ior > 0.0 && ior.is_finite()).then_some(ior)
+}
+
+/// The material's kind, as the loader and `ember info` name it.
+impl fmt::Display for Material {
+    fn fmt(&self, f: &mut fmt::Formatter) -> fmt::Result {
+        f.write_str(match self {
+            Material::Lambertian { .. } => "lambertian",
+            Material::Mirror { .. } => "mirror",
+            Material::Glass { .. } => "glass",
+            Material::Refraction { .. } => "refraction",
+            Material::Microfacet { .. } => "microfacet",
+            Material::Emission { .. } => "emission",
+            Material::Black => "black",
+        })
+    }
 }

@@ -4,7 +4,7 @@
 pub mod collada;
 
 use crate::geometry::{ray::gamma, Aabb, Ray};
-use crate::lights::Light;
+use crate::lights::{AreaLight, Light};
 use crate::materials::Material;
 use crate::Color;
 use glam::{Vec2, Vec3};
@@ -105,10 +105,60 @@ pub struct SurfaceInteraction {
 }
 
 impl Scene {
-    /// Radiance leaving the surface of `si` toward world direction `wo`.
+    /// Adds `light` and, after every triangle so far, the two triangles of its surface
+    /// (no bounds change: spec §4 leaves light quads out). Returns the light's index.
+    pub fn add_area_light(&mut self, light: AreaLight) -> u32 {
+        let index = self.lights.len() as u32;
+        let material = self.black_material();
+        self.lights.push(Light::Area(light));
+        for tri in light.quad() {
+            let base = self.positions.len() as u32;
+            self.positions.extend(tri);
+            self.triangles.push(Triangle {
+                v: [base, base + 1, base + 2],
+                n: None,
+                material,
+                light: index,
+            });
+        }
+        index
+    }
+
+    /// Replaces area light `index` (moved, resized or re-coloured), its surface with it.
+    pub fn set_area_light(&mut self, index: u32, light: AreaLight) {
+        assert!(
+            matches!(self.lights[index as usize], Light::Area(_)),
+            "light {index} is not an area light"
+        );
+        self.lights[index as usize] = Light::Area(light);
+        let quad = light.quad();
+        let tris = self.triangles.iter().filter(|t| t.light == index);
+        for (t, corners) in tris.zip(quad) {
+            for (&v, p) in t.v.iter().zip(corners) {
+                self.positions[v as usize] = p;
+            }
+        }
+    }
+
+    /// The index of the material of light surfaces, added on first use.
+    fn black_material(&mut self) -> u32 {
+        match self.materials.iter().position(|m| *m == Material::Black) {
+            Some(i) => i as u32,
+            None => {
+                self.materials.push(Material::Black);
+                (self.materials.len() - 1) as u32
+            }
+        }
+    }
+
+    /// Radiance leaving the surface of `si` toward world direction `wo`: from the
+    /// light when the surface is an area light's, else from the material.
     pub fn emission(&self, si: &SurfaceInteraction, wo: Vec3) -> Color {
-        let mut le =
-            self.materials[si.material as usize].emitted(Vec3::new(0.0, 0.0, wo.dot(si.ng)));
+        let cos_out = wo.dot(si.ng);
+        let mut le = match self.lights.get(si.light as usize) {
+            Some(Light::Area(a)) => a.emitted(cos_out),
+            _ => self.materials[si.material as usize].emitted(Vec3::new(0.0, 0.0, cos_out)),
+        };
         if !self.surface_emission.is_empty() {
             le += self
                 .surface_emission
@@ -125,18 +175,12 @@ impl Scene {
     pub fn has_unsampled_emitters(&self) -> bool {
         !self.surface_emission.is_empty()
             || self.triangles.iter().any(|t| {
-                t.light == NO_LIGHT
-                    && matches!(
-                        self.materials[t.material as usize],
-                        Material::Emission { .. }
-                    )
+                t.light == NO_LIGHT && self.materials[t.material as usize].flags().emissive
             })
-            || self.spheres.iter().any(|s| {
-                matches!(
-                    self.materials[s.material as usize],
-                    Material::Emission { .. }
-                )
-            })
+            || self
+                .spheres
+                .iter()
+                .any(|s| self.materials[s.material as usize].flags().emissive)
     }
 
     pub fn num_prims(&self) -> usize {

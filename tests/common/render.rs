@@ -1,9 +1,8 @@
 //! Helpers shared by the integration tests.
 
-use ember::accel::{self, AccelKind, BvhBuilder};
-use ember::camera::Camera;
+use ember::accel::{AccelKind, BvhBuilder};
 use ember::film::Image;
-use ember::render::{render, RenderOutput, RenderSettings};
+use ember::render::{RenderJob, RenderOutput, RenderSettings};
 use ember::scene::{collada, Scene};
 use std::path::PathBuf;
 
@@ -19,19 +18,17 @@ pub fn load(rel: &str) -> Scene {
     collada::load(&p).unwrap_or_else(|e| panic!("{}: {e}", p.display()))
 }
 
-pub fn render_scene(scene: &Scene, settings: &RenderSettings) -> RenderOutput {
-    render_with(scene, settings, AccelKind::Native(BvhBuilder::Sah))
+/// `scene` through the native SAH BVH, seen by its own camera at `width × height`.
+pub fn job(scene: &Scene, width: u32, height: u32, kind: AccelKind) -> RenderJob {
+    RenderJob::new(scene.clone(), kind, width, height).expect("accel")
 }
 
-pub fn render_with(scene: &Scene, settings: &RenderSettings, kind: AccelKind) -> RenderOutput {
-    let accel = accel::build(scene, kind).expect("accel");
-    let cam = Camera::new(
-        &scene.camera,
-        &scene.bounds,
-        settings.width,
-        settings.height,
-    );
-    render(scene, accel.as_ref(), &cam, settings, &|_| {})
+pub fn render_scene(
+    scene: &Scene,
+    (width, height): (u32, u32),
+    settings: &RenderSettings,
+) -> RenderOutput {
+    job(scene, width, height, AccelKind::Native(BvhBuilder::Sah)).render(settings)
 }
 
 /// Two renders with independent seeds, and their average: the halves give the
@@ -42,32 +39,18 @@ pub struct HalfRenders {
     pub avg: Image,
 }
 
-pub fn render_halves(scene: &Scene, settings: &RenderSettings, kind: AccelKind) -> HalfRenders {
-    let mut s = settings.clone();
-    s.spp = settings.spp / 2;
-    s.seed = settings.seed.wrapping_mul(2).wrapping_add(1);
-    let a = render_with(scene, &s, kind);
-    s.seed = settings.seed.wrapping_mul(2).wrapping_add(2);
-    let b = render_with(scene, &s, kind);
-    assert_eq!(
-        a.nonfinite_samples + b.nonfinite_samples,
-        0,
-        "non-finite samples"
-    );
-    let avg = Image {
-        pixels: a
-            .image
-            .pixels
-            .iter()
-            .zip(&b.image.pixels)
-            .map(|(x, y)| 0.5 * (*x + *y))
-            .collect(),
-        ..a.image.clone()
-    };
+pub fn render_halves(
+    scene: &Scene,
+    (width, height): (u32, u32),
+    settings: &RenderSettings,
+    kind: AccelKind,
+) -> HalfRenders {
+    let h = job(scene, width, height, kind).halves(settings);
+    assert_eq!(h.nonfinite(), 0, "non-finite samples");
     HalfRenders {
-        a: a.image,
-        b: b.image,
-        avg,
+        avg: h.average(),
+        a: h.a.image,
+        b: h.b.image,
     }
 }
 

@@ -28,20 +28,32 @@ const MEDIAN_DEPTH: u32 = 30;
 /// Bound on the depth of any tree this module builds.
 pub(crate) const MAX_DEPTH: usize = MEDIAN_DEPTH as usize + 33;
 
+/// A primitive record of 32 bytes (two per cache line): bounds and id; the
+/// centroid is recomputed from the bounds where needed.
 #[derive(Clone, Copy, Debug)]
+#[repr(C, align(32))]
 pub(crate) struct BuildPrim {
     pub bounds: Aabb,
-    pub centroid: Vec3,
     pub id: PrimId,
 }
 
+const _: () = assert!(std::mem::size_of::<BuildPrim>() == 32);
+
 impl BuildPrim {
     pub fn new(id: PrimId, bounds: Aabb) -> Self {
-        BuildPrim {
-            bounds,
-            centroid: bounds.centre(),
-            id,
-        }
+        BuildPrim { bounds, id }
+    }
+
+    /// The centre of the bounds (the same value as `Aabb::centre`).
+    #[inline(always)]
+    pub fn centroid(&self) -> Vec3 {
+        self.bounds.centre()
+    }
+
+    /// One coordinate of the centroid, without computing the other two.
+    #[inline(always)]
+    pub fn centroid_on(&self, axis: usize) -> f32 {
+        0.5 * (self.bounds.min[axis] + self.bounds.max[axis])
     }
 }
 
@@ -160,14 +172,16 @@ fn append_shifted(out: &mut Vec<BvhNode>, sub: Vec<BvhNode>) {
 pub(crate) fn median_split(prims: &mut [BuildPrim]) -> Split {
     let axis = centroid_bounds(prims).max_axis();
     let mid = prims.len() / 2;
-    prims.select_nth_unstable_by(mid, |a, b| a.centroid[axis].total_cmp(&b.centroid[axis]));
+    prims.select_nth_unstable_by(mid, |a, b| {
+        a.centroid_on(axis).total_cmp(&b.centroid_on(axis))
+    });
     Split { axis, mid }
 }
 
 pub(crate) fn centroid_bounds(prims: &[BuildPrim]) -> Aabb {
     let serial = |c: &[BuildPrim]| {
         c.iter().fold(Aabb::EMPTY, |mut b, p| {
-            b.grow(p.centroid);
+            b.grow(p.centroid());
             b
         })
     };

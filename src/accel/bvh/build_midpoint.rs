@@ -32,7 +32,7 @@ impl SplitRule for MidpointBuilder {
             return None;
         }
         let mid_value = 0.5 * (cb.min[axis] + cb.max[axis]);
-        let mid = partition(prims, |p| p.centroid[axis] < mid_value);
+        let mid = partition(prims, |p| p.centroid_on(axis) < mid_value);
         if mid == 0 || mid == prims.len() {
             // Bounds one float apart: the midpoint rounds onto an end.
             return Some(median_split(prims));

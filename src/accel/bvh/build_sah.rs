@@ -1,6 +1,7 @@
-//! Binned surface-area-heuristic splits (Wald 2007): centroids are binned along
-//! each axis and the cheapest of the bin boundaries is taken, or a leaf when
-//! that is cheaper still.
+//! Binned surface-area-heuristic splits (Wald 2007): one pass over a node's
+//! primitives bins their centroids on all three axes, and the cheapest of the bin
+//! boundaries is taken, or a leaf when that is cheaper still. Leaves are tested a
+//! block of four primitives at a time, so the cost counts blocks, not primitives.
 
 use super::build::{centroid_bounds, partition, reduce_chunks, BuildPrim, Split, SplitRule};
 use crate::geometry::Aabb;
@@ -23,7 +24,7 @@ pub(crate) struct SahBinnedBuilder {
 
 impl Default for SahBinnedBuilder {
     fn default() -> Self {
-        SahBinnedBuilder { max_leaf: 8 }
+        SahBinnedBuilder { max_leaf: 4 }
     }
 }
 
@@ -46,27 +47,37 @@ impl Bin {
         }
     }
 
-    fn area_count(&self) -> f32 {
-        self.bounds.surface_area() * self.count as f32
+    fn area_blocks(&self) -> f32 {
+        self.bounds.surface_area() * blocks(self.count)
     }
 }
 
-/// Maps a centroid coordinate to its bin; used for costing and for partitioning
-/// so both see the same bins.
+/// Leaves are tested four primitives at a time, so a leaf's cost counts blocks.
+#[inline]
+fn blocks(count: u32) -> f32 {
+    count.div_ceil(4) as f32
+}
+
+/// Maps centroid coordinates to bins on all three axes; used for costing and for
+/// partitioning so both see the same bins.
 #[derive(Clone, Copy)]
 struct Binning {
-    axis: usize,
-    min: f32,
-    scale: f32,
+    min: [f32; 3],
+    scale: [f32; 3],
+    /// Bins in use (`≤ BINS`): small nodes use fewer, which costs them little
+    /// quality and saves most of their per-node work.
+    count: usize,
 }
 
 impl Binning {
     #[inline]
-    fn bin(&self, p: &BuildPrim) -> usize {
+    fn bin(&self, p: &BuildPrim, axis: usize) -> usize {
         // `as usize` saturates (NaN → 0), so odd input cannot index out of range.
-        (((p.centroid[self.axis] - self.min) * self.scale) as usize).min(BINS - 1)
+        (((p.centroid_on(axis) - self.min[axis]) * self.scale[axis]) as usize).min(self.count - 1)
     }
 }
+
+type Bins = [[Bin; BINS]; 3];
 
 impl SplitRule for SahBinnedBuilder {
     fn max_leaf(&self) -> usize {
@@ -74,74 +85,87 @@ impl SplitRule for SahBinnedBuilder {
     }
 
     fn split(&self, prims: &mut [BuildPrim], bounds: &Aabb) -> Option<Split> {
+        let leaf_cost = INTERSECTION_COST * blocks(prims.len() as u32);
+        if prims.len() <= 4 {
+            // One block: no split can cost less than the leaf's single block test.
+            return None;
+        }
         let cb = centroid_bounds(prims);
-        let mut best: Option<(f32, Binning, usize)> = None;
-        for axis in 0..3 {
-            let extent = cb.max[axis] - cb.min[axis];
-            if extent.is_nan() || extent <= 0.0 {
+        let extent = cb.max - cb.min;
+        let count = (prims.len() / 2).clamp(8, BINS);
+        let binning = Binning {
+            min: cb.min.to_array(),
+            scale: [0, 1, 2].map(|a| {
+                if extent[a] > 0.0 {
+                    count as f32 / extent[a]
+                } else {
+                    0.0
+                }
+            }),
+            count,
+        };
+        // One pass over the primitives fills the bins of all three axes.
+        let bins = reduce_chunks(prims, |c| fill_bins(c, binning), merge_bins);
+        let mut best: Option<(f32, usize, usize)> = None;
+        for (axis, axis_bins) in bins.iter().enumerate() {
+            if binning.scale[axis] == 0.0 {
                 continue;
             }
-            let binning = Binning {
-                axis,
-                min: cb.min[axis],
-                scale: BINS as f32 / extent,
-            };
-            if let Some((cost, boundary)) = best_boundary(prims, binning) {
+            if let Some((cost, boundary)) = best_boundary(&axis_bins[..count]) {
                 if best.is_none_or(|(c, _, _)| cost < c) {
-                    best = Some((cost, binning, boundary));
+                    best = Some((cost, axis, boundary));
                 }
             }
         }
-        let (cost, binning, boundary) = best?;
+        let (cost, axis, boundary) = best?;
         // Relative to the parent's area; the traversal step into this node is paid either way.
         let split_cost = TRAVERSAL_COST + cost / bounds.surface_area();
-        let leaf_cost = INTERSECTION_COST * prims.len() as f32;
         if prims.len() <= self.max_leaf && leaf_cost <= split_cost {
             return None;
         }
-        let mid = partition(prims, |p| binning.bin(p) < boundary);
-        Some(Split {
-            axis: binning.axis,
-            mid,
-        })
+        let mid = partition(prims, |p| binning.bin(p, axis) < boundary);
+        Some(Split { axis, mid })
     }
 }
 
-fn fill_bins(prims: &[BuildPrim], binning: Binning) -> [Bin; BINS] {
-    let mut bins = [Bin::EMPTY; BINS];
+fn fill_bins(prims: &[BuildPrim], binning: Binning) -> Bins {
+    let mut bins = [[Bin::EMPTY; BINS]; 3];
     for p in prims {
-        let b = &mut bins[binning.bin(p)];
-        b.bounds = b.bounds.union(&p.bounds);
-        b.count += 1;
+        for (axis, axis_bins) in bins.iter_mut().enumerate() {
+            let b = &mut axis_bins[binning.bin(p, axis)];
+            b.bounds = b.bounds.union(&p.bounds);
+            b.count += 1;
+        }
     }
     bins
 }
 
-fn merge_bins(mut a: [Bin; BINS], b: [Bin; BINS]) -> [Bin; BINS] {
-    for (x, y) in a.iter_mut().zip(&b) {
-        *x = x.union(y);
+fn merge_bins(mut a: Bins, b: Bins) -> Bins {
+    for (xa, ya) in a.iter_mut().zip(&b) {
+        for (x, y) in xa.iter_mut().zip(ya) {
+            *x = x.union(y);
+        }
     }
     a
 }
 
-/// Cheapest boundary `k` (bins `< k` go left) as `(Σ area·count·C_isect, k)`.
-fn best_boundary(prims: &[BuildPrim], binning: Binning) -> Option<(f32, usize)> {
-    let bins = reduce_chunks(prims, |c| fill_bins(c, binning), merge_bins);
+/// Cheapest boundary `k` (bins `< k` go left) as `(Σ area·blocks·C_isect, k)`.
+fn best_boundary(bins: &[Bin]) -> Option<(f32, usize)> {
     // right[k]: the union of bins k.. (k ≥ 1).
     let mut right = [Bin::EMPTY; BINS];
     let mut acc = Bin::EMPTY;
-    for k in (1..BINS).rev() {
+    for k in (1..bins.len()).rev() {
         acc = acc.union(&bins[k]);
         right[k] = acc;
     }
     let mut left = Bin::EMPTY;
     let mut best: Option<(f32, usize)> = None;
-    for k in 1..BINS {
+    for k in 1..bins.len() {
         left = left.union(&bins[k - 1]);
         if left.count == 0 || right[k].count == 0 {
             continue;
         }
-        let cost = INTERSECTION_COST * (left.area_count() + right[k].area_count());
+        let cost = INTERSECTION_COST * (left.area_blocks() + right[k].area_blocks());
         if best.is_none_or(|(c, _)| cost < c) {
             best = Some((cost, k));
         }
@@ -172,9 +196,9 @@ mod tests {
             })
             .collect();
         let binning = Binning {
-            axis: 1,
-            min: -1.0,
-            scale: BINS as f32 / 2.0,
+            min: [-1.0; 3],
+            scale: [BINS as f32 / 2.0; 3],
+            count: BINS,
         };
         let serial = fill_bins(&prims, binning);
         for threads in [1, 3] {
@@ -184,11 +208,13 @@ mod tests {
                 .unwrap();
             let bins =
                 pool.install(|| reduce_chunks(&prims, |c| fill_bins(c, binning), merge_bins));
-            for (p, s) in bins.iter().zip(&serial) {
+            for (p, s) in bins.iter().flatten().zip(serial.iter().flatten()) {
                 assert_eq!(p.count, s.count);
                 assert_eq!(p.bounds, s.bounds);
             }
         }
-        assert_eq!(serial.iter().map(|b| b.count).sum::<u32>(), 50_000);
+        for axis_bins in &serial {
+            assert_eq!(axis_bins.iter().map(|b| b.count).sum::<u32>(), 50_000);
+        }
     }
 }

@@ -1,49 +1,52 @@
-//! The native BVH: a flat array of 32-byte nodes over triangles and spheres in
-//! one tree, built by binned SAH (default) or the course's midpoint split.
-//! Leaves reference a copy of the primitives in leaf order, so traversal reads
-//! memory front to back and never goes through the scene's index buffers.
+//! The native BVH over triangles and spheres in one tree, built as a binary tree
+//! by binned SAH (default) or the course's midpoint split, then collapsed into
+//! wide SIMD nodes whose leaves are blocks of up to four primitives, copied so
+//! traversal never goes through the scene's index buffers.
 
 mod build;
 mod build_midpoint;
 mod build_sah;
 mod node;
-mod pair_node;
 mod traverse;
+mod wide;
 
-use super::prims::{hittable_prims, PrimStore};
+use super::prims::{hittable_prims, SphereStore, TriBlock};
 use super::{Accel, BvhBuilder, TraversalStats};
 use crate::geometry::Ray;
 use crate::scene::{PrimHit, PrimId, Scene};
 use build::{build_nodes, BuildPrim};
 use build_midpoint::MidpointBuilder;
 use build_sah::SahBinnedBuilder;
-use node::BvhNode;
-use pair_node::{pair_nodes, ChildRef, PairNode};
+use wide::{collapse, ChildRef, WideNode, WIDTH};
 
-/// Shape and quality of a built tree, for `ember info` and benchmarks.
+/// Shape and quality of a built tree (the wide traversal layout), for `ember
+/// info` and benchmarks.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct BvhStats {
+    /// Wide inner nodes.
     pub nodes: usize,
+    /// Leaves (one block of at most 4 primitives each).
     pub leaves: usize,
     /// Primitives referenced by leaves (degenerate ones are left out).
     pub prims: usize,
     /// Longest root-to-leaf path, counted in nodes (a lone leaf has depth 1).
     pub max_depth: usize,
-    /// Expected cost of a random ray that hits the root box, with the SAH
-    /// builder's cost constants (a node visit costs 1, a primitive test 0.8).
+    /// Expected cost of a random ray that hits the root box: a wide node visit
+    /// costs [`build_sah::TRAVERSAL_COST`], a leaf block test
+    /// [`build_sah::INTERSECTION_COST`].
     pub sah_cost: f32,
+    /// Children per node.
+    pub width: usize,
 }
 
 /// Equality compares the whole layout: two builds are equal when they produced
 /// the same tree.
 #[derive(PartialEq)]
 pub struct Bvh {
-    /// The builder's nodes, kept for statistics.
-    nodes: Vec<BvhNode>,
-    /// The same tree in traversal layout, and where traversal starts.
-    pairs: Vec<PairNode>,
+    nodes: Vec<WideNode>,
+    blocks: Vec<TriBlock>,
+    spheres: SphereStore,
     root: ChildRef,
-    prims: PrimStore,
     builder: BvhBuilder,
     stats: BvhStats,
 }
@@ -54,56 +57,70 @@ impl Bvh {
             .into_iter()
             .map(|(id, bounds)| BuildPrim::new(id, bounds))
             .collect();
-        let nodes = match builder {
+        let binary = match builder {
             BvhBuilder::Sah => build_nodes(&SahBinnedBuilder::default(), &mut build_prims),
             BvhBuilder::Midpoint => build_nodes(&MidpointBuilder::default(), &mut build_prims),
         };
-        let mut nodes = nodes;
-        nodes.shrink_to_fit();
         let order: Vec<PrimId> = build_prims.iter().map(|p| p.id).collect();
-        let prims = PrimStore::new(scene, &order);
-        let stats = tree_stats(&nodes);
-        let (pairs, root) = pair_nodes(&nodes);
-        Bvh {
-            nodes,
-            pairs,
-            root,
-            prims,
+        drop(build_prims);
+        let mut tree = collapse(&binary, scene, &order);
+        tree.nodes.shrink_to_fit();
+        tree.blocks.shrink_to_fit();
+        let root_bounds = binary.first().map(|n| n.bounds());
+        let mut bvh = Bvh {
+            nodes: tree.nodes,
+            blocks: tree.blocks,
+            spheres: SphereStore::new(scene),
+            root: tree.root,
             builder,
-            stats,
-        }
+            stats: BvhStats::default(),
+        };
+        bvh.stats = bvh.tree_stats(root_bounds.map_or(0.0, |b| b.surface_area()));
+        bvh
     }
 
     pub fn stats(&self) -> BvhStats {
         self.stats
     }
-}
 
-fn tree_stats(nodes: &[BvhNode]) -> BvhStats {
-    let mut stats = BvhStats::default();
-    let Some(root) = nodes.first() else {
-        return stats;
-    };
-    let root_area = root.bounds().surface_area();
-    let mut stack = vec![(0usize, 1usize)];
-    let mut cost = 0.0f64;
-    while let Some((i, depth)) = stack.pop() {
-        let n = &nodes[i];
-        let rel_area = f64::from(n.bounds().surface_area() / root_area);
-        stats.nodes += 1;
-        stats.max_depth = stats.max_depth.max(depth);
-        if n.count() > 0 {
-            stats.leaves += 1;
-            stats.prims += n.count() as usize;
-            cost += rel_area * f64::from(build_sah::INTERSECTION_COST) * f64::from(n.count());
-        } else {
-            cost += rel_area * f64::from(build_sah::TRAVERSAL_COST);
-            stack.push((i + 1, depth + 1));
-            stack.push((n.offset as usize, depth + 1));
+    fn tree_stats(&self, root_area: f32) -> BvhStats {
+        let mut stats = BvhStats {
+            width: WIDTH,
+            ..BvhStats::default()
+        };
+        if self.blocks.is_empty() {
+            return stats;
         }
+        let rel = |a: f32| {
+            if root_area > 0.0 {
+                f64::from(a / root_area)
+            } else {
+                0.0
+            }
+        };
+        let mut cost = 0.0f64;
+        let mut stack = vec![(self.root, 1usize, 1.0f64)];
+        while let Some((r, depth, area)) = stack.pop() {
+            stats.max_depth = stats.max_depth.max(depth);
+            if r.is_leaf() {
+                stats.leaves += 1;
+                stats.prims += r.count as usize;
+                cost += area * f64::from(build_sah::INTERSECTION_COST);
+                continue;
+            }
+            stats.nodes += 1;
+            cost += area * f64::from(build_sah::TRAVERSAL_COST);
+            let node = &self.nodes[r.index as usize];
+            for c in 0..WIDTH {
+                let b = node.child_bounds(c);
+                if !b.is_empty() {
+                    stack.push((node.children[c], depth + 1, rel(b.surface_area())));
+                }
+            }
+        }
+        stats.sah_cost = if root_area > 0.0 { cost as f32 } else { 0.0 };
+        stats
     }
-    stats.sah_cost = if root_area > 0.0 { cost as f32 } else { 0.0 };
-    stats
 }
 
 impl Accel for Bvh {
@@ -127,10 +144,15 @@ impl Accel for Bvh {
         }
     }
 
+    fn bvh_stats(&self) -> Option<BvhStats> {
+        Some(self.stats)
+    }
+
+    /// Only what traversal reads: nodes, leaf blocks and spheres.
     fn memory_bytes(&self) -> usize {
         std::mem::size_of::<Self>()
-            + self.nodes.capacity() * std::mem::size_of::<BvhNode>()
-            + self.pairs.capacity() * std::mem::size_of::<PairNode>()
-            + self.prims.memory_bytes()
+            + self.nodes.capacity() * std::mem::size_of::<WideNode>()
+            + self.blocks.capacity() * std::mem::size_of::<TriBlock>()
+            + self.spheres.memory_bytes()
     }
 }

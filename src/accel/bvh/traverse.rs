@@ -1,12 +1,12 @@
-//! Ordered stack traversal over pair nodes: both children's boxes are tested at
-//! the parent, the ray descends into the nearer child it enters and pushes the
-//! farther one with its entry distance; a popped child whose entry lies beyond
-//! the closest hit found since is skipped without touching its memory. Shadow
-//! rays (any hit) skip the ordering: the first occluder ends the search wherever
-//! it is, and the compare cost more than it saved (3% of `occluded` on CBbunny).
+//! Ordered stack traversal over wide nodes: all child boxes are tested at the
+//! parent in one SIMD pass; the ray descends into the nearest child it enters and
+//! pushes the others with their entry distances, farthest first; a popped child
+//! whose entry lies beyond the closest hit found since is skipped without touching
+//! its memory. Shadow rays (any hit) skip the ordering: the first occluder ends
+//! the search wherever it is.
 
 use super::build::MAX_DEPTH;
-use super::pair_node::{ChildRef, PairRay, EXIT_SLACK};
+use super::wide::{BoxTest, ChildRef, WideRay, EXIT_SLACK, WIDTH};
 use super::Bvh;
 use crate::accel::prims::PrimRay;
 use crate::accel::TraversalStats;
@@ -21,72 +21,112 @@ struct Pending {
     entry: f32,
 }
 
+/// Every level pushes at most `WIDTH − 1` children.
+const STACK: usize = MAX_DEPTH * (WIDTH - 1) + 1;
+
 impl Bvh {
-    /// The one traversal loop. `ANY` stops at the first hit (shadow rays);
-    /// `COUNT` records the work done into `stats` (compiled out otherwise).
+    /// Dispatches to the SIMD traversal when the CPU has it.
     #[inline(always)]
     pub(super) fn traverse<const ANY: bool, const COUNT: bool>(
         &self,
         ray: &Ray,
         stats: &mut TraversalStats,
     ) -> Option<PrimHit> {
-        if self.prims.len() == 0 {
+        #[cfg(target_arch = "x86_64")]
+        if super::wide::simd_available() {
+            // SAFETY: AVX2 was detected on this CPU.
+            return unsafe { self.traverse_avx2::<ANY, COUNT>(ray, stats) };
+        }
+        self.traverse_with::<super::wide::ScalarBoxes, ANY, COUNT>(ray, stats)
+    }
+
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx2")]
+    unsafe fn traverse_avx2<const ANY: bool, const COUNT: bool>(
+        &self,
+        ray: &Ray,
+        stats: &mut TraversalStats,
+    ) -> Option<PrimHit> {
+        self.traverse_with::<super::wide::Avx2Boxes, ANY, COUNT>(ray, stats)
+    }
+
+    /// The one traversal loop. `ANY` stops at the first hit (shadow rays);
+    /// `COUNT` records the work done into `stats` (compiled out otherwise).
+    #[inline(always)]
+    pub(super) fn traverse_with<B: BoxTest, const ANY: bool, const COUNT: bool>(
+        &self,
+        ray: &Ray,
+        stats: &mut TraversalStats,
+    ) -> Option<PrimHit> {
+        if self.blocks.is_empty() {
             return None;
         }
-        let boxes = PairRay::new(ray);
+        let boxes = WideRay::new(ray);
         let prim_ray = PrimRay::new(ray);
         let mut t_max = ray.t_max;
         let mut best = None;
         // Left uninitialised: zeroing it cost as much as a small scene's traversal.
-        let mut stack = [MaybeUninit::<Pending>::uninit(); MAX_DEPTH + 1];
+        let mut stack = [MaybeUninit::<Pending>::uninit(); STACK];
         let mut sp = 0;
         let mut cur = self.root;
+        let mut entry = [0.0f32; WIDTH];
         loop {
             if !cur.is_leaf() {
-                let node = &self.pairs[cur.index as usize];
+                let node = &self.nodes[cur.index as usize];
                 if COUNT {
-                    stats.nodes += 2;
+                    stats.nodes += 1;
                 }
-                let hits = boxes.hits(node, t_max);
-                let [c0, c1] = node.children;
-                match hits.mask {
-                    0 => {}
-                    1 => {
-                        cur = c0;
+                let mut mask = B::hits(&boxes, node, t_max, &mut entry);
+                if mask != 0 {
+                    let first = mask.trailing_zeros() as usize;
+                    mask &= mask - 1;
+                    if mask == 0 {
+                        cur = node.children[first];
                         continue;
                     }
-                    2 => {
-                        cur = c1;
-                        continue;
-                    }
-                    _ => {
-                        let [e0, e1] = hits.entry;
-                        let (near, far, far_entry) = if !ANY && e1 < e0 {
-                            (c1, c0, e0)
-                        } else {
-                            (c0, c1, e1)
+                    // Push every entered child, then sort the pushed run so the
+                    // nearest is on top, and take it.
+                    let base = sp;
+                    stack[sp] = MaybeUninit::new(Pending {
+                        child: node.children[first],
+                        entry: entry[first],
+                    });
+                    sp += 1;
+                    while mask != 0 {
+                        let c = mask.trailing_zeros() as usize;
+                        mask &= mask - 1;
+                        let p = Pending {
+                            child: node.children[c],
+                            entry: entry[c],
                         };
-                        stack[sp] = MaybeUninit::new(Pending {
-                            child: far,
-                            entry: far_entry,
-                        });
+                        let mut j = sp;
+                        if !ANY {
+                            // Insertion: farther entries sink towards `base`.
+                            // SAFETY: slots in `base..sp` were written above.
+                            while j > base && unsafe { stack[j - 1].assume_init() }.entry < p.entry
+                            {
+                                stack[j] = stack[j - 1];
+                                j -= 1;
+                            }
+                        }
+                        stack[j] = MaybeUninit::new(p);
                         sp += 1;
-                        cur = near;
-                        continue;
                     }
+                    sp -= 1;
+                    // SAFETY: written just above.
+                    cur = unsafe { stack[sp].assume_init() }.child;
+                    continue;
                 }
             } else {
                 if COUNT {
                     stats.prims += cur.count;
                 }
-                let (first, count) = (cur.index as usize, cur.count as usize);
+                let block = &self.blocks[cur.index as usize];
                 if ANY {
-                    if let Some(hit) = self.prims.intersect_any(first, count, &prim_ray, t_max) {
+                    if let Some(hit) = block.intersect_any(&self.spheres, &prim_ray, t_max) {
                         return Some(hit);
                     }
-                } else if let Some(hit) =
-                    self.prims.intersect_closest(first, count, &prim_ray, t_max)
-                {
+                } else if let Some(hit) = block.intersect_closest(&self.spheres, &prim_ray, t_max) {
                     t_max = hit.t;
                     best = Some(hit);
                 }

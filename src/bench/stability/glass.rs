@@ -2,7 +2,7 @@
 //! a glass sphere) and a light seen through a glass slab, whose radiance follows from
 //! the Fresnel equations alone.
 
-use super::measure::{block_around, Budget, Setup};
+use super::measure::{block_around, Budget};
 use super::scenes::{embedded, slab_in_front_of_light, GLASS_IOR};
 use super::Row;
 use crate::integrators::{DirectStrategy, Roulette};
@@ -39,16 +39,18 @@ pub fn caustic(b: &Budget) -> Result<CausticCase> {
     }
     let base = RenderSettings {
         max_depth: CAUSTIC_DEPTH,
-        strategy: DirectStrategy::Mis,
+        strategy: Some(DirectStrategy::Mis),
         roulette: Roulette::Off,
         ..Default::default()
     };
-    let setup = Setup::new(glass, b.width, b.height)?;
+    let setup = b.job(glass)?;
     // Below the sphere (centre (0, 0.6, 0) after Z_UP) and a floor point 0.7 to its side.
     let below = setup
+        .camera
         .project(Vec3::ZERO)
         .ok_or_else(|| anyhow::anyhow!("caustic.dae: floor centre not in view"))?;
     let open = setup
+        .camera
         .project(Vec3::new(0.7, 0.0, 0.0))
         .ok_or_else(|| anyhow::anyhow!("caustic.dae: open floor not in view"))?;
     let spot = block_around(b.width, b.height, below, 1);
@@ -62,14 +64,14 @@ pub fn caustic(b: &Budget) -> Result<CausticCase> {
         DirectStrategy::Hemisphere,
     ] {
         let o = setup.render(&b.settings(RenderSettings {
-            strategy: s,
+            strategy: Some(s),
             spp: (b.spp / 4).max(1),
             ..base.clone()
         }));
         nonfinite += o.nonfinite_samples;
         all_finite &= o.image.all_finite();
     }
-    let shadow_setup = Setup::new(opaque, b.width, b.height)?;
+    let shadow_setup = b.job(opaque)?;
     let hs = shadow_setup.halves(&b.settings(base));
     Ok(CausticCase {
         caustic: h.mean_and_se(Some(&spot)),
@@ -128,13 +130,13 @@ pub struct SlabCase {
 
 pub fn slab(b: &Budget) -> Result<SlabCase> {
     let radiance = 1.0;
-    let setup = Setup::new(slab_in_front_of_light(radiance as f32), b.width, b.height)?;
+    let setup = b.job(slab_in_front_of_light(radiance as f32))?;
     let mut points = Vec::new();
     let (mut noise, mut nonfinite) = (0.0, 0);
     for depth in [1, 2, 8] {
         let s = RenderSettings {
             max_depth: depth,
-            strategy: DirectStrategy::Mis,
+            strategy: Some(DirectStrategy::Mis),
             roulette: Roulette::Off,
             ..Default::default()
         };

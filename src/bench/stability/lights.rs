@@ -2,14 +2,14 @@
 //! Point lights are invisible to every estimator that waits for a ray to hit a light;
 //! small lights make such estimators noisy; glossy lobes make light sampling noisy.
 
-use super::measure::{z_score, Budget, Halves, Setup};
+use super::measure::{z_score, Budget, Halves};
 use super::scenes::embedded;
 use super::Row;
 use crate::color::luminance;
 use crate::integrators::{DirectStrategy, Roulette};
-use crate::lights::Light;
+use crate::lights::{AreaLight, Light};
 use crate::materials::Material;
-use crate::render::RenderSettings;
+use crate::render::{RenderJob, RenderSettings};
 use crate::scene::Scene;
 use anyhow::{bail, Result};
 use std::f64::consts::PI;
@@ -25,7 +25,7 @@ pub const STRATEGIES: [(DirectStrategy, &str); 4] = [
 fn direct(strategy: DirectStrategy) -> RenderSettings {
     RenderSettings {
         max_depth: 1,
-        strategy,
+        strategy: Some(strategy),
         roulette: Roulette::Off,
         ..Default::default()
     }
@@ -46,7 +46,12 @@ pub struct StrategyRun {
 }
 
 impl StrategyRun {
-    fn from_halves(strategy: DirectStrategy, name: &'static str, h: &Halves) -> StrategyRun {
+    fn from_halves(
+        strategy: DirectStrategy,
+        name: &'static str,
+        h: &Halves,
+        warnings: Vec<String>,
+    ) -> StrategyRun {
         let (mean, se) = h.mean_and_se(None);
         let avg = h.average();
         let max_pixel = avg
@@ -61,7 +66,7 @@ impl StrategyRun {
             se,
             noise: h.noise_per_pixel(),
             max_pixel,
-            warnings: h.a.warnings.clone(),
+            warnings,
             nonfinite: h.nonfinite(),
         }
     }
@@ -86,13 +91,17 @@ fn find_run<'a>(runs: &'a [StrategyRun], name: &str) -> &'a StrategyRun {
 }
 
 fn run_all(
-    setup: &Setup,
+    setup: &RenderJob,
     b: &Budget,
     strategies: &[(DirectStrategy, &'static str)],
 ) -> Vec<StrategyRun> {
     strategies
         .iter()
-        .map(|&(s, name)| StrategyRun::from_halves(s, name, &setup.halves(&b.settings(direct(s)))))
+        .map(|&(s, name)| {
+            let settings = b.settings(direct(s));
+            let warnings = setup.warnings(&settings);
+            StrategyRun::from_halves(s, name, &setup.halves(&settings), warnings)
+        })
         .collect()
 }
 
@@ -104,7 +113,7 @@ pub struct PointLightCase {
 }
 
 pub fn point_light(b: &Budget) -> Result<PointLightCase> {
-    let setup = Setup::new(embedded("point_light.dae")?, b.width, b.height)?;
+    let setup = b.job(embedded("point_light.dae")?)?;
     let runs = run_all(&setup, b, &STRATEGIES);
     let expected_mean = point_light_image_mean(&setup)?;
     Ok(PointLightCase {
@@ -115,7 +124,7 @@ pub fn point_light(b: &Budget) -> Result<PointLightCase> {
 
 /// Direct light from the scene's point light on its Lambertian surfaces, averaged over
 /// a 16×16 grid in every pixel (the scene has no occluders).
-fn point_light_image_mean(setup: &Setup) -> Result<f64> {
+fn point_light_image_mean(setup: &RenderJob) -> Result<f64> {
     let Some(&Light::Point {
         position,
         intensity,
@@ -219,12 +228,12 @@ impl SmallLightCase {
 
 pub fn small_light(b: &Budget, size: f32) -> Result<SmallLightCase> {
     let scene = scale_area_lights(embedded("small_light.dae")?, size);
-    let Some(&Light::Area { centre, ex, ey, .. }) = scene.lights.first() else {
+    let Some(&Light::Area(AreaLight { centre, ex, ey, .. })) = scene.lights.first() else {
         bail!("small_light.dae: no area light")
     };
     let h = centre.y as f64; // the floor is y = 0
     let max_solid_angle = ex.cross(ey).length() as f64 / (h * h);
-    let setup = Setup::new(scene, b.width, b.height)?;
+    let setup = b.job(scene)?;
     Ok(SmallLightCase {
         size,
         max_solid_angle,
@@ -235,32 +244,19 @@ pub fn small_light(b: &Budget, size: f32) -> Result<SmallLightCase> {
 /// Every area light (and its emitting triangles) scaled by `k` about its centre, its
 /// radiance by `1/k²`: the same power from a smaller or larger source.
 pub fn scale_area_lights(mut scene: Scene, k: f32) -> Scene {
-    for (li, light) in scene.lights.iter_mut().enumerate() {
-        let Light::Area {
-            centre,
-            ex,
-            ey,
-            area,
-            radiance,
-            ..
-        } = light
-        else {
+    for li in 0..scene.lights.len() as u32 {
+        let Some(&a) = scene.lights[li as usize].as_area() else {
             continue;
         };
-        *ex *= k;
-        *ey *= k;
-        *area *= k * k;
-        *radiance /= k * k;
-        let (c, new_radiance) = (*centre, *radiance);
-        for t in scene.triangles.iter().filter(|t| t.light == li as u32) {
-            for &v in &t.v {
-                let p = &mut scene.positions[v as usize];
-                *p = c + k * (*p - c);
-            }
-            scene.materials[t.material as usize] = Material::Emission {
-                radiance: new_radiance,
-            };
-        }
+        scene.set_area_light(
+            li,
+            AreaLight {
+                ex: k * a.ex,
+                ey: k * a.ey,
+                radiance: a.radiance / (k * k),
+                ..a
+            },
+        );
     }
     scene
 }
@@ -275,7 +271,7 @@ pub struct GlossyCase {
 pub const GLOSSY_SCENES: [&str; 2] = ["glossy_large_light.dae", "rough_small_light.dae"];
 
 pub fn glossy(b: &Budget, scene: &'static str) -> Result<GlossyCase> {
-    let setup = Setup::new(embedded(scene)?, b.width, b.height)?;
+    let setup = b.job(embedded(scene)?)?;
     Ok(GlossyCase {
         scene,
         runs: run_all(&setup, b, &STRATEGIES[1..]),

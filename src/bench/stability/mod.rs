@@ -11,9 +11,9 @@ pub mod sampling;
 pub mod scenes;
 
 use super::chart::{write_chart, ChartSpec, Series};
+use super::table::Table;
 use anyhow::{Context, Result};
 pub use measure::Budget;
-use std::fmt::Write as _;
 use std::path::PathBuf;
 
 #[derive(Clone, Debug)]
@@ -56,7 +56,7 @@ pub struct StabilityReport {
 
 /// What ember does about each case, for the report.
 pub const EMBER_DOES: [(&str, &str); 8] = [
-    ("1", "Hemisphere and BSDF-only sampling cannot see delta lights; `render_warnings` says so in RenderOutput.warnings (the CLI prints it). The default strategies sample lights."),
+    ("1", "Hemisphere and BSDF-only sampling cannot see delta lights; `RenderJob::warnings` says so (the CLI prints it). The default strategies sample lights."),
     ("2", "Light sampling and MIS (the defaults: MIS for glossy or ambient-lit scenes, light sampling otherwise) sample the light's area: their noise does not grow as the light shrinks; -H's grows as √(2π/Ω)."),
     ("3", "MIS (power heuristic) is the default whenever the scene has glossy surfaces: never much worse than the better of light and BSDF sampling."),
     ("4", "Specular chains are followed by BSDF sampling with weight 1 at delta vertices; exact Fresnel; non-finite samples are counted and dropped (0 here)."),
@@ -94,36 +94,62 @@ pub fn run_stability(opts: &StabilityOptions) -> Result<StabilityReport> {
 }
 
 impl StabilityReport {
+    /// The rows at full precision, for scripts.
     pub fn to_csv(&self) -> String {
-        let mut s =
-            String::from("case,method,mean,stderr,expected,noise_per_pixel,nonfinite,note\n");
+        let mut t = Table::new([
+            "case",
+            "method",
+            "mean",
+            "stderr",
+            "expected",
+            "noise_per_pixel",
+            "nonfinite",
+            "note",
+        ]);
         for r in &self.rows {
-            let expected = r.expected.map_or(String::new(), |e| format!("{e:.6e}"));
-            let note = r.note.replace('"', "'");
-            let _ = writeln!(
-                s,
-                "{},{},{:.6e},{:.3e},{expected},{:.4e},{},\"{note}\"",
-                r.case, r.method, r.mean, r.stderr, r.noise, r.nonfinite
-            );
+            t.push(vec![
+                r.case.clone(),
+                r.method.clone(),
+                format!("{:.6e}", r.mean),
+                format!("{:.3e}", r.stderr),
+                r.expected.map_or(String::new(), |e| format!("{e:.6e}")),
+                format!("{:.4e}", r.noise),
+                r.nonfinite.to_string(),
+                r.note.clone(),
+            ]);
         }
-        s
+        t.to_csv()
     }
 
+    /// The rows, then what ember does in each case.
     pub fn to_markdown(&self) -> String {
-        let mut s = String::from("| case | method | mean | ± s.e. | expected | noise/pixel | NaN/Inf | finding |\n|---|---|---|---|---|---|---|---|\n");
+        let mut t = Table::new([
+            "case",
+            "method",
+            "mean",
+            "± s.e.",
+            "expected",
+            "noise/pixel",
+            "NaN/Inf",
+            "finding",
+        ]);
         for r in &self.rows {
-            let expected = r.expected.map_or("–".to_string(), |e| format!("{e:.4}"));
-            let _ = writeln!(
-                s,
-                "| {} | {} | {:.4} | {:.2e} | {expected} | {:.3e} | {} | {} |",
-                r.case, r.method, r.mean, r.stderr, r.noise, r.nonfinite, r.note
-            );
+            t.push(vec![
+                r.case.clone(),
+                r.method.clone(),
+                format!("{:.4}", r.mean),
+                format!("{:.2e}", r.stderr),
+                r.expected.map_or("–".to_string(), |e| format!("{e:.4}")),
+                format!("{:.3e}", r.noise),
+                r.nonfinite.to_string(),
+                r.note.clone(),
+            ]);
         }
-        s.push_str("\n| case | what ember does |\n|---|---|\n");
-        for (case, does) in EMBER_DOES {
-            let _ = writeln!(s, "| {case} | {does} |");
+        let mut does = Table::new(["case", "what ember does"]);
+        for (case, what) in EMBER_DOES {
+            does.push(vec![case.to_string(), what.to_string()]);
         }
-        s
+        format!("{}\n{}", t.to_markdown(), does.to_markdown())
     }
 
     /// Relative per-pixel noise (noise / mean) of each direct-lighting strategy, x = the
@@ -221,7 +247,11 @@ mod tests {
         };
         let csv = r.to_csv();
         assert_eq!(csv.lines().count(), 4);
-        assert!(csv.lines().nth(1).unwrap().ends_with("\"a 'quoted' note\""));
+        assert!(csv
+            .lines()
+            .nth(1)
+            .unwrap()
+            .ends_with("\"a \"\"quoted\"\" note\""));
         let md = r.to_markdown();
         assert!(md.contains("| 2 small | hemisphere |") && md.contains("what ember does"));
         let (series, scenarios) = r.strategy_noise_series();

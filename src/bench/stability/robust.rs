@@ -3,13 +3,13 @@
 //! rays along edges, through shared vertices or at grazing angles must not slip
 //! through a closed mesh; degenerate triangles must not produce NaN.
 
-use super::measure::{lum, Budget, Halves, Setup};
+use super::measure::{lum, Budget, Halves, NATIVE};
 use super::scenes::{degenerate_room, embedded, grid_plane, transformed, GRID_CELLS, GRID_HALF};
 use super::Row;
 use crate::camera::Camera;
 use crate::geometry::Ray;
 use crate::integrators::{DirectStrategy, Roulette};
-use crate::render::{RenderSettings, Shading};
+use crate::render::{RenderJob, RenderSettings, Shading};
 use crate::sampling::Sampler;
 use crate::Vec3;
 use anyhow::Result;
@@ -55,7 +55,7 @@ pub const SCALE_VARIANTS: [(&str, f32, f32); 4] = [
 fn scale_settings() -> RenderSettings {
     RenderSettings {
         max_depth: 4,
-        strategy: DirectStrategy::Mis,
+        strategy: Some(DirectStrategy::Mis),
         roulette: Roulette::Off,
         ..Default::default()
     }
@@ -64,7 +64,7 @@ fn scale_settings() -> RenderSettings {
 pub fn scale(b: &Budget) -> Result<ScaleCase> {
     let base_scene = embedded("cornell.dae")?;
     let s = b.settings(scale_settings());
-    let base = Setup::new(base_scene.clone(), b.width, b.height)?;
+    let base = b.job(base_scene.clone())?;
     let reference = base.render(&s);
     // Noise of one render of `spp` samples: halves of 2·spp have exactly that size.
     let halves = base.halves(&RenderSettings {
@@ -76,11 +76,7 @@ pub fn scale(b: &Budget) -> Result<ScaleCase> {
     let surface = surface_pixels(&base);
     let mut runs = Vec::new();
     for (name, k, off) in SCALE_VARIANTS {
-        let setup = Setup::new(
-            transformed(&base_scene, k, Vec3::splat(off)),
-            b.width,
-            b.height,
-        )?;
+        let setup = b.job(transformed(&base_scene, k, Vec3::splat(off)))?;
         let o = setup.render(&s);
         let mut run = compare(name, k, off, &reference.image, &o, sigma, block_sigma);
         (run.surface_rel_diff, run.surface_rel_se) =
@@ -97,7 +93,7 @@ pub fn scale(b: &Budget) -> Result<ScaleCase> {
 }
 
 /// Pixels none of whose corners or centre sees an emitter directly.
-fn surface_pixels(setup: &Setup) -> Vec<usize> {
+fn surface_pixels(setup: &RenderJob) -> Vec<usize> {
     let cam = &setup.camera;
     let sees_emitter = |x: u32, y: u32| {
         [(0.0, 0.0), (1.0, 0.0), (0.0, 1.0), (1.0, 1.0), (0.5, 0.5)]
@@ -242,7 +238,7 @@ pub fn grid(b: &Budget) -> Result<GridCase> {
     let scene = grid_plane();
     let mut camera = Camera::new(&scene.camera, &scene.bounds, b.width, b.height);
     camera.eye = Vec3::new(0.0, 0.02, -GRID_HALF - 0.5);
-    let setup = Setup::with_camera(scene, camera)?;
+    let setup = RenderJob::with_camera(scene, NATIVE, camera)?;
     let mut c = GridCase::default();
     grid_queries(&setup, &mut c, b.seed);
     grazing_render(&setup, b, &mut c);
@@ -253,7 +249,7 @@ pub fn grid(b: &Budget) -> Result<GridCase> {
 /// Rays at grazing elevations aimed at every inner vertex, at the midpoints of shared
 /// (axis and diagonal) edges, at random points, and rays lying in the vertical plane
 /// of a grid line (they run along an edge's line), from outside and above the grid.
-fn grid_queries(setup: &Setup, c: &mut GridCase, seed: u64) {
+fn grid_queries(setup: &RenderJob, c: &mut GridCase, seed: u64) {
     let step = 2.0 * GRID_HALF / GRID_CELLS as f32;
     let mut sampler = Sampler::from_seed(seed);
     let mut targets = Vec::new();
@@ -298,7 +294,7 @@ fn grid_queries(setup: &Setup, c: &mut GridCase, seed: u64) {
 /// Elevation (rad) below which grazing rays are counted separately.
 pub const GRAZING_LIMIT: f32 = 2e-4;
 
-fn check_ray(setup: &Setup, c: &mut GridCase, o: Vec3, target: Vec3, elevation: f32) {
+fn check_ray(setup: &RenderJob, c: &mut GridCase, o: Vec3, target: Vec3, elevation: f32) {
     let ray = Ray::new(o, (target - o).normalize());
     let t_exact = (-(o.y as f64)) / ray.d.y as f64;
     let p = ray.o.as_dvec3() + t_exact * ray.d.as_dvec3();
@@ -323,7 +319,7 @@ fn check_ray(setup: &Setup, c: &mut GridCase, o: Vec3, target: Vec3, elevation: 
 
 /// A normals render from 2 cm above the grid: a pixel all of whose corners' rays hit
 /// the grid must be the up normal's colour in every sample (a hole would show black).
-fn grazing_render(setup: &Setup, b: &Budget, c: &mut GridCase) {
+fn grazing_render(setup: &RenderJob, b: &Budget, c: &mut GridCase) {
     let s = b.settings(RenderSettings {
         shading: Shading::Normals,
         spp: b.spp.max(4),
@@ -362,7 +358,7 @@ fn degenerate(b: &Budget, c: &mut GridCase) -> Result<()> {
     let scene = degenerate_room();
     let mut camera = Camera::new(&scene.camera, &scene.bounds, b.width, b.height);
     camera.eye = Vec3::new(0.05, -0.1, -0.95);
-    let setup = Setup::with_camera(scene, camera)?;
+    let setup = RenderJob::with_camera(scene, NATIVE, camera)?;
     c.degenerate_all_finite = true;
     for strategy in [
         DirectStrategy::Mis,
@@ -372,7 +368,7 @@ fn degenerate(b: &Budget, c: &mut GridCase) -> Result<()> {
     ] {
         let o = setup.render(&b.settings(RenderSettings {
             max_depth: 5,
-            strategy,
+            strategy: Some(strategy),
             roulette: Roulette::default(),
             ..Default::default()
         }));

@@ -3,7 +3,7 @@
 //! with a tiny continuation probability must stay unbiased, only noisier.
 
 use super::lights::scale_area_lights;
-use super::measure::{lum, Budget, Halves, Setup};
+use super::measure::{lum, Budget, Halves};
 use super::scenes::embedded;
 use super::Row;
 use crate::integrators::{DirectStrategy, Roulette};
@@ -37,10 +37,10 @@ pub struct AdaptiveCase {
 /// probability ≥ 0.95⁸ ≈ 0.66 although every floor pixel's mean is > 0.
 pub fn adaptive(b: &Budget) -> Result<AdaptiveCase> {
     let scene = scale_area_lights(embedded("small_light.dae")?, 4.0);
-    let setup = Setup::new(scene, b.width, b.height)?;
+    let setup = b.job(scene)?;
     let base = RenderSettings {
         max_depth: 1,
-        strategy: DirectStrategy::Bsdf,
+        strategy: Some(DirectStrategy::Bsdf),
         roulette: Roulette::Off,
         ..Default::default()
     };
@@ -167,13 +167,13 @@ pub struct RouletteCase {
 pub const ROULETTE_DEPTH: u32 = 5;
 
 pub fn roulette(b: &Budget) -> Result<RouletteCase> {
-    let setup = Setup::new(embedded("cornell.dae")?, b.width, b.height)?;
+    let setup = b.job(embedded("cornell.dae")?)?;
     let runs = ROULETTES
         .iter()
         .map(|&(name, roulette)| {
             let s = RenderSettings {
                 max_depth: ROULETTE_DEPTH,
-                strategy: DirectStrategy::Mis,
+                strategy: Some(DirectStrategy::Mis),
                 roulette,
                 ..Default::default()
             };

@@ -4,7 +4,7 @@
 //! normal incidence, a fine grid seen at grazing angles, degenerate triangles.
 
 use crate::geometry::Aabb;
-use crate::lights::Light;
+use crate::lights::{AreaLight, Light};
 use crate::materials::Material;
 use crate::scene::{collada, CameraDesc, Scene, Sphere, Triangle, NO_LIGHT};
 use crate::{Color, Vec3};
@@ -39,17 +39,10 @@ pub fn transformed(scene: &Scene, scale: f32, offset: Vec3) -> Scene {
     }
     for l in &mut s.lights {
         match l {
-            Light::Area {
-                centre,
-                ex,
-                ey,
-                area,
-                ..
-            } => {
-                *centre = map(*centre);
-                *ex *= scale;
-                *ey *= scale;
-                *area *= scale * scale;
+            Light::Area(a) => {
+                a.centre = map(a.centre);
+                a.ex *= scale;
+                a.ey *= scale;
             }
             Light::Point { position, .. } => *position = map(*position),
             Light::Directional { .. } | Light::Ambient { .. } => {}
@@ -116,19 +109,11 @@ impl SceneBuilder {
 
     /// A one-sided rectangular area light `centre ± ex/2 ± ey/2` emitting toward `ex × ey`.
     pub fn area_light(&mut self, centre: Vec3, ex: Vec3, ey: Vec3, radiance: Color) {
-        let light = self.scene.lights.len() as u32;
-        let m = self.material(Material::Emission { radiance });
-        let normal = ex.cross(ey).normalize_or_zero();
-        let o = centre - 0.5 * ex - 0.5 * ey;
-        self.triangle([o, o + ex, o + ex + ey], m, light);
-        self.triangle([o, o + ex + ey, o + ey], m, light);
-        let area = ex.cross(ey).length();
-        self.scene.lights.push(Light::Area {
+        self.scene.add_area_light(AreaLight {
             centre,
             ex,
             ey,
-            normal,
-            area,
+            normal: ex.cross(ey).normalize_or_zero(),
             radiance,
         });
     }

@@ -2,7 +2,7 @@
 
 use super::camera::read_camera;
 use super::effects::read_material;
-use super::lights::{area_quad, read_light};
+use super::lights::read_light;
 use super::mesh::{parse_mesh, LocalMesh};
 use super::transform::{linear, local_matrix, normal_matrix, point, up_axis_matrix};
 use super::xml::{child, children, extension_technique, path, Ctx};
@@ -356,23 +356,12 @@ impl<'a, 'i> Builder<'a, 'i> {
     /// Appends each area light's two emitting triangles (after all mesh
     /// triangles, outside `bounds`) and settles the camera.
     fn finish(mut self, root: Node) -> Scene {
-        for (index, light) in self.scene.lights.clone().iter().enumerate() {
-            let (Some(quad), Light::Area { radiance, .. }) = (area_quad(light), light) else {
-                continue;
-            };
-            let material = self.push_material(Material::Emission {
-                radiance: *radiance,
-            });
-            let s = &mut self.scene;
-            for tri in quad {
-                let base = s.positions.len() as u32;
-                s.positions.extend(tri);
-                s.triangles.push(Triangle {
-                    v: [base, base + 1, base + 2],
-                    n: None,
-                    material,
-                    light: index as u32,
-                });
+        for light in std::mem::take(&mut self.scene.lights) {
+            match light {
+                Light::Area(a) => {
+                    self.scene.add_area_light(a);
+                }
+                other => self.scene.lights.push(other),
             }
         }
         self.scene.camera = match self.camera {

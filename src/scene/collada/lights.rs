@@ -3,7 +3,7 @@
 use super::transform::{linear, point};
 use super::xml::{child, extension_technique, Ctx};
 use super::LoadError;
-use crate::lights::Light;
+use crate::lights::{AreaLight, Light};
 use crate::Color;
 use glam::{DMat4, DVec3, Vec3};
 use roxmltree::Node;
@@ -77,14 +77,13 @@ fn area(ctx: &mut Ctx, kind: Node, w: &DMat4, c: Color) -> Result<Option<Light>,
     } else {
         -plane_normal
     };
-    Ok(Some(Light::Area {
+    Ok(Some(Light::Area(AreaLight {
         centre,
         ex,
         ey,
         normal,
-        area,
         radiance: c,
-    }))
+    })))
 }
 
 fn finite(ctx: &Ctx, node: Node, v: DVec3) -> Result<Vec3, LoadError> {
@@ -97,29 +96,4 @@ fn finite(ctx: &Ctx, node: Node, v: DVec3) -> Result<Vec3, LoadError> {
             "the node transform gives a non-finite light position or axis",
         ))
     }
-}
-
-/// The two triangles of an area light's surface, wound so that their
-/// geometric normal `(p1−p0)×(p2−p0)` is the emitting normal.
-pub(crate) fn area_quad(light: &Light) -> Option<[[Vec3; 3]; 2]> {
-    let Light::Area {
-        centre,
-        ex,
-        ey,
-        normal,
-        ..
-    } = *light
-    else {
-        return None;
-    };
-    let (hx, hy) = (0.5 * ex, 0.5 * ey);
-    let p00 = centre - hx - hy;
-    let p10 = centre + hx - hy;
-    let p11 = centre + hx + hy;
-    let p01 = centre - hx + hy;
-    Some(if ex.cross(ey).dot(normal) > 0.0 {
-        [[p00, p10, p11], [p00, p11, p01]]
-    } else {
-        [[p00, p11, p10], [p00, p01, p11]]
-    })
 }

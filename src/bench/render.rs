@@ -1,0 +1,150 @@
+//! `ember bench render`: samples per second of whole renders (load, build and render
+//! timed apart), the median of several repetitions per scene.
+
+use super::table::Table;
+use crate::accel::{AccelKind, BvhBuilder};
+use crate::render::{RenderJob, RenderSettings};
+use crate::scene::collada;
+use anyhow::{Context, Result};
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+
+#[derive(Clone, Debug)]
+pub struct RenderBenchOptions {
+    pub scenes: Vec<PathBuf>,
+    pub spp: u32,
+    pub max_depth: u32,
+    /// Repetitions per scene; the median render is reported.
+    pub repeat: u32,
+    pub accel: AccelKind,
+    pub out_dir: PathBuf,
+}
+
+impl RenderBenchOptions {
+    /// The default scenes: CBspheres_lambertian and CBbunny from ../shared.
+    pub fn default_scenes() -> Vec<PathBuf> {
+        let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("../shared/scenes/cs184/sky");
+        vec![
+            root.join("CBspheres_lambertian.dae"),
+            root.join("CBbunny.dae"),
+        ]
+    }
+}
+
+impl Default for RenderBenchOptions {
+    fn default() -> Self {
+        RenderBenchOptions {
+            scenes: Self::default_scenes(),
+            spp: 64,
+            max_depth: 5,
+            repeat: 3,
+            accel: AccelKind::Native(BvhBuilder::Sah),
+            out_dir: PathBuf::from("bench-out/render"),
+        }
+    }
+}
+
+/// The image size of every measured render.
+pub const WIDTH: u32 = 480;
+pub const HEIGHT: u32 = 360;
+
+/// The median run of one scene (seconds).
+#[derive(Clone, Debug)]
+pub struct RenderBenchRow {
+    pub scene: String,
+    pub spp: u32,
+    pub max_depth: u32,
+    pub render_s: f64,
+    pub load_s: f64,
+    pub build_s: f64,
+    pub samples: u64,
+}
+
+pub struct RenderBenchReport {
+    pub rows: Vec<RenderBenchRow>,
+}
+
+pub fn run(opts: &RenderBenchOptions) -> Result<RenderBenchReport> {
+    let rows = opts
+        .scenes
+        .iter()
+        .map(|p| measure(p, opts))
+        .collect::<Result<_>>()?;
+    Ok(RenderBenchReport { rows })
+}
+
+fn measure(path: &Path, opts: &RenderBenchOptions) -> Result<RenderBenchRow> {
+    let settings = RenderSettings {
+        spp: opts.spp,
+        max_depth: opts.max_depth,
+        strategy: None,
+        ..Default::default()
+    };
+    let mut runs = Vec::new();
+    for _ in 0..opts.repeat.max(1) {
+        let t0 = Instant::now();
+        let scene = collada::load(path)?;
+        let load_s = t0.elapsed().as_secs_f64();
+        let t1 = Instant::now();
+        let job = RenderJob::new(scene, opts.accel, WIDTH, HEIGHT)?;
+        let build_s = t1.elapsed().as_secs_f64();
+        let t2 = Instant::now();
+        let out = job.render(&settings);
+        let render_s = t2.elapsed().as_secs_f64();
+        runs.push((render_s, load_s, build_s, out.total_samples()));
+    }
+    runs.sort_by(|a, b| a.0.total_cmp(&b.0));
+    let (render_s, load_s, build_s, samples) = runs[runs.len() / 2];
+    Ok(RenderBenchRow {
+        scene: path
+            .file_name()
+            .map(|s| s.to_string_lossy().into_owned())
+            .unwrap_or_default(),
+        spp: opts.spp,
+        max_depth: opts.max_depth,
+        render_s,
+        load_s,
+        build_s,
+        samples,
+    })
+}
+
+impl RenderBenchReport {
+    pub fn table(&self) -> Table {
+        let mut t = Table::new([
+            "scene",
+            "spp",
+            "-m",
+            "render-only M samples/s",
+            "incl. load+build M samples/s",
+            "render s",
+            "load ms",
+            "build ms",
+        ]);
+        for r in &self.rows {
+            let n = r.samples as f64;
+            t.push(vec![
+                r.scene.clone(),
+                r.spp.to_string(),
+                r.max_depth.to_string(),
+                format!("{:.2}", n / r.render_s / 1e6),
+                format!("{:.2}", n / (r.render_s + r.load_s + r.build_s) / 1e6),
+                format!("{:.3}", r.render_s),
+                format!("{:.1}", r.load_s * 1e3),
+                format!("{:.1}", r.build_s * 1e3),
+            ]);
+        }
+        t
+    }
+
+    pub fn to_markdown(&self) -> String {
+        self.table().to_markdown()
+    }
+
+    /// Writes `<out_dir>/render.csv` and `render.md`.
+    pub fn write(&self, out_dir: &Path) -> Result<()> {
+        std::fs::create_dir_all(out_dir)
+            .with_context(|| format!("{}: cannot create", out_dir.display()))?;
+        self.table().write(&out_dir.join("render"))
+    }
+}

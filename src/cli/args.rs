@@ -1,0 +1,291 @@
+//! The flags: clap definitions only. `convert` turns them into library settings.
+
+use clap::{Args, Parser, Subcommand, ValueEnum};
+use std::path::PathBuf;
+
+/// ember — a physically based CPU path tracer for the CS184 COLLADA scenes.
+///
+/// Accepts the CS184 pathtracer command line verbatim, e.g.
+///   ember -t 8 -s 64 -l 16 -m 5 -r 480 360 -f out.png scene.dae
+#[derive(Parser, Debug)]
+#[command(name = "ember", version, about, long_about = None, args_conflicts_with_subcommands = true, args_override_self = true)]
+pub struct Cli {
+    #[command(subcommand)]
+    pub command: Option<Command>,
+    #[command(flatten)]
+    pub render: RenderArgs,
+}
+
+#[derive(Subcommand, Debug)]
+pub enum Command {
+    /// Print what a scene contains (geometry, lights, materials, camera, bounds) and the backends of this build.
+    Info {
+        /// The .dae scene file.
+        scene: PathBuf,
+        /// Resolution at which to report the camera's field of view.
+        #[arg(short = 'r', num_args = 2, action = clap::ArgAction::Set, value_names = ["WIDTH", "HEIGHT"], default_values_t = [480, 360])]
+        resolution: Vec<u32>,
+    },
+    /// Write the scene for another renderer, meaning exactly what ember renders
+    /// (spec semantics): `ember export --format mitsuba SCENE.dae -r W H -s SPP -m M --out DIR`.
+    Export(ExportArgs),
+    /// Measure speed: `ember bench render` (samples/s of full renders).
+    #[cfg(feature = "bench")]
+    Bench {
+        #[command(subcommand)]
+        which: BenchCommand,
+    },
+}
+
+#[derive(Args, Debug)]
+pub struct ExportArgs {
+    /// The .dae scene file.
+    pub scene: PathBuf,
+    /// Target renderer.
+    #[arg(long, value_enum, default_value_t = ExportFormat::Mitsuba)]
+    pub format: ExportFormat,
+    /// Image resolution.
+    #[arg(short = 'r', num_args = 2, action = clap::ArgAction::Set, value_names = ["WIDTH", "HEIGHT"], default_values_t = [480, 360])]
+    pub resolution: Vec<u32>,
+    /// Samples per pixel.
+    #[arg(short = 's', default_value_t = 64)]
+    pub spp: u32,
+    /// Max ray depth (bounces), as ember's -m; Mitsuba's max_depth is m + 1.
+    #[arg(short = 'm', default_value_t = 5)]
+    pub max_depth: u32,
+    /// Output folder (created if missing); files are named after the scene.
+    #[arg(long = "out", default_value = ".")]
+    pub out: PathBuf,
+}
+
+#[derive(Clone, Copy, Debug, ValueEnum)]
+pub enum ExportFormat {
+    /// Mitsuba 3 XML with PLY meshes.
+    Mitsuba,
+}
+
+#[cfg(feature = "bench")]
+#[derive(Subcommand, Debug)]
+pub enum BenchCommand {
+    /// Where methods fail: a row per case (delta lights, tiny lights, glossy vs rough, caustics, scale, grazing rays,
+    /// adaptive sampling, roulette) with what each method does there. Writes stability.csv, stability.md and a chart.
+    Stability {
+        /// Output folder.
+        #[arg(long, default_value = "bench-out/stability")]
+        out: PathBuf,
+        /// Multiplies every case's samples per pixel.
+        #[arg(long, default_value_t = 1.0)]
+        spp_scale: f32,
+        /// Random seed.
+        #[arg(long, default_value_t = 0)]
+        seed: u64,
+    },
+    /// Build time, memory and Mrays/s (camera, incoherent, shadow rays) of every backend this build has,
+    /// at each thread count, with the native/Embree ratio. Default scenes: CBbunny, CBspheres_lambertian, a ~1M-triangle displaced sphere.
+    Accel {
+        /// Scenes to measure instead of the defaults.
+        scenes: Vec<PathBuf>,
+        /// Incoherent and shadow rays per measurement (camera rays are 480x360).
+        #[arg(long, default_value_t = 500_000)]
+        rays: usize,
+        /// Thread counts to measure.
+        #[arg(long, value_delimiter = ',', default_values_t = [1, 2])]
+        threads: Vec<usize>,
+        /// Each figure is the median of this many runs.
+        #[arg(long, default_value_t = 5)]
+        repeats: usize,
+        /// Embree's build quality.
+        #[arg(long, value_enum, default_value_t = QualityArg::Medium)]
+        quality: QualityArg,
+        /// Triangle count of the generated displaced sphere (0 leaves it out).
+        #[arg(long, default_value_t = 1_000_000)]
+        mesh_triangles: usize,
+        /// Instead: generated meshes (displaced sphere, random soup) from 1k to 4M triangles, every native builder and
+        /// Embree quality, charted against triangle count (log-log) with fitted growth. Writes CSV, Markdown and charts to --out.
+        #[arg(long)]
+        scaling: bool,
+        /// Output folder of --scaling.
+        #[arg(long, default_value = "bench-out/scaling")]
+        out: PathBuf,
+    },
+    /// Error against render time for each method (direct: hemisphere / light / MIS; GI: roulette, -l, adaptive, backends).
+    /// Writes <out>/<scene>_m<M>.csv and error-vs-time charts (PNG and SVG), prints the time each method needs to reach an error.
+    Converge {
+        /// The .dae scene.
+        scene: PathBuf,
+        /// Reference image (linear EXR at the render resolution). Default: ember's own high-spp render, cached under <out>/cache.
+        #[arg(long)]
+        reference: Option<PathBuf>,
+        /// Per-pixel RMS noise of --reference, if known (e.g. noise_rmse_per_pixel from the references' manifest); subtracted from every MSE.
+        #[arg(long)]
+        reference_noise: Option<f64>,
+        /// Max ray depth.
+        #[arg(short = 'm', default_value_t = 1)]
+        max_depth: u32,
+        /// Resolution.
+        #[arg(short = 'r', num_args = 2, action = clap::ArgAction::Set, value_names = ["WIDTH", "HEIGHT"], default_values_t = [160, 120])]
+        resolution: Vec<u32>,
+        /// Largest spp of the doubling sequence 1, 2, 4, ...
+        #[arg(long, default_value_t = 1024)]
+        max_spp: u32,
+        /// Stop doubling a method once one render takes longer than this (seconds).
+        #[arg(long, default_value_t = 8.0)]
+        max_seconds: f64,
+        /// spp of ember's own reference.
+        #[arg(long, default_value_t = 8192)]
+        reference_spp: u32,
+        /// RMSE whose time-to-reach is tabulated (default: the median of the methods' final RMSEs).
+        #[arg(long)]
+        target_rmse: Option<f64>,
+        /// Output folder.
+        #[arg(long, default_value = "bench-out")]
+        out: PathBuf,
+        /// Random seed.
+        #[arg(long, default_value_t = 0)]
+        seed: u64,
+    },
+    /// Samples per second for CBspheres_lambertian and CBbunny at 480x360, 64 spp, -m 5.
+    Render {
+        /// Scenes to render (default: the two CS184 scenes from ../shared).
+        scenes: Vec<PathBuf>,
+        /// Samples per pixel.
+        #[arg(short = 's', default_value_t = 64)]
+        spp: u32,
+        /// Max ray depth.
+        #[arg(short = 'm', default_value_t = 5)]
+        max_depth: u32,
+        /// Repetitions per scene (the median is reported).
+        #[arg(long, default_value_t = 3)]
+        repeat: u32,
+        /// Backend.
+        #[arg(long, value_enum, default_value_t = AccelArg::Native)]
+        accel: AccelArg,
+        /// Output folder (render.csv, render.md).
+        #[arg(long, default_value = "bench-out/render")]
+        out: PathBuf,
+    },
+}
+
+#[derive(Args, Debug)]
+pub struct RenderArgs {
+    /// The .dae scene to render.
+    pub scene: Option<PathBuf>,
+
+    /// Worker threads (default: all cores). The image does not depend on it.
+    #[arg(short = 't', value_name = "THREADS")]
+    pub threads: Option<usize>,
+
+    /// Camera rays (samples) per pixel; with -a, the cap per pixel.
+    #[arg(short = 's', value_name = "SPP", default_value_t = 1)]
+    pub spp: u32,
+
+    /// Light samples per area light at every shading point (delta lights take one).
+    #[arg(short = 'l', value_name = "SAMPLES", default_value_t = 1)]
+    pub light_samples: u32,
+
+    /// Max ray depth: the most bounces (scattering events) a counted path may have. 0 = emitters only, 1 = direct lighting.
+    #[arg(short = 'm', value_name = "DEPTH", default_value_t = 1)]
+    pub max_depth: u32,
+
+    /// Accumulate bounces: 1 (default) sums all paths of up to -m bounces, 0 keeps only paths of exactly -m bounces.
+    #[arg(short = 'o', value_name = "0|1", default_value_t = 1, value_parser = clap::value_parser!(u8).range(0..=1))]
+    pub accumulate: u8,
+
+    /// Adaptive sampling: after every BATCH samples stop a pixel once 1.96·σ/√n ≤ TOL·μ. `-a` alone means 32 0.05.
+    #[arg(short = 'a', num_args = 0..=2, action = clap::ArgAction::Set, value_names = ["BATCH", "TOL"])]
+    pub adaptive: Option<Vec<String>>,
+
+    /// Direct lighting by uniform hemisphere sampling instead of light sampling (cannot see point/directional lights).
+    #[arg(short = 'H')]
+    pub hemisphere: bool,
+
+    /// Output image; .png (8-bit sRGB) or .exr (linear float). Default: <scene stem>.png.
+    #[arg(short = 'f', value_name = "FILE")]
+    pub output: Option<PathBuf>,
+
+    /// Resolution of the image.
+    #[arg(short = 'r', num_args = 2, action = clap::ArgAction::Set, value_names = ["WIDTH", "HEIGHT"], default_values_t = [480, 360])]
+    pub resolution: Vec<u32>,
+
+    /// Intersection backend.
+    #[arg(long, value_enum, default_value_t = AccelArg::Native)]
+    pub accel: AccelArg,
+
+    /// How the native BVH is built.
+    #[arg(long, value_enum, default_value_t = BvhArg::Sah)]
+    pub bvh: BvhArg,
+
+    /// Embree's build quality (with --accel embree).
+    #[arg(long, value_enum, default_value_t = QualityArg::Medium)]
+    pub embree_quality: QualityArg,
+
+    /// What each pixel shows.
+    #[arg(long, value_enum, default_value_t = ShadingArg::Radiance)]
+    pub shading: ShadingArg,
+
+    /// Direct-lighting estimator. auto: MIS (light + BSDF sampling) when the scene has glossy surfaces or an ambient light, light sampling otherwise (see BENCHMARKS.md). -H forces hemisphere.
+    #[arg(long, value_enum, default_value_t = IntegratorArg::Auto)]
+    pub integrator: IntegratorArg,
+
+    /// Russian roulette: off, throughput (continue with probability max(throughput), at least 0.05), or a fixed probability like 0.5.
+    #[arg(long, default_value = "throughput", value_name = "off|throughput|PROB")]
+    pub rr: String,
+
+    /// First bounce at which Russian roulette may end a path.
+    #[arg(long, default_value_t = 3, value_name = "BOUNCE")]
+    pub rr_start: u32,
+
+    /// Random seed; the same seed gives the same image whatever -t is.
+    #[arg(long, default_value_t = 0)]
+    pub seed: u64,
+
+    /// No progress bar and no summary.
+    #[arg(short = 'q', long)]
+    pub quiet: bool,
+}
+
+#[derive(Clone, Copy, Debug, ValueEnum, PartialEq, Eq)]
+pub enum AccelArg {
+    /// ember's own BVH.
+    Native,
+    /// Intel Embree (builds with --features embree only).
+    Embree,
+}
+
+#[derive(Clone, Copy, Debug, ValueEnum)]
+pub enum BvhArg {
+    /// Binned surface-area heuristic.
+    Sah,
+    /// The course's split at the centroid midpoint of the longest axis.
+    Midpoint,
+}
+
+#[derive(Clone, Copy, Debug, ValueEnum)]
+pub enum QualityArg {
+    Low,
+    Medium,
+    High,
+}
+
+#[derive(Clone, Copy, Debug, ValueEnum, PartialEq, Eq)]
+pub enum ShadingArg {
+    /// The physically based image.
+    Radiance,
+    /// 0.5·n + 0.5 of the shading normal (course parts 1-2).
+    Normals,
+    /// Heat map of BVH nodes + primitives tested per camera ray.
+    BvhCost,
+}
+
+#[derive(Clone, Copy, Debug, ValueEnum, PartialEq, Eq)]
+pub enum IntegratorArg {
+    Auto,
+    /// Light sampling only.
+    Light,
+    /// Light and BSDF sampling, power heuristic.
+    Mis,
+    /// Uniform hemisphere sampling (same as -H).
+    Hemisphere,
+    /// BSDF sampling alone, no light sampling (cannot see point/directional lights).
+    Bsdf,
+}

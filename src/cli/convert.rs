@@ -1,0 +1,138 @@
+//! Flags into library settings: every check and translation of a flag's value lives here.
+
+use super::args::{AccelArg, BvhArg, IntegratorArg, QualityArg, RenderArgs, ShadingArg};
+use anyhow::{bail, Context, Result};
+use ember::accel::{AccelKind, BvhBuilder, EmbreeQuality};
+use ember::integrators::{DirectStrategy, Roulette};
+use ember::render::{Adaptive, RenderSettings, Shading};
+use std::path::{Path, PathBuf};
+
+pub(super) fn check_resolution(w: u32, h: u32) -> Result<()> {
+    if w == 0 || h == 0 || (w as u64) * (h as u64) > 1 << 28 {
+        bail!("resolution {w}x{h} is out of range (each side ≥ 1, at most 2^28 pixels)");
+    }
+    Ok(())
+}
+
+pub(super) fn accel_kind(a: AccelArg, b: BvhArg, q: QualityArg) -> AccelKind {
+    match a {
+        AccelArg::Native => AccelKind::Native(match b {
+            BvhArg::Sah => BvhBuilder::Sah,
+            BvhArg::Midpoint => BvhBuilder::Midpoint,
+        }),
+        AccelArg::Embree => AccelKind::Embree(match q {
+            QualityArg::Low => EmbreeQuality::Low,
+            QualityArg::Medium => EmbreeQuality::Medium,
+            QualityArg::High => EmbreeQuality::High,
+        }),
+    }
+}
+
+pub(super) fn parse_adaptive(a: &Option<Vec<String>>) -> Result<Option<Adaptive>> {
+    let Some(v) = a else { return Ok(None) };
+    let batch: u32 = match v.first() {
+        Some(s) => s
+            .parse()
+            .ok()
+            .filter(|&b| b > 0)
+            .with_context(|| format!("-a: BATCH must be a positive integer, got {s:?}"))?,
+        None => 32,
+    };
+    let tol: f32 = match v.get(1) {
+        Some(s) => s
+            .parse()
+            .ok()
+            .filter(|t: &f32| t.is_finite() && *t > 0.0)
+            .with_context(|| format!("-a: TOL must be a positive number, got {s:?}"))?,
+        None => 0.05,
+    };
+    Ok(Some(Adaptive::new(batch, tol)))
+}
+
+pub(super) fn parse_roulette(s: &str, start: u32) -> Result<Roulette> {
+    Ok(match s {
+        "off" => Roulette::Off,
+        "throughput" => Roulette::Throughput {
+            start,
+            min_prob: 0.05,
+        },
+        p => {
+            let prob: f32 = p
+                .parse()
+                .ok()
+                .filter(|q: &f32| *q > 0.0 && *q <= 1.0)
+                .with_context(|| {
+                    format!("--rr: expected off, throughput or a probability in (0, 1], got {p:?}")
+                })?;
+            Roulette::Fixed { start, prob }
+        }
+    })
+}
+
+/// The requested estimator; `None` for auto, which depends on the scene.
+pub(super) fn strategy(args: &RenderArgs) -> Option<DirectStrategy> {
+    if args.hemisphere {
+        return Some(DirectStrategy::Hemisphere);
+    }
+    match args.integrator {
+        IntegratorArg::Light => Some(DirectStrategy::Light),
+        IntegratorArg::Mis => Some(DirectStrategy::Mis),
+        IntegratorArg::Hemisphere => Some(DirectStrategy::Hemisphere),
+        IntegratorArg::Bsdf => Some(DirectStrategy::Bsdf),
+        IntegratorArg::Auto => None,
+    }
+}
+
+pub(super) fn settings_from(args: &RenderArgs) -> Result<RenderSettings> {
+    if args.spp == 0 {
+        bail!("-s: samples per pixel must be at least 1");
+    }
+    Ok(RenderSettings {
+        spp: args.spp,
+        light_samples: args.light_samples.max(1),
+        max_depth: args.max_depth,
+        accumulate: args.accumulate == 1,
+        strategy: strategy(args),
+        roulette: parse_roulette(&args.rr, args.rr_start)?,
+        adaptive: parse_adaptive(&args.adaptive)?,
+        shading: match args.shading {
+            ShadingArg::Radiance => Shading::Radiance,
+            ShadingArg::Normals => Shading::Normals,
+            ShadingArg::BvhCost => Shading::BvhCost,
+        },
+        seed: args.seed,
+    })
+}
+
+pub(super) fn output_path(args: &RenderArgs, scene: &Path) -> Result<PathBuf> {
+    let out = match &args.output {
+        Some(p) => p.clone(),
+        None => PathBuf::from(format!(
+            "{}.png",
+            scene
+                .file_stem()
+                .map(|s| s.to_string_lossy())
+                .unwrap_or("ember".into())
+        )),
+    };
+    ember::image_io::OutputFormat::from_path(&out)?;
+    Ok(out)
+}
+
+/// `-a` takes up to two values, so `ember -a scene.dae` hands the scene to `-a`;
+/// give it back when it is clearly not a number.
+pub(super) fn adopt_scene_from_adaptive(args: &mut RenderArgs) {
+    if args.scene.is_some() {
+        return;
+    }
+    if let Some(v) = args.adaptive.as_mut() {
+        if v.last().is_some_and(|s| s.parse::<f64>().is_err()) {
+            args.scene = v.pop().map(PathBuf::from);
+        }
+    }
+}
+
+#[cfg(feature = "bench")]
+pub(super) fn threads_invalid(t: &[usize]) -> bool {
+    t.is_empty() || t.contains(&0)
+}

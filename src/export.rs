@@ -1,0 +1,377 @@
+//! Scene export to Mitsuba 3, so that ember can be measured against a peer on
+//! exactly the image it renders (spec semantics, not the course's): the same
+//! camera, lights, materials, path-length rule and pixel filter.
+//!
+//! Meshes go to binary PLY files beside the XML, one per (material, emitter)
+//! group, with vertices unshared so per-corner normals survive. The triangle
+//! winding is already the spec's front side (the loader orients it), which is
+//! also Mitsuba's: area emitters emit toward it and dielectrics are entered
+//! through it.
+
+use crate::camera::Camera;
+use crate::film::Image;
+use crate::image_io::{write_image, ImageIoError};
+use crate::lights::Light;
+use crate::materials::Material;
+use crate::scene::{Scene, NO_LIGHT};
+use crate::Color;
+use glam::Vec3;
+use std::collections::BTreeMap;
+use std::fmt::Write as _;
+use std::io::Write as _;
+use std::path::{Path, PathBuf};
+
+/// How the exported scene is rendered.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct MitsubaSettings {
+    pub spp: u32,
+    /// ember's `-m`: bounces. Mitsuba's `max_depth` counts path segments, so it is `m + 1`.
+    pub max_depth: u32,
+    /// The bounce from which ember's default roulette runs; Mitsuba's `rr_depth`.
+    /// `None` turns roulette off (Mitsuba: `rr_depth` past `max_depth`).
+    pub roulette_start: Option<u32>,
+}
+
+/// What an export wrote, and what Mitsuba cannot express exactly.
+#[derive(Debug, Default)]
+pub struct ExportSummary {
+    pub files: Vec<PathBuf>,
+    pub warnings: Vec<String>,
+}
+
+#[derive(Debug, thiserror::Error)]
+pub enum ExportError {
+    #[error("{path}: cannot write: {source}")]
+    Io {
+        path: PathBuf,
+        source: std::io::Error,
+    },
+    #[error(transparent)]
+    Image(#[from] ImageIoError),
+}
+
+/// Rows of the sky map: the horizon falls between two rows, so a tall map keeps
+/// Mitsuba's bilinear lookup from blurring the hemisphere's edge by more than 0.1°.
+const SKY_ROWS: u32 = 2048;
+const SKY_COLUMNS: u32 = 8;
+
+/// Writes `<dir>/<stem>.xml` and its PLY (and sky EXR) files.
+pub fn write_mitsuba(
+    scene: &Scene,
+    camera: &Camera,
+    settings: &MitsubaSettings,
+    dir: &Path,
+    stem: &str,
+) -> Result<ExportSummary, ExportError> {
+    let mut summary = ExportSummary::default();
+    let mut xml = String::new();
+    let _ = writeln!(xml, "<?xml version=\"1.0\" encoding=\"utf-8\"?>");
+    let _ = writeln!(
+        xml,
+        "<!-- exported by ember {} -->\n<scene version=\"3.0.0\">",
+        env!("CARGO_PKG_VERSION")
+    );
+    xml += &integrator_xml(settings);
+    xml += &sensor_xml(camera, settings.spp, scene);
+    for (g, group) in triangle_groups(scene).into_iter().enumerate() {
+        let name = format!("{stem}_mesh{g}.ply");
+        let path = dir.join(&name);
+        write_ply(scene, &group.triangles, &path)?;
+        summary.files.push(path);
+        let emitter = group_emitter(scene, &group);
+        let _ = writeln!(
+            xml,
+            "  <shape type=\"ply\">\n    <string name=\"filename\" value=\"{name}\"/>\n    \
+             <boolean name=\"face_normals\" value=\"{}\"/>\n{}{}  </shape>",
+            !group.smooth,
+            bsdf_xml(&group_material(scene, &group), &mut summary.warnings),
+            emitter.map(area_emitter_xml).unwrap_or_default()
+        );
+    }
+    for s in &scene.spheres {
+        let m = scene.materials[s.material as usize];
+        let _ = writeln!(
+            xml,
+            "  <shape type=\"sphere\">\n    <point name=\"center\" {}/>\n    \
+             <float name=\"radius\" value=\"{}\"/>\n{}{}  </shape>",
+            xyz(s.centre),
+            s.radius,
+            bsdf_xml(&m, &mut summary.warnings),
+            emission_of(&m).map(area_emitter_xml).unwrap_or_default()
+        );
+    }
+    for light in &scene.lights {
+        xml += &light_xml(light, dir, stem, &mut summary)?;
+    }
+    xml += "</scene>\n";
+    let path = dir.join(format!("{stem}.xml"));
+    std::fs::write(&path, xml).map_err(|source| ExportError::Io {
+        path: path.clone(),
+        source,
+    })?;
+    summary.files.insert(0, path);
+    Ok(summary)
+}
+
+fn integrator_xml(s: &MitsubaSettings) -> String {
+    let max_depth = s.max_depth + 1;
+    // Mitsuba's depth of a path vertex is ember's bounce count plus one.
+    let rr_depth = s.roulette_start.map_or(max_depth + 1, |b| b + 1);
+    format!(
+        "  <integrator type=\"path\">\n    <integer name=\"max_depth\" value=\"{max_depth}\"/>\n    \
+         <integer name=\"rr_depth\" value=\"{rr_depth}\"/>\n    \
+         <boolean name=\"hide_emitters\" value=\"false\"/>\n  </integrator>\n"
+    )
+}
+
+fn sensor_xml(camera: &Camera, spp: u32, scene: &Scene) -> String {
+    let (hfov, _) = camera.fov_degrees();
+    let target = camera.eye + camera.forward;
+    // No clipping (spec §4): the near plane far below any scene feature, the far one past it.
+    let extent =
+        scene.bounds.diagonal().length().max(1.0) + (camera.eye - scene.bounds.centre()).length();
+    format!(
+        "  <sensor type=\"perspective\">\n    <float name=\"fov\" value=\"{hfov}\"/>\n    \
+         <string name=\"fov_axis\" value=\"x\"/>\n    \
+         <float name=\"near_clip\" value=\"{}\"/>\n    <float name=\"far_clip\" value=\"{}\"/>\n    \
+         <transform name=\"to_world\">\n      <lookat origin=\"{}\" target=\"{}\" up=\"{}\"/>\n    </transform>\n    \
+         <sampler type=\"independent\">\n      <integer name=\"sample_count\" value=\"{spp}\"/>\n    </sampler>\n    \
+         <film type=\"hdrfilm\">\n      <integer name=\"width\" value=\"{}\"/>\n      \
+         <integer name=\"height\" value=\"{}\"/>\n      <string name=\"pixel_format\" value=\"rgb\"/>\n      \
+         <string name=\"component_format\" value=\"float32\"/>\n      <rfilter type=\"box\"/>\n    </film>\n  </sensor>\n",
+        extent * 1e-7,
+        extent * 10.0,
+        csv(camera.eye),
+        csv(target),
+        csv(camera.up),
+        camera.width,
+        camera.height,
+    )
+}
+
+/// Triangles that share a material, an emitter and whether they carry normals.
+struct TriangleGroup {
+    material: u32,
+    light: u32,
+    smooth: bool,
+    triangles: Vec<usize>,
+}
+
+fn triangle_groups(scene: &Scene) -> Vec<TriangleGroup> {
+    let mut groups: BTreeMap<(u32, u32, bool), Vec<usize>> = BTreeMap::new();
+    for (i, t) in scene.triangles.iter().enumerate() {
+        groups
+            .entry((t.material, t.light, t.n.is_some()))
+            .or_default()
+            .push(i);
+    }
+    groups
+        .into_iter()
+        .map(|((material, light, smooth), triangles)| TriangleGroup {
+            material,
+            light,
+            smooth,
+            triangles,
+        })
+        .collect()
+}
+
+fn group_material(scene: &Scene, g: &TriangleGroup) -> Material {
+    if g.light != NO_LIGHT {
+        // An area light reflects nothing (spec §5).
+        return Material::Lambertian {
+            albedo: Color::ZERO,
+        };
+    }
+    scene.materials[g.material as usize]
+}
+
+fn group_emitter(scene: &Scene, g: &TriangleGroup) -> Option<Color> {
+    match scene.lights.get(g.light as usize) {
+        Some(Light::Area(area)) => Some(area.radiance),
+        _ => emission_of(&scene.materials[g.material as usize]),
+    }
+}
+
+fn emission_of(m: &Material) -> Option<Color> {
+    match *m {
+        Material::Emission { radiance } => Some(radiance),
+        _ => None,
+    }
+}
+
+fn area_emitter_xml(radiance: Color) -> String {
+    format!(
+        "    <emitter type=\"area\">\n      <rgb name=\"radiance\" value=\"{}\"/>\n    </emitter>\n",
+        rgb(radiance)
+    )
+}
+
+/// Mitsuba's BSDF for a material; one-sided Mitsuba BSDFs are wrapped in
+/// `twosided` where the spec says both faces behave alike.
+fn bsdf_xml(m: &Material, warnings: &mut Vec<String>) -> String {
+    let two_sided = |inner: String| {
+        format!(
+            "    <bsdf type=\"twosided\">\n  {}    </bsdf>\n",
+            inner.replace("\n  ", "\n    ")
+        )
+    };
+    match *m {
+        Material::Lambertian { albedo } => two_sided(format!(
+            "  <bsdf type=\"diffuse\"><rgb name=\"reflectance\" value=\"{}\"/></bsdf>\n",
+            rgb(albedo)
+        )),
+        Material::Mirror { reflectance } => two_sided(format!(
+            "  <bsdf type=\"conductor\"><string name=\"material\" value=\"none\"/>\
+             <rgb name=\"specular_reflectance\" value=\"{}\"/></bsdf>\n",
+            rgb(reflectance)
+        )),
+        Material::Microfacet { alpha, eta, k } => two_sided(format!(
+            "  <bsdf type=\"roughconductor\"><string name=\"distribution\" value=\"beckmann\"/>\
+             <float name=\"alpha\" value=\"{alpha}\"/><rgb name=\"eta\" value=\"{}\"/>\
+             <rgb name=\"k\" value=\"{}\"/></bsdf>\n",
+            rgb(eta),
+            rgb(k)
+        )),
+        Material::Glass {
+            ior,
+            reflectance,
+            transmittance,
+        } => dielectric_xml(ior, reflectance, transmittance),
+        Material::Refraction { ior, transmittance } => {
+            warnings.push(
+                "refraction-only material: Mitsuba's nearest is a dielectric without reflection, \
+                 which weights transmission by (1 - Fresnel) where the spec does not"
+                    .into(),
+            );
+            dielectric_xml(ior, Color::ZERO, transmittance)
+        }
+        Material::Emission { .. } | Material::Black => {
+            "    <bsdf type=\"diffuse\"><rgb name=\"reflectance\" value=\"0 0 0\"/></bsdf>\n".into()
+        }
+    }
+}
+
+fn dielectric_xml(ior: f32, reflectance: Color, transmittance: Color) -> String {
+    format!(
+        "    <bsdf type=\"dielectric\"><float name=\"int_ior\" value=\"{ior}\"/>\
+         <float name=\"ext_ior\" value=\"1\"/><rgb name=\"specular_reflectance\" value=\"{}\"/>\
+         <rgb name=\"specular_transmittance\" value=\"{}\"/></bsdf>\n",
+        rgb(reflectance),
+        rgb(transmittance)
+    )
+}
+
+fn light_xml(
+    light: &Light,
+    dir: &Path,
+    stem: &str,
+    summary: &mut ExportSummary,
+) -> Result<String, ExportError> {
+    Ok(match *light {
+        // Area lights are emitted with their triangles.
+        Light::Area(_) => String::new(),
+        Light::Point {
+            position,
+            intensity,
+        } => format!(
+            "  <emitter type=\"point\">\n    <point name=\"position\" {}/>\n    \
+             <rgb name=\"intensity\" value=\"{}\"/>\n  </emitter>\n",
+            xyz(position),
+            rgb(intensity)
+        ),
+        Light::Directional {
+            direction,
+            irradiance,
+        } => format!(
+            "  <emitter type=\"directional\">\n    <vector name=\"direction\" {}/>\n    \
+             <rgb name=\"irradiance\" value=\"{}\"/>\n  </emitter>\n",
+            xyz(direction),
+            rgb(irradiance)
+        ),
+        Light::Ambient { radiance } => {
+            let name = format!("{stem}_sky.exr");
+            let path = dir.join(&name);
+            write_image(&sky_map(radiance), &path)?;
+            summary.files.push(path);
+            format!(
+                "  <emitter type=\"envmap\">\n    <string name=\"filename\" value=\"{name}\"/>\n  </emitter>\n"
+            )
+        }
+    })
+}
+
+/// The hemisphere light as a latitude-longitude map: Mitsuba's rows run from
+/// +Y (top) to −Y, so the upper half is `radiance` and the lower half black.
+fn sky_map(radiance: Color) -> Image {
+    let mut img = Image::new(SKY_COLUMNS, SKY_ROWS);
+    for (i, p) in img.pixels.iter_mut().enumerate() {
+        let row = i as u32 / SKY_COLUMNS;
+        *p = if row < SKY_ROWS / 2 {
+            radiance
+        } else {
+            Color::ZERO
+        };
+    }
+    img
+}
+
+/// Binary PLY of the triangles, three vertices each (with normals when the mesh has them).
+fn write_ply(scene: &Scene, triangles: &[usize], path: &Path) -> Result<(), ExportError> {
+    let io = |source| ExportError::Io {
+        path: path.to_path_buf(),
+        source,
+    };
+    let smooth = triangles
+        .first()
+        .is_some_and(|&i| scene.triangles[i].n.is_some());
+    let mut header = format!(
+        "ply\nformat binary_little_endian 1.0\nelement vertex {}\n\
+         property float x\nproperty float y\nproperty float z\n",
+        3 * triangles.len()
+    );
+    if smooth {
+        header += "property float nx\nproperty float ny\nproperty float nz\n";
+    }
+    let _ = write!(
+        header,
+        "element face {}\nproperty list uchar int vertex_indices\nend_header\n",
+        triangles.len()
+    );
+    let mut bytes = header.into_bytes();
+    for &i in triangles {
+        let t = &scene.triangles[i];
+        for c in 0..3 {
+            push_vec(&mut bytes, scene.positions[t.v[c] as usize]);
+            if let Some(n) = t.n {
+                push_vec(&mut bytes, scene.normals[n[c] as usize]);
+            }
+        }
+    }
+    for f in 0..triangles.len() as i32 {
+        bytes.push(3);
+        for c in 0..3 {
+            bytes.extend_from_slice(&(3 * f + c).to_le_bytes());
+        }
+    }
+    let mut file = std::fs::File::create(path).map_err(io)?;
+    file.write_all(&bytes).map_err(io)
+}
+
+fn push_vec(bytes: &mut Vec<u8>, v: Vec3) {
+    for x in v.to_array() {
+        bytes.extend_from_slice(&x.to_le_bytes());
+    }
+}
+
+fn xyz(v: Vec3) -> String {
+    format!("x=\"{}\" y=\"{}\" z=\"{}\"", v.x, v.y, v.z)
+}
+
+fn csv(v: Vec3) -> String {
+    format!("{}, {}, {}", v.x, v.y, v.z)
+}
+
+fn rgb(c: Color) -> String {
+    format!("{} {} {}", c.x, c.y, c.z)
+}

@@ -1,0 +1,98 @@
+//! Pins a hash of a few small renders so that restructuring the code cannot change an image
+//! by accident: for a fixed seed every pixel must stay bit-identical.
+//!
+//! Only non-adaptive renders are pinned (the adaptive stopping rule may change on purpose).
+//! A deliberate change to what the renderer computes changes these hashes; so may a change
+//! to how the BVH handles hits of grazing rays. Update a pin only for such a change, and say
+//! so in the commit.
+
+mod common;
+
+use common::{load, render_scene};
+use ember::film::Image;
+use ember::integrators::DirectStrategy;
+use ember::render::RenderSettings;
+
+/// FNV-1a over the bits of every channel of every pixel.
+fn image_hash(img: &Image) -> u64 {
+    let mut h: u64 = 0xcbf2_9ce4_8422_2325;
+    for p in &img.pixels {
+        for c in [p.x, p.y, p.z] {
+            for b in c.to_bits().to_le_bytes() {
+                h ^= b as u64;
+                h = h.wrapping_mul(0x0100_0000_01b3);
+            }
+        }
+    }
+    h
+}
+
+struct Case {
+    scene: &'static str,
+    max_depth: u32,
+    strategy: DirectStrategy,
+    expected: u64,
+}
+
+const CASES: &[Case] = &[
+    Case {
+        scene: "scenes/cs184/sky/CBspheres_lambertian.dae",
+        max_depth: 1,
+        strategy: DirectStrategy::Light,
+        expected: 0x59fc_ea9b_7a8e_7487,
+    },
+    Case {
+        scene: "scenes/cs184/sky/CBspheres_lambertian.dae",
+        max_depth: 5,
+        strategy: DirectStrategy::Mis,
+        expected: 0x3574_5f23_5995_10e4,
+    },
+    Case {
+        scene: "scenes/cs184/sky/CBspheres.dae",
+        max_depth: 5,
+        strategy: DirectStrategy::Light,
+        expected: 0xaf02_96d4_629a_81cc,
+    },
+    Case {
+        scene: "scenes/cs184/sky/CBbunny_microfacet_cu.dae",
+        max_depth: 5,
+        strategy: DirectStrategy::Mis,
+        expected: 0x3631_4f11_bbf2_7bcf,
+    },
+];
+
+fn render_hash(case: &Case, threads: usize) -> u64 {
+    let scene = load(case.scene);
+    let s = RenderSettings {
+        spp: 4,
+        light_samples: 2,
+        max_depth: case.max_depth,
+        strategy: Some(case.strategy),
+        seed: 7,
+        ..Default::default()
+    };
+    let pool = rayon::ThreadPoolBuilder::new()
+        .num_threads(threads)
+        .build()
+        .expect("thread pool");
+    let out = pool.install(|| render_scene(&scene, (64, 48), &s));
+    assert_eq!(out.nonfinite_samples, 0, "{}", case.scene);
+    image_hash(&out.image)
+}
+
+#[test]
+fn small_renders_are_bit_identical_to_the_pinned_hashes_at_one_and_two_threads() {
+    let mut wrong = Vec::new();
+    for case in CASES {
+        let one = render_hash(case, 1);
+        let two = render_hash(case, 2);
+        assert_eq!(one, two, "{}: thread count changed the image", case.scene);
+        if one != case.expected {
+            wrong.push(format!(
+                "{} -m {} {:?}: got {one:#018x}, pinned {:#018x}",
+                case.scene, case.max_depth, case.strategy, case.expected
+            ));
+        }
+    }
+    assert!(wrong.is_empty(), "{}", wrong.join("\n"));
+}
