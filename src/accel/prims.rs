@@ -26,13 +26,12 @@ impl<'a> PrimRay<'a> {
 
 /// Primitives in structure order. Slot `i` holds primitive `ids[i]`; triangle
 /// slots carry their corners in `tris[i]`, sphere slots (ids `≥ num_triangles`)
-/// leave `tris[i]` unused and read the (few) spheres from `spheres`.
+/// leave `tris[i]` unused and are tested by `spheres`.
 #[derive(Clone, Debug, Default, PartialEq)]
 pub(crate) struct PrimStore {
     tris: Vec<PackedTriangle>,
     ids: Vec<PrimId>,
-    spheres: Vec<(Vec3, f32)>,
-    num_triangles: u32,
+    spheres: SphereStore,
 }
 
 impl PrimStore {
@@ -54,8 +53,7 @@ impl PrimStore {
         PrimStore {
             tris,
             ids: order.to_vec(),
-            spheres: scene.spheres.iter().map(|s| (s.centre, s.radius)).collect(),
-            num_triangles: ntri as u32,
+            spheres: SphereStore::new(scene),
         }
     }
 
@@ -66,7 +64,7 @@ impl PrimStore {
     pub fn memory_bytes(&self) -> usize {
         self.tris.capacity() * std::mem::size_of::<PackedTriangle>()
             + self.ids.capacity() * std::mem::size_of::<PrimId>()
-            + self.spheres.capacity() * std::mem::size_of::<(Vec3, f32)>()
+            + self.spheres.memory_bytes()
     }
 
     /// Tests slot `i` for a hit with `t ≤ t_max`.
@@ -83,7 +81,7 @@ impl PrimStore {
         r: &PrimRay,
         t_max: f32,
     ) -> Option<PrimHit> {
-        if prim < self.num_triangles {
+        if prim < self.spheres.num_triangles {
             let h = tri.intersect(&r.tri, t_max)?;
             Some(PrimHit {
                 t: h.t,
@@ -92,21 +90,8 @@ impl PrimStore {
                 b2: h.b2,
             })
         } else {
-            self.intersect_sphere(prim, r.ray, t_max)
+            self.spheres.intersect(prim, r.ray, t_max)
         }
-    }
-
-    #[inline(never)]
-    fn intersect_sphere(&self, prim: PrimId, ray: &Ray, t_max: f32) -> Option<PrimHit> {
-        let (centre, radius) = self.spheres[(prim - self.num_triangles) as usize];
-        let ray = Ray { t_max, ..*ray };
-        let t = intersect_sphere(&ray, centre, radius)?;
-        Some(PrimHit {
-            t,
-            prim,
-            b1: 0.0,
-            b2: 0.0,
-        })
     }
 }
 
