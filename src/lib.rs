@@ -8,6 +8,7 @@ pub mod accel;
 pub mod bench;
 pub mod camera;
 pub mod color;
+pub mod distribution;
 pub mod export;
 pub mod film;
 pub mod geometry;

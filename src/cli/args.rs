@@ -56,6 +56,9 @@ pub struct ExportArgs {
     /// Output folder (created if missing); files are named after the scene.
     #[arg(long = "out", default_value = ".")]
     pub out: PathBuf,
+    /// Environment map replacing the scene's ambient light, as the renderer's -e (exported in Mitsuba's orientation).
+    #[arg(short = 'e', value_name = "FILE.exr")]
+    pub env_map: Option<PathBuf>,
 }
 
 #[derive(Clone, Copy, Debug, ValueEnum)]
@@ -198,6 +201,10 @@ pub struct RenderArgs {
     /// Direct lighting by uniform hemisphere sampling instead of light sampling (cannot see point/directional lights).
     #[arg(short = 'H')]
     pub hemisphere: bool,
+
+    /// Environment light: a latitude-longitude .exr map (row 0 = +Y, u = 0 at -X, u = 1/4 at +Z, as the course's) around the scene, importance-sampled by luminance x sin(theta). Replaces the scene's ambient light.
+    #[arg(short = 'e', value_name = "FILE.exr")]
+    pub env_map: Option<PathBuf>,
 
     /// Output image; .png (8-bit sRGB) or .exr (linear float). Default: <scene stem>.png.
     #[arg(short = 'f', value_name = "FILE")]

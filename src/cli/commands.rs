@@ -2,7 +2,8 @@
 
 use super::args::{AccelArg, ExportArgs, ExportFormat, RenderArgs};
 use super::convert::{
-    accel_kind, adopt_scene_from_adaptive, check_resolution, output_path, settings_from,
+    accel_kind, adopt_scene_from_adaptive, apply_env_map, check_resolution, output_path,
+    settings_from,
 };
 use anyhow::{bail, Result};
 use ember::accel;
@@ -27,18 +28,22 @@ pub(super) fn render(mut args: RenderArgs) -> Result<()> {
     let settings = settings_from(&args)?;
     let out = output_path(&args, &scene_path)?;
     // Claim the outputs before loading, so a bad path fails at once and no partial file appears.
-    let pending = ember::image_io::PendingImage::claim(&out, &[&scene_path])?;
+    let inputs: Vec<&Path> = std::iter::once(scene_path.as_path())
+        .chain(args.env_map.as_deref())
+        .collect();
+    let pending = ember::image_io::PendingImage::claim(&out, &inputs)?;
     let pending_rate = match settings.adaptive {
         Some(_) => Some(ember::image_io::PendingImage::claim(
             &rate_path(&out),
-            &[&scene_path],
+            &inputs,
         )?),
         None => None,
     };
     let kind = accel_kind(args.accel, args.bvh, args.embree_quality);
     let pool = thread_pool(args.threads)?;
     let t0 = Instant::now();
-    let scene = load_scene(&scene_path)?;
+    let mut scene = load_scene(&scene_path)?;
+    apply_env_map(args.env_map.as_deref(), &mut scene)?;
     let t_load = t0.elapsed();
     let t1 = Instant::now();
     let job = pool.install(|| RenderJob::new(scene, kind, width, height))?;
@@ -160,7 +165,8 @@ pub(super) fn export(a: ExportArgs) -> Result<()> {
     if a.spp == 0 {
         bail!("-s must be at least 1");
     }
-    let scene = load_scene(&a.scene)?;
+    let mut scene = load_scene(&a.scene)?;
+    apply_env_map(a.env_map.as_deref(), &mut scene)?;
     let camera = ember::camera::Camera::new(&scene.camera, &scene.bounds, w, h);
     std::fs::create_dir_all(&a.out)
         .map_err(|e| anyhow::anyhow!("{}: cannot create folder: {e}", a.out.display()))?;

@@ -136,3 +136,12 @@ pub(super) fn adopt_scene_from_adaptive(args: &mut RenderArgs) {
 pub(super) fn threads_invalid(t: &[usize]) -> bool {
     t.is_empty() || t.contains(&0)
 }
+
+/// `-e FILE.exr`: the scene lit by that environment map instead of its ambient light.
+pub(super) fn apply_env_map(env_map: Option<&Path>, scene: &mut ember::scene::Scene) -> Result<()> {
+    if let Some(path) = env_map {
+        let env = ember::lights::EnvironmentMap::load(path)?;
+        scene.set_environment(std::sync::Arc::new(env));
+    }
+    Ok(())
+}

@@ -46,7 +46,7 @@ pub struct StrategyRun {
 }
 
 impl StrategyRun {
-    fn from_halves(
+    pub(super) fn from_halves(
         strategy: DirectStrategy,
         name: &'static str,
         h: &Halves,
