@@ -230,7 +230,7 @@ pub struct RenderArgs {
     #[arg(long, value_enum, default_value_t = ShadingArg::Radiance)]
     pub shading: ShadingArg,
 
-    /// Direct-lighting estimator. auto: MIS (light + BSDF sampling) when the scene has glossy surfaces or an ambient light, light sampling otherwise (see BENCHMARKS.md). -H forces hemisphere.
+    /// Direct-lighting estimator. auto: MIS (light + BSDF sampling) when the scene has glossy surfaces or an ambient or environment (-e) light, light sampling otherwise (see BENCHMARKS.md). -H forces hemisphere.
     #[arg(long, value_enum, default_value_t = IntegratorArg::Auto)]
     pub integrator: IntegratorArg,
 

@@ -205,7 +205,8 @@ impl EnvironmentMap {
             EnvSampling::Uniform => uniform_sphere_pdf(),
             EnvSampling::Importance => {
                 let uv = dir_to_uv(wi);
-                let sin_theta = (1.0 - wi.y * wi.y).max(0.0).sqrt();
+                // From x and z: accurate near the poles, where 1 − y² cancels.
+                let sin_theta = (wi.x * wi.x + wi.z * wi.z).sqrt();
                 if sin_theta <= 0.0 {
                     return 0.0;
                 }
