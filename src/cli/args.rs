@@ -143,6 +143,12 @@ pub enum BenchCommand {
         /// Random seed.
         #[arg(long, default_value_t = 0)]
         seed: u64,
+        /// Also run Mitsuba 3 as a method, through this Python (one that imports `mitsuba`; scripts/mitsuba-env creates one and prints its path). Each point is the warm, render-only time of its own process.
+        #[arg(long, value_name = "PYTHON")]
+        mitsuba: Option<PathBuf>,
+        /// Mitsuba variants to run with --mitsuba, comma-separated.
+        #[arg(long, value_delimiter = ',', default_value = "llvm_ad_rgb")]
+        mitsuba_variants: Vec<String>,
     },
     /// Samples per second for CBspheres_lambertian and CBbunny at 480x360, 64 spp, -m 5.
     Render {
