@@ -8,6 +8,7 @@ pub use job::{average, Halves, PixelRect, RenderJob};
 use crate::color::{is_finite, luminance};
 use crate::film::{heat_map, Image};
 use crate::integrators::{debug, DirectStrategy, PathIntegrator, PathSettings, Roulette};
+use crate::names::{display_from_table, Named};
 use crate::sampling::Sampler;
 use crate::scene::Scene;
 use crate::Color;
@@ -24,6 +25,24 @@ pub enum Shading {
     /// Heat map of BVH nodes + primitives tested per camera ray.
     BvhCost,
 }
+
+impl Named for Shading {
+    const WHAT: &'static str = "shading";
+    const TABLE: &'static [(Self, &'static str, &'static str)] = &[
+        (Shading::Radiance, "radiance", "The physically based image"),
+        (
+            Shading::Normals,
+            "normals",
+            "0.5·n + 0.5 of the shading normal (course parts 1-2)",
+        ),
+        (
+            Shading::BvhCost,
+            "bvh-cost",
+            "Heat map of BVH nodes + primitives tested per camera ray",
+        ),
+    ];
+}
+display_from_table!(Shading);
 
 /// Adaptive sampling (spec §7): stop a pixel once `1.96·σ/√n ≤ tol·μ`.
 #[derive(Clone, Copy, Debug, PartialEq)]

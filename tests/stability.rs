@@ -9,6 +9,7 @@
 
 use ember::bench::stability::measure::z_score;
 use ember::bench::stability::{glass, lights, robust, sampling, Budget};
+use ember::integrators::DirectStrategy;
 
 const SEED: u64 = 20240611;
 const Z_MAX: f64 = 4.5;
@@ -27,8 +28,8 @@ fn case1_point_light_is_invisible_to_hemisphere_and_bsdf_sampling() {
     let c = lights::point_light(&budget(48, 36, 16)).unwrap();
     for r in &c.runs {
         assert_eq!(r.nonfinite, 0, "{}", r.name);
-        match r.name {
-            "hemisphere" | "BSDF" => {
+        match r.strategy {
+            DirectStrategy::Hemisphere | DirectStrategy::Bsdf => {
                 // Nothing in the scene emits toward a ray: the image is exactly black, and ember says why.
                 assert_eq!(r.max_pixel, 0.0, "{}: a delta light cannot be hit", r.name);
                 assert!(
@@ -58,7 +59,7 @@ fn case1_point_light_is_invisible_to_hemisphere_and_bsdf_sampling() {
 #[test]
 fn case2_small_light_hemisphere_noise_explodes_but_means_agree() {
     let c = lights::small_light(&budget(40, 30, 256), 1.0).unwrap();
-    let light = c.run("light");
+    let light = c.run(DirectStrategy::Light);
     for r in &c.runs {
         assert_eq!(r.nonfinite, 0, "{}", r.name);
         assert!(
@@ -82,13 +83,13 @@ fn case2_small_light_hemisphere_noise_explodes_but_means_agree() {
     // Hemisphere noise / light noise ≥ √(2π/Ω − 1) (see `predicted_min_ratio`); half of
     // it leaves room for the noise of the noise estimate (≈ 1/√hits ≈ 10% here).
     let bound = 0.5 * c.predicted_min_ratio();
-    let ratio = c.run("hemisphere").noise / light.noise;
+    let ratio = c.run(DirectStrategy::Hemisphere).noise / light.noise;
     assert!(
         ratio >= bound,
         "noise ratio hemisphere/light {ratio:.1} < {bound:.1}"
     );
     assert!(
-        c.run("MIS").noise <= 1.1 * light.noise,
+        c.run(DirectStrategy::Mis).noise <= 1.1 * light.noise,
         "MIS is not as good as light sampling on a small light"
     );
 }
@@ -96,11 +97,19 @@ fn case2_small_light_hemisphere_noise_explodes_but_means_agree() {
 #[test]
 fn case3_mis_is_never_much_worse_than_the_better_strategy() {
     for (scene, noisy, good) in [
-        (lights::GLOSSY_SCENES[0], "light", "BSDF"),
-        (lights::GLOSSY_SCENES[1], "BSDF", "light"),
+        (
+            lights::GLOSSY_SCENES[0],
+            DirectStrategy::Light,
+            DirectStrategy::Bsdf,
+        ),
+        (
+            lights::GLOSSY_SCENES[1],
+            DirectStrategy::Bsdf,
+            DirectStrategy::Light,
+        ),
     ] {
         let c = lights::glossy(&budget(40, 30, 128), scene).unwrap();
-        let mis = c.run("MIS");
+        let mis = c.run(DirectStrategy::Mis);
         for r in &c.runs {
             assert_eq!(r.nonfinite, 0, "{scene} {}", r.name);
             let z = z_score((r.mean, r.se), (mis.mean, mis.se));

@@ -1,6 +1,11 @@
 //! The flags: clap definitions only. `convert` turns them into library settings.
 
+use clap::builder::{PossibleValue, PossibleValuesParser, TypedValueParser};
 use clap::{Args, Parser, Subcommand, ValueEnum};
+use ember::accel::{Backend, BvhBuilder, EmbreeQuality};
+use ember::integrators::DirectStrategy;
+use ember::names::Named;
+use ember::render::Shading;
 use std::path::PathBuf;
 
 /// ember — a physically based CPU path tracer for the CS184 COLLADA scenes.
@@ -95,8 +100,8 @@ pub enum BenchCommand {
         #[arg(long, default_value_t = 5)]
         repeats: usize,
         /// Embree's build quality.
-        #[arg(long, value_enum, default_value_t = QualityArg::Medium)]
-        quality: QualityArg,
+        #[arg(long, value_parser = named::<EmbreeQuality>(), default_value_t = EmbreeQuality::default())]
+        quality: EmbreeQuality,
         /// Triangle count of the generated displaced sphere (0 leaves it out).
         #[arg(long, default_value_t = 1_000_000)]
         mesh_triangles: usize,
@@ -164,8 +169,8 @@ pub enum BenchCommand {
         #[arg(long, default_value_t = 3)]
         repeat: u32,
         /// Backend.
-        #[arg(long, value_enum, default_value_t = AccelArg::Native)]
-        accel: AccelArg,
+        #[arg(long, value_parser = named::<Backend>(), default_value_t = Backend::Native)]
+        accel: Backend,
         /// Output folder (render.csv, render.md).
         #[arg(long, default_value = "bench-out/render")]
         out: PathBuf,
@@ -214,24 +219,25 @@ pub struct RenderArgs {
     pub resolution: Vec<u32>,
 
     /// Intersection backend.
-    #[arg(long, value_enum, default_value_t = AccelArg::Native)]
-    pub accel: AccelArg,
+    #[arg(long, value_parser = named::<Backend>(), default_value_t = Backend::Native)]
+    pub accel: Backend,
 
     /// How the native BVH is built.
-    #[arg(long, value_enum, default_value_t = BvhArg::Sah)]
-    pub bvh: BvhArg,
+    #[arg(long, value_parser = named::<BvhBuilder>(), default_value_t = BvhBuilder::Sah)]
+    pub bvh: BvhBuilder,
 
     /// Embree's build quality (with --accel embree).
-    #[arg(long, value_enum, default_value_t = QualityArg::Medium)]
-    pub embree_quality: QualityArg,
+    #[arg(long, value_parser = named::<EmbreeQuality>(), default_value_t = EmbreeQuality::Medium)]
+    pub embree_quality: EmbreeQuality,
 
     /// What each pixel shows.
-    #[arg(long, value_enum, default_value_t = ShadingArg::Radiance)]
-    pub shading: ShadingArg,
+    #[arg(long, value_parser = named::<Shading>(), default_value_t = Shading::Radiance)]
+    pub shading: Shading,
 
     /// Direct-lighting estimator. auto: MIS (light + BSDF sampling) when the scene has glossy surfaces or an ambient light, light sampling otherwise (see BENCHMARKS.md). -H forces hemisphere.
-    #[arg(long, value_enum, default_value_t = IntegratorArg::Auto)]
-    pub integrator: IntegratorArg,
+    // `std::option::Option` spelled out: clap reads a bare `Option` as "the flag may be absent".
+    #[arg(long, value_parser = integrator(), default_value = AUTO)]
+    pub integrator: std::option::Option<DirectStrategy>,
 
     /// Russian roulette: off, throughput (continue with probability max(throughput), at least 0.05), or a fixed probability like 0.5.
     #[arg(long, default_value = "throughput", value_name = "off|throughput|PROB")]
@@ -250,48 +256,34 @@ pub struct RenderArgs {
     pub quiet: bool,
 }
 
-#[derive(Clone, Copy, Debug, ValueEnum, PartialEq, Eq)]
-pub enum AccelArg {
-    /// ember's own BVH.
-    Native,
-    /// Intel Embree (builds with --features embree only).
-    Embree,
+/// A flag parsed straight into a library enum through its name table; `--help`
+/// lists every name with its description.
+fn named<T: Named + Send + Sync>() -> impl TypedValueParser<Value = T> {
+    PossibleValuesParser::new(T::TABLE.iter().map(|&(_, name, help)| possible(name, help)))
+        .try_map(|s| T::from_name(&s))
 }
 
-#[derive(Clone, Copy, Debug, ValueEnum)]
-pub enum BvhArg {
-    /// Binned surface-area heuristic.
-    Sah,
-    /// The course's split at the centroid midpoint of the longest axis.
-    Midpoint,
+fn possible(name: &'static str, help: &'static str) -> PossibleValue {
+    let v = PossibleValue::new(name);
+    if help.is_empty() {
+        v
+    } else {
+        v.help(help)
+    }
 }
 
-#[derive(Clone, Copy, Debug, ValueEnum)]
-pub enum QualityArg {
-    Low,
-    Medium,
-    High,
-}
+/// `--integrator`'s word for "let the scene choose" (`DirectStrategy::auto_for`).
+const AUTO: &str = "auto";
 
-#[derive(Clone, Copy, Debug, ValueEnum, PartialEq, Eq)]
-pub enum ShadingArg {
-    /// The physically based image.
-    Radiance,
-    /// 0.5·n + 0.5 of the shading normal (course parts 1-2).
-    Normals,
-    /// Heat map of BVH nodes + primitives tested per camera ray.
-    BvhCost,
-}
-
-#[derive(Clone, Copy, Debug, ValueEnum, PartialEq, Eq)]
-pub enum IntegratorArg {
-    Auto,
-    /// Light sampling only.
-    Light,
-    /// Light and BSDF sampling, power heuristic.
-    Mis,
-    /// Uniform hemisphere sampling (same as -H).
-    Hemisphere,
-    /// BSDF sampling alone, no light sampling (cannot see point/directional lights).
-    Bsdf,
+/// `--integrator`: `auto` (None) or one of the library's estimators.
+fn integrator() -> impl TypedValueParser<Value = Option<DirectStrategy>> {
+    let names = DirectStrategy::TABLE
+        .iter()
+        .map(|&(_, n, h)| possible(n, h));
+    PossibleValuesParser::new(std::iter::once(PossibleValue::new(AUTO)).chain(names)).try_map(|s| {
+        match s.as_str() {
+            AUTO => Ok(None),
+            s => DirectStrategy::from_name(s).map(Some),
+        }
+    })
 }

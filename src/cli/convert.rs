@@ -1,10 +1,9 @@
 //! Flags into library settings: every check and translation of a flag's value lives here.
 
-use super::args::{AccelArg, BvhArg, IntegratorArg, QualityArg, RenderArgs, ShadingArg};
+use super::args::RenderArgs;
 use anyhow::{bail, Context, Result};
-use ember::accel::{AccelKind, BvhBuilder, EmbreeQuality};
 use ember::integrators::{DirectStrategy, Roulette};
-use ember::render::{Adaptive, RenderSettings, Shading};
+use ember::render::{Adaptive, RenderSettings};
 use std::path::{Path, PathBuf};
 
 pub(super) fn check_resolution(w: u32, h: u32) -> Result<()> {
@@ -12,20 +11,6 @@ pub(super) fn check_resolution(w: u32, h: u32) -> Result<()> {
         bail!("resolution {w}x{h} is out of range (each side ≥ 1, at most 2^28 pixels)");
     }
     Ok(())
-}
-
-pub(super) fn accel_kind(a: AccelArg, b: BvhArg, q: QualityArg) -> AccelKind {
-    match a {
-        AccelArg::Native => AccelKind::Native(match b {
-            BvhArg::Sah => BvhBuilder::Sah,
-            BvhArg::Midpoint => BvhBuilder::Midpoint,
-        }),
-        AccelArg::Embree => AccelKind::Embree(match q {
-            QualityArg::Low => EmbreeQuality::Low,
-            QualityArg::Medium => EmbreeQuality::Medium,
-            QualityArg::High => EmbreeQuality::High,
-        }),
-    }
 }
 
 pub(super) fn parse_adaptive(a: &Option<Vec<String>>) -> Result<Option<Adaptive>> {
@@ -74,13 +59,7 @@ pub(super) fn strategy(args: &RenderArgs) -> Option<DirectStrategy> {
     if args.hemisphere {
         return Some(DirectStrategy::Hemisphere);
     }
-    match args.integrator {
-        IntegratorArg::Light => Some(DirectStrategy::Light),
-        IntegratorArg::Mis => Some(DirectStrategy::Mis),
-        IntegratorArg::Hemisphere => Some(DirectStrategy::Hemisphere),
-        IntegratorArg::Bsdf => Some(DirectStrategy::Bsdf),
-        IntegratorArg::Auto => None,
-    }
+    args.integrator
 }
 
 pub(super) fn settings_from(args: &RenderArgs) -> Result<RenderSettings> {
@@ -95,11 +74,7 @@ pub(super) fn settings_from(args: &RenderArgs) -> Result<RenderSettings> {
         strategy: strategy(args),
         roulette: parse_roulette(&args.rr, args.rr_start)?,
         adaptive: parse_adaptive(&args.adaptive)?,
-        shading: match args.shading {
-            ShadingArg::Radiance => Shading::Radiance,
-            ShadingArg::Normals => Shading::Normals,
-            ShadingArg::BvhCost => Shading::BvhCost,
-        },
+        shading: args.shading,
         seed: args.seed,
     })
 }

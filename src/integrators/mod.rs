@@ -7,6 +7,8 @@ pub mod path;
 
 pub use path::{PathIntegrator, PathSettings};
 
+use crate::names::{display_from_table, Named};
+
 /// How light arriving directly from emitters is estimated at each scattering vertex.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum DirectStrategy {
@@ -21,6 +23,29 @@ pub enum DirectStrategy {
     /// it exists to show where BSDF sampling is the better half of MIS.
     Bsdf,
 }
+
+impl Named for DirectStrategy {
+    const WHAT: &'static str = "direct-lighting estimator";
+    const TABLE: &'static [(Self, &'static str, &'static str)] = &[
+        (DirectStrategy::Light, "light", "Light sampling only"),
+        (
+            DirectStrategy::Mis,
+            "mis",
+            "Light and BSDF sampling, power heuristic",
+        ),
+        (
+            DirectStrategy::Hemisphere,
+            "hemisphere",
+            "Uniform hemisphere sampling (same as -H)",
+        ),
+        (
+            DirectStrategy::Bsdf,
+            "bsdf",
+            "BSDF sampling alone, no light sampling (cannot see point/directional lights)",
+        ),
+    ];
+}
+display_from_table!(DirectStrategy);
 
 impl DirectStrategy {
     /// The better default for `scene`, from `ember bench converge` (BENCHMARKS.md):

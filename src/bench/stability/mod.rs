@@ -12,6 +12,7 @@ pub mod scenes;
 
 use super::chart::{write_chart, ChartSpec, Series};
 use super::table::Table;
+use crate::names::Named;
 use anyhow::{Context, Result};
 pub use measure::Budget;
 use std::path::PathBuf;
@@ -155,7 +156,7 @@ impl StabilityReport {
     /// Relative per-pixel noise (noise / mean) of each direct-lighting strategy, x = the
     /// number of the scenario among those rows (cases 1–3, in report order).
     pub fn strategy_noise_series(&self) -> (Vec<Series>, Vec<String>) {
-        let names: Vec<&str> = lights::STRATEGIES.iter().map(|s| s.1).collect();
+        let names: Vec<&str> = lights::STRATEGIES.iter().map(|s| s.name()).collect();
         let mut scenarios: Vec<String> = Vec::new();
         let mut out: Vec<Series> = names
             .iter()
