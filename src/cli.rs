@@ -5,7 +5,7 @@ use anyhow::{bail, Context, Result};
 use clap::{Args, Parser, Subcommand, ValueEnum};
 use ember::accel::{self, AccelKind, BvhBuilder, EmbreeQuality};
 use ember::camera::Camera;
-use ember::integrators::{DirectStrategy, Roulette};
+use ember::integrators::{DirectStrategy, Estimator, Roulette};
 use ember::render::{self, Adaptive, RenderSettings, Shading};
 use ember::scene::{collada, Scene};
 use indicatif::{ProgressBar, ProgressStyle};
@@ -198,7 +198,7 @@ pub struct RenderArgs {
     #[arg(long, value_enum, default_value_t = ShadingArg::Radiance)]
     pub shading: ShadingArg,
 
-    /// Direct-lighting estimator. auto: MIS (light + BSDF sampling) when the scene has glossy surfaces or an ambient light, light sampling otherwise (see BENCHMARKS.md). -H forces hemisphere.
+    /// Estimator. auto: light tracing when every light is a point light and nothing is specular or self-emitting (CBempty: see BENCHMARKS.md, stability case 9); otherwise path tracing with MIS (light + BSDF sampling) when the scene has glossy surfaces or an ambient light, light sampling otherwise. -H forces hemisphere.
     #[arg(long, value_enum, default_value_t = IntegratorArg::Auto)]
     pub integrator: IntegratorArg,
 
@@ -263,6 +263,8 @@ pub enum IntegratorArg {
     Hemisphere,
     /// BSDF sampling alone, no light sampling (cannot see point/directional lights).
     Bsdf,
+    /// Light tracing: paths start on the lights and connect to the camera (not for mirrors/glass).
+    LightTracing,
 }
 
 pub fn run(cli: Cli) -> Result<()> {
@@ -362,6 +364,7 @@ fn strategy(args: &RenderArgs) -> Option<DirectStrategy> {
         IntegratorArg::Mis => Some(DirectStrategy::Mis),
         IntegratorArg::Hemisphere => Some(DirectStrategy::Hemisphere),
         IntegratorArg::Bsdf => Some(DirectStrategy::Bsdf),
+        IntegratorArg::LightTracing => Some(DirectStrategy::Light),
         IntegratorArg::Auto => None,
     }
 }
@@ -379,6 +382,10 @@ fn settings_from(args: &RenderArgs) -> Result<RenderSettings> {
         light_samples: args.light_samples.max(1),
         max_depth: args.max_depth,
         accumulate: args.accumulate == 1,
+        estimator: match args.integrator {
+            IntegratorArg::LightTracing => Estimator::LightTracing,
+            _ => Estimator::Path,
+        },
         strategy: strategy(args).unwrap_or(DirectStrategy::Light),
         roulette: parse_roulette(&args.rr, args.rr_start)?,
         adaptive: parse_adaptive(&args.adaptive)?,
@@ -450,6 +457,10 @@ fn render_command(mut args: RenderArgs) -> Result<()> {
     let t_load = t0.elapsed();
     let settings = RenderSettings {
         strategy: strategy(&args).unwrap_or_else(|| DirectStrategy::auto_for(&scene)),
+        estimator: match args.integrator {
+            IntegratorArg::Auto if !args.hemisphere => Estimator::auto_for(&scene),
+            _ => settings.estimator,
+        },
         ..settings
     };
     let t1 = Instant::now();

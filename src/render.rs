@@ -5,7 +5,9 @@ use crate::accel::Accel;
 use crate::camera::Camera;
 use crate::color::{is_finite, luminance};
 use crate::film::{heat_map, Image};
-use crate::integrators::{debug, DirectStrategy, PathIntegrator, PathSettings, Roulette};
+use crate::integrators::{
+    debug, light_tracing, DirectStrategy, Estimator, PathIntegrator, PathSettings, Roulette,
+};
 use crate::sampling::Sampler;
 use crate::scene::Scene;
 use crate::Color;
@@ -51,6 +53,8 @@ pub struct RenderSettings {
     pub light_samples: u32,
     pub max_depth: u32,
     pub accumulate: bool,
+    /// Camera paths (with `strategy`) or light tracing.
+    pub estimator: Estimator,
     pub strategy: DirectStrategy,
     pub roulette: Roulette,
     pub adaptive: Option<Adaptive>,
@@ -79,6 +83,7 @@ impl Default for RenderSettings {
             light_samples: 1,
             max_depth: 1,
             accumulate: true,
+            estimator: Estimator::Path,
             strategy: DirectStrategy::Light,
             roulette: Roulette::default(),
             adaptive: None,
@@ -122,6 +127,9 @@ pub fn render(
     settings: &RenderSettings,
     progress: &(dyn Fn(u64) + Sync),
 ) -> RenderOutput {
+    if settings.estimator == Estimator::LightTracing && settings.shading == Shading::Radiance {
+        return light_tracing::render(scene, accel, camera, settings, progress);
+    }
     let (w, h) = (settings.width, settings.height);
     let tiles: Vec<(u32, u32)> = (0..h.div_ceil(TILE))
         .flat_map(|ty| (0..w.div_ceil(TILE)).map(move |tx| (tx, ty)))
@@ -264,8 +272,9 @@ fn percentile(v: &[f32], q: f32) -> f32 {
 
 /// Cases where the chosen estimator cannot converge to the right image, said out loud.
 pub fn render_warnings(scene: &Scene, s: &RenderSettings) -> Vec<String> {
-    let mut w = Vec::new();
+    let mut w = light_tracing::warnings(scene, s);
     let blind = match s.strategy {
+        _ if s.estimator == Estimator::LightTracing => None,
         DirectStrategy::Hemisphere => Some("hemisphere sampling (-H)"),
         DirectStrategy::Bsdf => Some("BSDF sampling alone"),
         DirectStrategy::Light | DirectStrategy::Mis => None,

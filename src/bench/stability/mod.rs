@@ -4,6 +4,7 @@
 //! tests (tests/stability.rs) assert on the same functions at small budgets.
 
 pub mod glass;
+pub mod light_paths;
 pub mod lights;
 pub mod measure;
 pub mod robust;
