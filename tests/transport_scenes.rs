@@ -5,7 +5,7 @@ mod common;
 
 use common::{load, render_halves, render_scene, shared};
 use ember::accel::{AccelKind, BvhBuilder};
-use ember::integrators::DirectStrategy;
+use ember::integrators::{DirectStrategy, Estimator};
 use ember::render::{Adaptive, RenderSettings, Shading};
 use std::path::Path;
 
@@ -121,6 +121,16 @@ fn renders_are_identical_for_one_and_two_threads() {
             height: 36,
             spp: 2,
             shading: Shading::Normals,
+            ..Default::default()
+        },
+        // Light tracing splats across pixels from parallel chunks: still identical.
+        RenderSettings {
+            width: 48,
+            height: 36,
+            spp: 8,
+            max_depth: 5,
+            estimator: Estimator::LightTracing,
+            seed: 11,
             ..Default::default()
         },
     ] {
