@@ -12,7 +12,7 @@ use crate::accel::{self, AccelKind, BvhBuilder, EmbreeQuality};
 use crate::camera::Camera;
 use crate::film::Image;
 use crate::image_io::{read_image, write_image};
-use crate::integrators::{DirectStrategy, Roulette};
+use crate::integrators::{DirectStrategy, Estimator, Roulette};
 use crate::render::{render, Adaptive, RenderSettings};
 use crate::scene::{collada, Scene};
 use anyhow::{bail, Context, Result};
@@ -140,6 +140,16 @@ pub fn methods(base: &RenderSettings, scene: &Scene, compare_backends: bool) -> 
             RenderSettings {
                 strategy: DirectStrategy::Mis,
                 light_samples: 16,
+                ..base.clone()
+            },
+        ));
+    }
+    // Light tracing cannot show specular surfaces to the camera: only where it can converge.
+    if !scene.materials.iter().any(|mat| mat.is_delta()) {
+        v.push(m(
+            "light tracing",
+            RenderSettings {
+                estimator: Estimator::LightTracing,
                 ..base.clone()
             },
         ));

@@ -114,7 +114,7 @@ impl<'a> LightTracer<'a> {
         };
         let mut beta = es.beta / p_light;
         let beta0 = beta.max_element();
-        if !(beta0 > 0.0) {
+        if beta0.is_nan() || beta0 <= 0.0 {
             return 0;
         }
         let mut ray = Ray::new(es.origin, es.dir);
@@ -243,7 +243,7 @@ fn adjoint_factor(
     w_next: Vec3,
 ) -> f32 {
     let ns_next = w_next_local.z.abs();
-    if !(ns_next > 0.0) {
+    if ns_next.is_nan() || ns_next <= 0.0 {
         return 0.0;
     }
     let mut k = shading_correction(si, wl, w_light) * w_next.dot(si.ng).abs() / ns_next;
