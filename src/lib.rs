@@ -4,6 +4,7 @@
 //! Scene semantics follow `shared/docs/scene-semantics.md`.
 
 pub mod accel;
+pub mod adaptive;
 pub mod bench;
 pub mod camera;
 pub mod color;

@@ -30,9 +30,21 @@ pub enum Shading {
 pub struct Adaptive {
     pub batch: u32,
     pub tol: f32,
-    /// A pixel whose samples so far are all equal (σ = 0) keeps sampling until it
-    /// has this many: one batch of zeros says little about a small light.
+    /// A pixel whose samples so far are all equal (σ = 0) keeps sampling until it has
+    /// this many (`StopRule::Neighbourhood`: non-zero constants only).
     pub min_samples_if_constant: u32,
+    pub rule: StopRule,
+}
+
+/// When a pixel whose samples are all equal may stop.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum StopRule {
+    /// The course's rule on the pixel's own samples, after `min_samples_if_constant`.
+    /// Biased where light is rare (stability case 7); kept for comparison.
+    PerPixel,
+    /// `crate::adaptive` (default): a pixel of zeros only when its whole neighbourhood
+    /// looked constant too; a constant non-zero pixel after `min_samples_if_constant`.
+    Neighbourhood,
 }
 
 impl Adaptive {
@@ -41,6 +53,7 @@ impl Adaptive {
             batch: batch.max(1),
             tol,
             min_samples_if_constant: 4 * batch.max(1),
+            rule: StopRule::Neighbourhood,
         }
     }
 }
@@ -129,6 +142,12 @@ pub fn render(
 ) -> RenderOutput {
     if settings.estimator == Estimator::LightTracing && settings.shading == Shading::Radiance {
         return light_tracing::render(scene, accel, camera, settings, progress);
+    }
+    if let Some(a) = settings
+        .adaptive
+        .filter(|a| a.rule == StopRule::Neighbourhood && settings.shading == Shading::Radiance)
+    {
+        return crate::adaptive::render(scene, accel, camera, settings, a, progress);
     }
     let (w, h) = (settings.width, settings.height);
     let tiles: Vec<(u32, u32)> = (0..h.div_ceil(TILE))

@@ -332,3 +332,34 @@ fn case9_cbempty_point_light_needs_light_tracing() {
         100.0 * pt.pass_rate
     );
 }
+
+#[test]
+fn case7_default_rule_is_unbiased_within_the_same_cap() {
+    // 160×120 at a cap of 512 so that the lit pixels' mean has a standard error of ~0.4%.
+    let c = sampling::adaptive(&budget(160, 120, 512)).unwrap();
+    let (rm, rse) = c.reference;
+    let (n, g) = (&c.neighbourhood, &c.guarded);
+    // The default rule's own noise: lit pixels that did not stop are fixed-spp estimates.
+    let lit = c.lit_pixels.len() as f64;
+    eprintln!(
+        "reference {rm} ± {rse} over {lit} px; default {} ({:.1} spp); guard {} ({:.1} spp); none {} ({:.1} spp)",
+        n.mean, n.mean_samples, g.mean, g.mean_samples, c.unguarded.mean, c.unguarded.mean_samples
+    );
+    eprintln!(
+        "default rule: {} lit pixels stopped at 0 after the pilot batch; bias {:+.3}% ± {:.3}%",
+        n.stopped_at_zero_after_one_batch,
+        100.0 * (n.mean / rm - 1.0),
+        100.0 * (rse.powi(2) + n.se.powi(2)).sqrt() / rm
+    );
+    assert!(n.output.samples.iter().all(|&s| s <= 512));
+    let se = (rse.powi(2) + n.se.powi(2)).sqrt();
+    let bias = n.mean / rm - 1.0;
+    assert!(
+        bias.abs() < 0.01 && (n.mean - rm).abs() <= Z_MAX * se,
+        "default rule bias {:+.2}% (s.e. {:.2}%)",
+        100.0 * bias,
+        100.0 * se / rm
+    );
+    // The old rule's bias is far outside that (the failure this case documents).
+    assert!(g.mean < rm - Z_MAX * se, "guard {} vs {rm}", g.mean);
+}
