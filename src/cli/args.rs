@@ -191,7 +191,7 @@ pub struct RenderArgs {
     #[arg(short = 'o', value_name = "0|1", default_value_t = 1, value_parser = clap::value_parser!(u8).range(0..=1))]
     pub accumulate: u8,
 
-    /// Adaptive sampling: after every BATCH samples stop a pixel once 1.96·σ/√n ≤ TOL·μ. `-a` alone means 32 0.05.
+    /// Adaptive sampling: after every BATCH samples stop a pixel once 1.96·σ/√n ≤ TOL·μ (or at -s). A pixel whose samples are all zero stops only if every pixel within 5 px saw constant values in its first batch, so light found rarely is not missed (README). `-a` alone means 32 0.05.
     #[arg(short = 'a', num_args = 0..=2, action = clap::ArgAction::Set, value_names = ["BATCH", "TOL"])]
     pub adaptive: Option<Vec<String>>,
 
@@ -223,7 +223,7 @@ pub struct RenderArgs {
     #[arg(long, value_enum, default_value_t = ShadingArg::Radiance)]
     pub shading: ShadingArg,
 
-    /// Direct-lighting estimator. auto: MIS (light + BSDF sampling) when the scene has glossy surfaces or an ambient light, light sampling otherwise (see BENCHMARKS.md). -H forces hemisphere.
+    /// Estimator. auto: light tracing when every light is a point light and nothing is specular or self-emitting (CBempty: see BENCHMARKS.md, stability case 9); otherwise path tracing with MIS (light + BSDF sampling) when the scene has glossy surfaces or an ambient light, light sampling otherwise. -H forces hemisphere.
     #[arg(long, value_enum, default_value_t = IntegratorArg::Auto)]
     pub integrator: IntegratorArg,
 
@@ -288,4 +288,6 @@ pub enum IntegratorArg {
     Hemisphere,
     /// BSDF sampling alone, no light sampling (cannot see point/directional lights).
     Bsdf,
+    /// Light tracing: paths start on the lights and connect to the camera (not for mirrors/glass).
+    LightTracing,
 }

@@ -3,7 +3,7 @@
 use super::args::{AccelArg, BvhArg, IntegratorArg, QualityArg, RenderArgs, ShadingArg};
 use anyhow::{bail, Context, Result};
 use ember::accel::{AccelKind, BvhBuilder, EmbreeQuality};
-use ember::integrators::{DirectStrategy, Roulette};
+use ember::integrators::{DirectStrategy, Estimator, Roulette};
 use ember::render::{Adaptive, RenderSettings, Shading};
 use std::path::{Path, PathBuf};
 
@@ -79,7 +79,16 @@ pub(super) fn strategy(args: &RenderArgs) -> Option<DirectStrategy> {
         IntegratorArg::Mis => Some(DirectStrategy::Mis),
         IntegratorArg::Hemisphere => Some(DirectStrategy::Hemisphere),
         IntegratorArg::Bsdf => Some(DirectStrategy::Bsdf),
-        IntegratorArg::Auto => None,
+        IntegratorArg::Auto | IntegratorArg::LightTracing => None,
+    }
+}
+
+/// Which way paths are built; `None` for auto (`Estimator::auto_for` the scene).
+pub(super) fn estimator(args: &RenderArgs) -> Option<Estimator> {
+    match args.integrator {
+        IntegratorArg::LightTracing => Some(Estimator::LightTracing),
+        IntegratorArg::Auto if !args.hemisphere => None,
+        _ => Some(Estimator::Path),
     }
 }
 
@@ -92,6 +101,7 @@ pub(super) fn settings_from(args: &RenderArgs) -> Result<RenderSettings> {
         light_samples: args.light_samples.max(1),
         max_depth: args.max_depth,
         accumulate: args.accumulate == 1,
+        estimator: estimator(args),
         strategy: strategy(args),
         roulette: parse_roulette(&args.rr, args.rr_start)?,
         adaptive: parse_adaptive(&args.adaptive)?,
