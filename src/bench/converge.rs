@@ -14,7 +14,7 @@ use crate::accel::{AccelKind, BvhBuilder, EmbreeQuality};
 use crate::camera::Camera;
 use crate::film::Image;
 use crate::image_io::{read_image, write_image};
-use crate::integrators::{DirectStrategy, Roulette};
+use crate::integrators::{DirectStrategy, Estimator, Roulette};
 use crate::render::{average, Adaptive, RenderJob, RenderSettings};
 use crate::scene::{collada, Scene};
 use anyhow::{bail, Context, Result};
@@ -84,7 +84,7 @@ pub struct ConvergeReport {
 /// The methods compared for depth `m`: the direct-lighting estimators at `m = 1`,
 /// MIS with and without roulette and at several `-l` beyond; adaptive sampling and
 /// (optionally) Embree with the scene's default (`DirectStrategy::auto_for`).
-pub fn methods(base: &RenderSettings, compare_backends: bool) -> Vec<Method> {
+pub fn methods(base: &RenderSettings, scene: &Scene, compare_backends: bool) -> Vec<Method> {
     let native = AccelKind::Native(BvhBuilder::Sah);
     let m = |name: &str, s: RenderSettings| Method {
         name: name.to_string(),
@@ -155,6 +155,16 @@ pub fn methods(base: &RenderSettings, compare_backends: bool) -> Vec<Method> {
             },
         ));
     }
+    // Light tracing cannot show specular surfaces to the camera: only where it can converge.
+    if !scene.materials.iter().any(|mat| mat.is_delta()) {
+        v.push(m(
+            "light tracing",
+            RenderSettings {
+                estimator: Some(Estimator::LightTracing),
+                ..base.clone()
+            },
+        ));
+    }
     v.push(m(
         "adaptive (-a 16 0.05)",
         RenderSettings {
@@ -192,7 +202,7 @@ pub fn run(opts: &ConvergeOptions, log: &mut dyn FnMut(&str)) -> Result<Converge
     };
     let reference = reference(opts, &scene, &base, log)?;
     let mut points = Vec::new();
-    for method in methods(&base, opts.compare_backends) {
+    for method in methods(&base, &scene, opts.compare_backends) {
         log(&format!("method: {}", method.name));
         points.extend(run_method(&scene, &method, opts, &reference)?);
     }
