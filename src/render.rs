@@ -231,12 +231,13 @@ fn render_pixel(
     y: u32,
 ) -> PixelResult {
     let (camera, scene, accel) = (&job.camera, &job.scene, job.accel.as_ref());
-    let mut sampler = Sampler::new(s.seed, (y as u64) * (camera.width as u64) + x as u64, 0);
+    let pixel = (y as u64) * (camera.width as u64) + x as u64;
     let (mut sum, mut s1, mut s2) = (Color::ZERO, 0f64, 0f64);
     let (mut n, mut nonfinite) = (0u32, 0u32);
     let batch = s.adaptive.map_or(s.spp.max(1), |a| a.batch);
     while n < s.spp.max(1) {
         for _ in 0..batch.min(s.spp.max(1) - n) {
+            let mut sampler = Sampler::for_sample(s.seed, pixel, n as u64);
             let ray = camera.generate_ray(x, y, sampler.next_2d());
             let mut v = match s.shading {
                 Shading::Radiance => integrator.li(ray, &mut sampler),
