@@ -226,12 +226,13 @@ fn bsdf_xml(m: &Material, warnings: &mut Vec<String>) -> String {
              <rgb name=\"specular_reflectance\" value=\"{}\"/></bsdf>\n",
             rgb(reflectance)
         )),
-        Material::Microfacet { alpha, eta, k } => two_sided(format!(
+        Material::Microfacet(c) => two_sided(format!(
             "  <bsdf type=\"roughconductor\"><string name=\"distribution\" value=\"beckmann\"/>\
-             <float name=\"alpha\" value=\"{alpha}\"/><rgb name=\"eta\" value=\"{}\"/>\
+             <float name=\"alpha\" value=\"{}\"/><rgb name=\"eta\" value=\"{}\"/>\
              <rgb name=\"k\" value=\"{}\"/></bsdf>\n",
-            rgb(eta),
-            rgb(k)
+            c.alpha,
+            rgb(c.eta()),
+            rgb(c.k())
         )),
         Material::Glass {
             ior,

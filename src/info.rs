@@ -116,9 +116,12 @@ fn describe_material(m: &Material) -> String {
         Material::Refraction { ior, transmittance } => {
             format!("refraction: ior {ior}, transmittance {}", v(transmittance))
         }
-        Material::Microfacet { alpha, eta, k } => {
-            format!("microfacet: alpha {alpha}, eta {}, k {}", v(eta), v(k))
-        }
+        Material::Microfacet(c) => format!(
+            "microfacet: alpha {}, eta {}, k {}",
+            c.alpha,
+            v(c.eta()),
+            v(c.k())
+        ),
         Material::Emission { radiance } => format!("emission: radiance {}", v(radiance)),
         Material::Black => "black (an area light's surface)".into(),
     }

@@ -9,7 +9,7 @@ pub mod specular;
 
 use crate::Color;
 use glam::{Vec2, Vec3};
-use microfacet::Conductor;
+pub use microfacet::Conductor;
 use std::fmt;
 
 /// What kind of scattering (and emission) a material has, as pbrt-v4's `BxDFFlags`:
@@ -53,11 +53,8 @@ pub enum Material {
         transmittance: Color,
     },
     /// Rough conductor: Beckmann NDF, separable Smith G, exact conductor Fresnel.
-    Microfacet {
-        alpha: f32,
-        eta: Color,
-        k: Color,
-    },
+    /// Its parameters are built once, by `Conductor::new`, when the material is made.
+    Microfacet(Conductor),
     /// Emits `radiance` from the front side; reflects nothing.
     Emission {
         radiance: Color,
@@ -94,7 +91,7 @@ impl Material {
     pub fn eval(&self, wo: Vec3, wi: Vec3) -> Color {
         match *self {
             Material::Lambertian { albedo } => lambertian::eval(albedo, wo, wi),
-            Material::Microfacet { alpha, eta, k } => Conductor::new(alpha, eta, k).eval(wo, wi),
+            Material::Microfacet(c) => c.eval(wo, wi),
             _ => Color::ZERO,
         }
     }
@@ -103,7 +100,7 @@ impl Material {
     pub fn pdf(&self, wo: Vec3, wi: Vec3) -> f32 {
         match *self {
             Material::Lambertian { .. } => lambertian::pdf(wo, wi),
-            Material::Microfacet { alpha, eta, k } => Conductor::new(alpha, eta, k).pdf(wo, wi),
+            Material::Microfacet(c) => c.pdf(wo, wi),
             _ => 0.0,
         }
     }
@@ -128,7 +125,7 @@ impl Material {
             Material::Refraction { ior, transmittance } => {
                 valid_ior(ior).and_then(|ior| specular::sample_refraction(ior, transmittance, wo))
             }
-            Material::Microfacet { alpha, eta, k } => Conductor::new(alpha, eta, k).sample(wo, u),
+            Material::Microfacet(c) => c.sample(wo, u),
             Material::Emission { .. } | Material::Black => None,
         }
     }
@@ -147,7 +144,7 @@ impl Material {
                     ..none
                 }
             }
-            Material::Microfacet { .. } => BsdfFlags {
+            Material::Microfacet(_) => BsdfFlags {
                 glossy: true,
                 ..none
             },
@@ -192,7 +189,7 @@ impl fmt::Display for Material {
             Material::Mirror { .. } => "mirror",
             Material::Glass { .. } => "glass",
             Material::Refraction { .. } => "refraction",
-            Material::Microfacet { .. } => "microfacet",
+            Material::Microfacet(_) => "microfacet",
             Material::Emission { .. } => "emission",
             Material::Black => "black",
         })
