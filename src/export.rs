@@ -32,6 +32,17 @@ pub struct MitsubaSettings {
     pub roulette_start: Option<u32>,
 }
 
+impl MitsubaSettings {
+    /// `spp` samples, `max_depth` bounces, and ember's default roulette.
+    pub fn new(spp: u32, max_depth: u32) -> Self {
+        MitsubaSettings {
+            spp,
+            max_depth,
+            roulette_start: crate::integrators::Roulette::default().start(),
+        }
+    }
+}
+
 /// What an export wrote, and what Mitsuba cannot express exactly.
 #[derive(Debug, Default)]
 pub struct ExportSummary {

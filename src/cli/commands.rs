@@ -167,15 +167,7 @@ pub(super) fn export(a: ExportArgs) -> Result<()> {
         .file_stem()
         .map_or("scene".into(), |s| s.to_string_lossy().into_owned());
     let ExportFormat::Mitsuba = a.format;
-    let settings = ember::export::MitsubaSettings {
-        spp: a.spp,
-        max_depth: a.max_depth,
-        roulette_start: match ember::integrators::Roulette::default() {
-            ember::integrators::Roulette::Throughput { start, .. }
-            | ember::integrators::Roulette::Fixed { start, .. } => Some(start),
-            ember::integrators::Roulette::Off => None,
-        },
-    };
+    let settings = ember::export::MitsubaSettings::new(a.spp, a.max_depth);
     let summary = ember::export::write_mitsuba(&scene, &camera, &settings, &a.out, &stem)?;
     for w in &summary.warnings {
         ember::errln!("ember: warning: {w}");

@@ -176,6 +176,37 @@ impl Material {
     }
 }
 
+impl Material {
+    /// The kind and every parameter, for `ember info`: `lambertian: albedo (0.5, 0.5, 0.5)`.
+    pub fn describe(&self) -> String {
+        use crate::color::compact as v;
+        match *self {
+            Material::Lambertian { albedo } => format!("{self}: albedo {}", v(albedo)),
+            Material::Mirror { reflectance } => format!("{self}: reflectance {}", v(reflectance)),
+            Material::Glass {
+                ior,
+                reflectance,
+                transmittance,
+            } => format!(
+                "{self}: ior {ior}, reflectance {}, transmittance {}",
+                v(reflectance),
+                v(transmittance)
+            ),
+            Material::Refraction { ior, transmittance } => {
+                format!("{self}: ior {ior}, transmittance {}", v(transmittance))
+            }
+            Material::Microfacet(c) => format!(
+                "{self}: alpha {}, eta {}, k {}",
+                c.alpha,
+                v(c.eta()),
+                v(c.k())
+            ),
+            Material::Emission { radiance } => format!("{self}: radiance {}", v(radiance)),
+            Material::Black => format!("{self} (an area light's surface)"),
+        }
+    }
+}
+
 /// A dielectric index must be positive and finite for Snell's law to mean anything.
 fn valid_ior(ior: f32) -> Option<f32> {
     (ior > 0.0 && ior.is_finite()).then_some(ior)
