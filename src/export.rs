@@ -11,6 +11,7 @@
 use crate::camera::Camera;
 use crate::film::Image;
 use crate::image_io::{write_image, ImageIoError};
+use crate::integrators::Roulette;
 use crate::lights::Light;
 use crate::materials::Material;
 use crate::scene::{Scene, NO_LIGHT};
@@ -33,12 +34,13 @@ pub struct MitsubaSettings {
 }
 
 impl MitsubaSettings {
-    /// `spp` samples, `max_depth` bounces, and ember's default roulette.
-    pub fn new(spp: u32, max_depth: u32) -> Self {
+    /// The settings that make Mitsuba render what ember renders with `-s spp -m max_depth`
+    /// and roulette policy `roulette`.
+    pub fn for_ember(spp: u32, max_depth: u32, roulette: &Roulette) -> Self {
         MitsubaSettings {
             spp,
             max_depth,
-            roulette_start: crate::integrators::Roulette::default().start(),
+            roulette_start: roulette.start(),
         }
     }
 }

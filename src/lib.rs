@@ -4,6 +4,7 @@
 //! Scene semantics follow `shared/docs/scene-semantics.md`.
 
 pub mod accel;
+pub mod adaptive;
 #[cfg(feature = "bench")]
 pub mod bench;
 pub mod camera;

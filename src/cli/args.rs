@@ -3,7 +3,7 @@
 use clap::builder::{PossibleValue, PossibleValuesParser, TypedValueParser};
 use clap::{Args, Parser, Subcommand, ValueEnum};
 use ember::accel::{Backend, BvhBuilder, EmbreeQuality};
-use ember::integrators::DirectStrategy;
+use ember::integrators::{DirectStrategy, Estimator};
 use ember::names::Named;
 use ember::render::Shading;
 use std::path::PathBuf;
@@ -148,6 +148,12 @@ pub enum BenchCommand {
         /// Random seed.
         #[arg(long, default_value_t = 0)]
         seed: u64,
+        /// Also run Mitsuba 3 as a method, through this Python (one that imports `mitsuba`; scripts/mitsuba-env creates one and prints its path). Each point is the warm, render-only time of its own process.
+        #[arg(long, value_name = "PYTHON")]
+        mitsuba: Option<PathBuf>,
+        /// Mitsuba variants to run with --mitsuba, comma-separated.
+        #[arg(long, value_delimiter = ',', default_value = "llvm_ad_rgb")]
+        mitsuba_variants: Vec<String>,
     },
     /// Samples per second for CBspheres_lambertian and CBbunny at 480x360, 64 spp, -m 5.
     Render {
@@ -196,7 +202,7 @@ pub struct RenderArgs {
     #[arg(short = 'o', value_name = "0|1", default_value_t = 1, value_parser = clap::value_parser!(u8).range(0..=1))]
     pub accumulate: u8,
 
-    /// Adaptive sampling: after every BATCH samples stop a pixel once 1.96·σ/√n ≤ TOL·μ. `-a` alone means 32 0.05.
+    /// Adaptive sampling: after every BATCH samples stop a pixel once 1.96·σ/√n ≤ TOL·μ (or at -s). A pixel whose samples are all zero stops only if every pixel within 5 px saw constant values in its first batch, so light found rarely is not missed (README). `-a` alone means 32 0.05.
     #[arg(short = 'a', num_args = 0..=2, action = clap::ArgAction::Set, value_names = ["BATCH", "TOL"])]
     pub adaptive: Option<Vec<String>>,
 
@@ -228,10 +234,9 @@ pub struct RenderArgs {
     #[arg(long, value_parser = named::<Shading>(), default_value_t = Shading::Radiance)]
     pub shading: Shading,
 
-    /// Direct-lighting estimator. auto: MIS (light + BSDF sampling) when the scene has glossy surfaces or an ambient light, light sampling otherwise (see BENCHMARKS.md). -H forces hemisphere.
-    // `std::option::Option` spelled out: clap reads a bare `Option` as "the flag may be absent".
+    /// Estimator. auto: light tracing when every light is a point light and nothing is specular or self-emitting (CBempty: see BENCHMARKS.md, stability case 9); otherwise path tracing with MIS (light + BSDF sampling) when the scene has glossy surfaces or an ambient light, light sampling otherwise. A direct-lighting strategy name means path tracing with it. -H forces hemisphere.
     #[arg(long, value_parser = integrator(), default_value = AUTO)]
-    pub integrator: std::option::Option<DirectStrategy>,
+    pub integrator: IntegratorChoice,
 
     /// Russian roulette: off, throughput (continue with probability max(throughput), at least 0.05), or a fixed probability like 0.5.
     #[arg(long, default_value = "throughput", value_name = "off|throughput|PROB")]
@@ -269,16 +274,37 @@ fn possible(name: &'static str, help: &'static str) -> PossibleValue {
 /// `--integrator`'s word for "let the scene choose" (`DirectStrategy::auto_for`).
 const AUTO: &str = "auto";
 
-/// `--integrator`: `auto` (None) or one of the library's estimators.
-fn integrator() -> impl TypedValueParser<Value = Option<DirectStrategy>> {
-    let names = DirectStrategy::TABLE
+/// What `--integrator` names: an estimator and, for path tracing, its direct-lighting
+/// strategy; a `None` is chosen from the scene.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct IntegratorChoice {
+    pub estimator: Option<Estimator>,
+    pub strategy: Option<DirectStrategy>,
+}
+
+/// `--integrator`: `auto`, an estimator (`path`, `light-tracing`), or a path-tracing
+/// strategy, each from the library's name tables.
+fn integrator() -> impl TypedValueParser<Value = IntegratorChoice> {
+    let auto = PossibleValue::new(AUTO).help("Chosen from the scene (see above)");
+    let estimators = Estimator::TABLE.iter().map(|&(_, n, h)| possible(n, h));
+    let strategies = DirectStrategy::TABLE
         .iter()
         .map(|&(_, n, h)| possible(n, h));
-    PossibleValuesParser::new(std::iter::once(PossibleValue::new(AUTO)).chain(names)).try_map(|s| {
-        match s.as_str() {
-            AUTO => Ok(None),
-            s => DirectStrategy::from_name(s).map(Some),
+    let values = std::iter::once(auto).chain(estimators).chain(strategies);
+    PossibleValuesParser::new(values).try_map(|s| {
+        if s == AUTO {
+            return Ok(IntegratorChoice::default());
         }
+        if let Ok(e) = Estimator::from_name(&s) {
+            return Ok(IntegratorChoice {
+                estimator: Some(e),
+                strategy: None,
+            });
+        }
+        DirectStrategy::from_name(&s).map(|d| IntegratorChoice {
+            estimator: Some(Estimator::Path),
+            strategy: Some(d),
+        })
     })
 }
 

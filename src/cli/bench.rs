@@ -42,6 +42,8 @@ pub(super) fn run(which: BenchCommand) -> Result<()> {
             target_rmse,
             out,
             seed,
+            mitsuba,
+            mitsuba_variants,
         } => {
             check_resolution(resolution[0], resolution[1])?;
             bench_converge(bench::converge::ConvergeOptions {
@@ -58,6 +60,10 @@ pub(super) fn run(which: BenchCommand) -> Result<()> {
                 target_rmse,
                 seed,
                 compare_backends: true,
+                mitsuba: mitsuba.map(|python| bench::converge::MitsubaPeer {
+                    python,
+                    variants: mitsuba_variants,
+                }),
             })
         }
         BenchCommand::Render {

@@ -2,7 +2,7 @@
 
 use super::args::RenderArgs;
 use anyhow::{bail, Context, Result};
-use ember::integrators::{DirectStrategy, Roulette};
+use ember::integrators::{DirectStrategy, Estimator, Roulette};
 use ember::render::{Adaptive, RenderSettings};
 use std::path::{Path, PathBuf};
 
@@ -59,7 +59,15 @@ pub(super) fn strategy(args: &RenderArgs) -> Option<DirectStrategy> {
     if args.hemisphere {
         return Some(DirectStrategy::Hemisphere);
     }
+    args.integrator.strategy
+}
+
+/// Which way paths are built; `None` for auto (`Estimator::auto_for` the scene).
+/// `-H` means path tracing unless an estimator was named.
+pub(super) fn estimator(args: &RenderArgs) -> Option<Estimator> {
     args.integrator
+        .estimator
+        .or(args.hemisphere.then_some(Estimator::Path))
 }
 
 pub(super) fn settings_from(args: &RenderArgs) -> Result<RenderSettings> {
@@ -71,6 +79,7 @@ pub(super) fn settings_from(args: &RenderArgs) -> Result<RenderSettings> {
         light_samples: args.light_samples.max(1),
         max_depth: args.max_depth,
         accumulate: args.accumulate == 1,
+        estimator: estimator(args),
         strategy: strategy(args),
         roulette: parse_roulette(&args.rr, args.rr_start)?,
         adaptive: parse_adaptive(&args.adaptive)?,

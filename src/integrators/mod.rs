@@ -3,6 +3,7 @@
 //! direct-lighting strategy chosen by the user; debug views live in `debug`.
 
 pub mod debug;
+pub mod light_tracing;
 pub mod path;
 
 pub use path::{PathIntegrator, PathSettings};
@@ -60,6 +61,54 @@ impl DirectStrategy {
             DirectStrategy::Mis
         } else {
             DirectStrategy::Light
+        }
+    }
+}
+
+/// Which way paths are built.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
+pub enum Estimator {
+    /// Paths start at the camera (`PathIntegrator`, with its `DirectStrategy`).
+    #[default]
+    Path,
+    /// Paths start on the lights and connect to the camera (`light_tracing`).
+    LightTracing,
+}
+
+impl Named for Estimator {
+    const WHAT: &'static str = "estimator";
+    const TABLE: &'static [(Self, &'static str, &'static str)] = &[
+        (
+            Estimator::Path,
+            "path",
+            "Path tracing from the camera, direct-lighting strategy chosen from the scene",
+        ),
+        (
+            Estimator::LightTracing,
+            "light-tracing",
+            "Light tracing: paths start on the lights and connect to the camera (not for mirrors/glass)",
+        ),
+    ];
+}
+display_from_table!(Estimator);
+
+impl Estimator {
+    /// Light tracing where `ember bench stability` (the CBempty case) shows path tracing
+    /// failing: every light is a point light, so the light reaches most of the scene
+    /// indirectly, through the few surfaces near it, which camera paths find by chance
+    /// and light paths find at once. Only when nothing specular or self-emitting is
+    /// present, which light tracing cannot show (see `light_tracing`).
+    pub fn auto_for(scene: &crate::scene::Scene) -> Estimator {
+        let point_lights_only = !scene.lights.is_empty()
+            && scene
+                .lights
+                .iter()
+                .all(|l| matches!(l, crate::lights::Light::Point { .. }));
+        let specular = scene.materials.iter().any(|m| m.is_delta());
+        if point_lights_only && !specular && !scene.has_unsampled_emitters() {
+            Estimator::LightTracing
+        } else {
+            Estimator::Path
         }
     }
 }
