@@ -307,3 +307,50 @@ fn integrator() -> impl TypedValueParser<Value = IntegratorChoice> {
         })
     })
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use clap::CommandFactory;
+
+    /// The values `--help` lists for the render flag `--long`.
+    fn listed(long: &str) -> Vec<String> {
+        let cmd = Cli::command();
+        let arg = cmd
+            .get_arguments()
+            .find(|a| a.get_long() == Some(long))
+            .unwrap_or_else(|| panic!("no --{long}"));
+        arg.get_possible_values()
+            .iter()
+            .map(|v| v.get_name().to_string())
+            .collect()
+    }
+
+    /// Every name of the library's table is listed by `--help` and parses into its value.
+    fn check<T: Named + std::fmt::Debug>(long: &str, get: impl Fn(&RenderArgs) -> T) {
+        let listed = listed(long);
+        for &(value, name, _) in T::TABLE {
+            assert!(
+                listed.iter().any(|l| l == name),
+                "--{long} does not list {name}"
+            );
+            let flag = format!("--{long}");
+            let cli = Cli::try_parse_from(["ember", flag.as_str(), name, "scene.dae"])
+                .unwrap_or_else(|e| panic!("--{long} {name}: {e}"));
+            assert_eq!(get(&cli.render), value, "--{long} {name}");
+        }
+    }
+
+    #[test]
+    fn flags_take_every_name_of_the_library_tables() {
+        check("accel", |a| a.accel);
+        check("bvh", |a| a.bvh);
+        check("embree-quality", |a| a.embree_quality);
+        check("shading", |a| a.shading);
+        let integrators = listed("integrator");
+        for &(_, name, _) in DirectStrategy::TABLE {
+            assert!(integrators.iter().any(|l| l == name), "--integrator {name}");
+        }
+        assert!(Cli::try_parse_from(["ember", "--bvh", "octree", "scene.dae"]).is_err());
+    }
+}
