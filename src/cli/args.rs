@@ -58,12 +58,14 @@ pub struct CameraArgs {
 #[derive(Args, Debug)]
 pub struct LensArgs {
     /// Thin-lens radius, in scene units: depth of field, the lens sampled uniformly over its disk.
-    /// 0 (default) is the pinhole. Overrides the -c file's lensRadius (the course's flag overrides it always).
+    /// 0 (default) is the pinhole. Replaces the -c file's lensRadius (in the course, -b or its default 0
+    /// always does). Stricter than the course: must be at least 0.
     #[arg(short = 'b', value_name = "RADIUS", allow_negative_numbers = true)]
     pub lens_radius: Option<f32>,
 
     /// Focal distance of the lens, in scene units, measured along the view direction: the plane at this
-    /// depth is sharp. Default: the -c file's focalDistance, else the course's 4.7.
+    /// depth is sharp. Default: the -c file's focalDistance, else the course's 4.7. Stricter than the
+    /// course: must be positive.
     #[arg(short = 'd', value_name = "DISTANCE", allow_negative_numbers = true)]
     pub focal_distance: Option<f32>,
 }
@@ -240,13 +242,14 @@ pub struct RenderArgs {
 
     /// Camera settings file as the course's viewer saves it (`ember camera --save` writes one): its eye,
     /// orientation, field of view and lens replace the scene's camera. A field of view of another aspect
-    /// than -r is widened to it (the course stretches the image).
+    /// than -r is widened to it (the course stretches the image). Stricter than the course: every field
+    /// must be a number in range, c2w a rotation, nothing may follow the 30 numbers.
     #[arg(short = 'c', value_name = "FILE")]
     pub camera_file: Option<PathBuf>,
 
     /// Render only the cell of DX x DY pixels starting at pixel (X, Y), X from the left and Y from the
     /// bottom as in the course; its pixels equal the full render's bit for bit. Writes the cell alone
-    /// (as the course does) unless --full-frame.
+    /// (as the course does) unless --full-frame. Stricter than the course: the cell must lie in the image.
     #[arg(short = 'p', num_args = 4, action = clap::ArgAction::Set, value_names = ["X", "Y", "DX", "DY"])]
     pub cell: Option<Vec<u32>>,
 
