@@ -82,6 +82,34 @@ fn saved_camera_renders_the_same_image() {
 }
 
 #[test]
+fn saved_lens_is_used_and_flags_replace_it() {
+    let dir = tempfile::tempdir().unwrap();
+    let cam = dir.path().join("lens.cam");
+    let st = ember()
+        .args(["camera", "-r", "40", "30", "-b", "0.1", "-d", "3", "--save"])
+        .arg(&cam)
+        .arg(shared(BUNNY))
+        .output()
+        .unwrap();
+    assert!(st.status.success());
+    let cam_arg = cam.to_str().unwrap();
+    let flags = render(
+        &with(&["-b", "0.1", "-d", "3"]),
+        &dir.path().join("flags.exr"),
+        BUNNY,
+    );
+    let file = render(&with(&["-c", cam_arg]), &dir.path().join("file.exr"), BUNNY);
+    assert_eq!(flags.pixels, file.pixels);
+    let plain = render(BASE, &dir.path().join("plain.exr"), BUNNY);
+    let pinhole = render(
+        &with(&["-c", cam_arg, "-b", "0"]),
+        &dir.path().join("pinhole.exr"),
+        BUNNY,
+    );
+    assert_eq!(plain.pixels, pinhole.pixels);
+}
+
+#[test]
 fn camera_without_save_prints_the_file() {
     let o = ember()
         .args(["camera", "-b", "0.05", "-d", "3.5"])

@@ -61,6 +61,9 @@ pub(super) fn render(mut args: RenderArgs) -> Result<()> {
     for w in job.warnings(&settings) {
         ember::errln!("ember: warning: {w}");
     }
+    if cell.is_some() && settings.shading == ember::render::Shading::BvhCost {
+        ember::errln!("ember: warning: -p: the bvh-cost heat map is scaled to the cell's own pixels, not the full image's");
+    }
     let rect = cell.unwrap_or_else(|| job.full_frame());
     let pb = progress_bar(rect.area(), args.quiet);
     let t2 = Instant::now();
