@@ -14,7 +14,7 @@
 use ember::accel::{AccelKind, BvhBuilder};
 use ember::camera::{Camera, ThinLens};
 use ember::film::Image;
-use ember::integrators::DirectStrategy;
+use ember::integrators::{DirectStrategy, Estimator};
 use ember::render::{RenderJob, RenderSettings};
 use ember::scene::collada::parse;
 use glam::Vec3;
@@ -251,4 +251,101 @@ fn zero_radius_is_the_pinhole_bit_for_bit() {
         4,
     );
     assert_eq!(a.pixels, b.pixels);
+}
+
+/// A grey (albedo 0.3) Lambertian quad at depth `DEPTH` facing the camera, its left edge
+/// at `t_e·DEPTH`, lit head-on by a directional light of irradiance 1: where the camera
+/// sees it, its radiance is `0.3/π`, elsewhere 0. Small, so that light paths started
+/// over the scene's bounds mostly land on it.
+fn lit_edge_scene() -> ember::scene::Scene {
+    let (x0, x1, y) = (edge_tangent() as f32 * DEPTH, 0.9, 0.45);
+    let z = -DEPTH;
+    let doc = format!(
+        r##"<?xml version="1.0" encoding="utf-8"?>
+<COLLADA xmlns="http://www.collada.org/2005/11/COLLADASchema" version="1.4.1">
+  <asset><up_axis>Y_UP</up_axis></asset>
+  <library_lights>
+    <light id="sun"><technique_common><directional><color>1 1 1</color></directional></technique_common></light>
+  </library_lights>
+  <library_effects>
+    <effect id="grey-fx"><profile_COMMON><technique sid="common"><lambert>
+      <diffuse><color>0.3 0.3 0.3 1</color></diffuse>
+    </lambert></technique></profile_COMMON></effect>
+  </library_effects>
+  <library_materials><material id="grey"><instance_effect url="#grey-fx"/></material></library_materials>
+  <library_geometries>
+    <geometry id="quad"><mesh>
+      <source id="pos"><float_array id="pos-a" count="12">{x0} -{y} {z} {x1} -{y} {z} {x1} {y} {z} {x0} {y} {z}</float_array>
+        <technique_common><accessor source="#pos-a" count="4" stride="3"/></technique_common></source>
+      <vertices id="vtx"><input semantic="POSITION" source="#pos"/></vertices>
+      <triangles material="m" count="2"><input semantic="VERTEX" source="#vtx" offset="0"/><p>0 1 2 0 2 3</p></triangles>
+    </mesh></geometry>
+  </library_geometries>
+  <library_visual_scenes>
+    <visual_scene id="main">
+      <node id="q"><instance_geometry url="#quad"><bind_material><technique_common>
+        <instance_material symbol="m" target="#grey"/></technique_common></bind_material></instance_geometry></node>
+      <node id="sun-node"><instance_light url="#sun"/></node>
+    </visual_scene>
+  </library_visual_scenes>
+  <scene><instance_visual_scene url="#main"/></scene>
+</COLLADA>
+"##
+    );
+    parse(&doc, "lit_edge.dae").unwrap_or_else(|e| panic!("{e}"))
+}
+
+#[test]
+fn light_tracing_sees_through_the_lens_as_path_tracing_does() {
+    // Light paths connect to a point on the lens; the edge must blur by the same circle
+    // of confusion as camera paths see. Rows of a column are independent and alike, so
+    // a column mean's variance is estimated from its rows.
+    let lens = ThinLens {
+        radius: 0.19,
+        focal_distance: 1.0,
+    };
+    let rho = coc(lens);
+    let l0 = 0.3 / std::f64::consts::PI;
+    let cam = Camera {
+        height: 32,
+        tan_half_y: TAN_HALF_X * 32.0 / W as f32,
+        ..camera(lens)
+    };
+    for estimator in [Estimator::Path, Estimator::LightTracing] {
+        let job = RenderJob::with_camera(lit_edge_scene(), AccelKind::Native(BvhBuilder::Sah), cam)
+            .expect("accel");
+        let s = RenderSettings {
+            spp: 64,
+            max_depth: 1,
+            estimator: Some(estimator),
+            strategy: Some(DirectStrategy::Light),
+            roulette: ember::integrators::Roulette::Off,
+            seed: 9,
+            ..RenderSettings::default()
+        };
+        let img = job.render(&s).image;
+        let mut worst: f64 = 0.0;
+        for x in 0..W {
+            let v: Vec<f64> = (0..cam.height).map(|y| img.get(x, y).y as f64).collect();
+            let n = v.len() as f64;
+            let mean = v.iter().sum::<f64>() / n;
+            let var = v.iter().map(|a| (a - mean).powi(2)).sum::<f64>() / (n - 1.0);
+            let want = l0 * expected_column(x, rho);
+            let se = (var / n).sqrt();
+            if se == 0.0 {
+                assert!(
+                    (mean - want).abs() < 1e-6 * l0,
+                    "{estimator:?} column {x}: {mean} vs {want}"
+                );
+            } else {
+                worst = worst.max((mean - want).abs() / se);
+            }
+        }
+        eprintln!("{estimator:?}: worst column {worst:.2} standard errors from the analytic edge");
+        // Student t with 31 degrees of freedom over 64 columns.
+        assert!(
+            worst < 5.5,
+            "{estimator:?}: a column is {worst:.1} standard errors off"
+        );
+    }
 }

@@ -120,13 +120,19 @@ impl Camera {
         let v_px = (j as f32 + xi.y) / self.height as f32;
         let sx = (2.0 * u_px - 1.0) * self.tan_half_x;
         let sy = (1.0 - 2.0 * v_px) * self.tan_half_y;
-        let r = self.lens.radius * u.x.sqrt();
-        let (sin, cos) = (2.0 * PI * u.y).sin_cos();
-        let (lx, ly) = (r * cos, r * sin);
+        let l = self.lens_offset(u);
         let fd = self.lens.focal_distance;
         // Camera space: lens point (lx, ly, 0), focus point (sx·fd, sy·fd, fd along forward).
-        let d = (sx * fd - lx) * self.right + (sy * fd - ly) * self.up + fd * self.forward;
-        Ray::new(self.eye + lx * self.right + ly * self.up, d.normalize())
+        let d = (sx * fd - l.x) * self.right + (sy * fd - l.y) * self.up + fd * self.forward;
+        Ray::new(self.eye + l.x * self.right + l.y * self.up, d.normalize())
+    }
+
+    /// The lens point of `u ∈ [0,1)²` in the lens plane's (right, up) coordinates.
+    #[inline]
+    fn lens_offset(&self, u: Vec2) -> Vec2 {
+        let r = self.lens.radius * u.x.sqrt();
+        let (sin, cos) = (2.0 * PI * u.y).sin_cos();
+        Vec2::new(r * cos, r * sin)
     }
 
     /// Pixel `(x, y)` whose centre sees world point `p`, if it is in front of the camera and in the image.
@@ -142,6 +148,72 @@ impl Camera {
         let v = 0.5 * (1.0 - sy) * self.height as f32;
         (u >= 0.0 && v >= 0.0 && u < self.width as f32 && v < self.height as f32)
             .then_some((u as u32, v as u32))
+    }
+}
+
+/// The pixel that sees a scene point, for estimators that connect to the camera.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct CameraConnection {
+    pub x: u32,
+    pub y: u32,
+    /// Where the connection ends: the eye, or the point on the lens.
+    pub origin: Vec3,
+    /// Unit direction from the point toward `origin`.
+    pub to_eye: Vec3,
+    pub dist: f32,
+    /// `We·cos θ / d² = 1/(A·cos³θ·d²)` (pbrt-v4 `PerspectiveCamera::SampleWi`),
+    /// `A = 4·tan_half_x·tan_half_y` the image plane's area at distance 1; with a lens,
+    /// `We = 1/(A·lensArea·cos⁴θ)` over the lens-area pdf `d²/(cos θ·lensArea)` gives the same.
+    /// With `N` paths per pixel, a pixel is the sum of its `β·f·|cos|·importance` over `N`.
+    pub importance: f32,
+}
+
+impl Camera {
+    /// Projects `p` onto the image through the lens point of `u_lens` (unused by the
+    /// pinhole): `None` behind the lens or outside the frame. The pixel is where the ray
+    /// from the lens point through `p` crosses the focal plane, seen from the eye.
+    pub fn connect(&self, p: Vec3, u_lens: Vec2) -> Option<CameraConnection> {
+        let pinhole = self.lens.is_pinhole();
+        let origin = if pinhole {
+            self.eye
+        } else {
+            let l = self.lens_offset(u_lens);
+            self.eye + l.x * self.right + l.y * self.up
+        };
+        let d = p - origin;
+        let dist = d.length();
+        if !(dist > 0.0 && dist.is_finite()) {
+            return None;
+        }
+        let w = d / dist;
+        let cos = w.dot(self.forward);
+        if cos <= 0.0 {
+            return None;
+        }
+        // The crossing with the plane at depth 1 (the pinhole) or at the focal distance,
+        // scaled to depth 1 (the lens).
+        let q = if pinhole {
+            w / cos
+        } else {
+            (origin - self.eye) / self.lens.focal_distance + w / cos
+        };
+        let u = 0.5 * (q.dot(self.right) / self.tan_half_x + 1.0);
+        let v = 0.5 * (1.0 - q.dot(self.up) / self.tan_half_y);
+        if !((0.0..1.0).contains(&u) && (0.0..1.0).contains(&v)) {
+            return None;
+        }
+        let x = ((u * self.width as f32) as u32).min(self.width - 1);
+        let y = ((v * self.height as f32) as u32).min(self.height - 1);
+        let area = 4.0 * self.tan_half_x * self.tan_half_y;
+        let importance = 1.0 / (area * cos * cos * cos * dist * dist);
+        importance.is_finite().then_some(CameraConnection {
+            x,
+            y,
+            origin,
+            to_eye: -w,
+            dist,
+            importance,
+        })
     }
 }
 
@@ -185,6 +257,43 @@ mod tests {
         assert!((r.d - desc.forward).length() < 1e-6);
         // Row 0 is the top: its rays point up.
         assert!(cam.generate_ray(0, 0, Vec2::splat(0.5)).d.dot(desc.up) > 0.0);
+    }
+
+    #[test]
+    fn connect_inverts_generate_ray() {
+        let desc = CameraDesc::default();
+        let b = Aabb::new(Vec3::splat(-1.0), Vec3::splat(1.0));
+        let cam = Camera::new(&desc, &b, 16, 12);
+        for (i, j) in [(0, 0), (15, 11), (7, 3)] {
+            let r = cam.generate_ray(i, j, Vec2::new(0.25, 0.75));
+            let c = cam.connect(r.o + 3.0 * r.d, Vec2::ZERO).unwrap();
+            assert_eq!((c.x, c.y), (i, j));
+            assert!((c.dist - 3.0).abs() < 1e-4 && (c.to_eye + r.d).length() < 1e-5);
+        }
+        assert!(cam.connect(cam.eye - desc.forward, Vec2::ZERO).is_none());
+    }
+
+    #[test]
+    fn connect_through_the_lens_inverts_generate_lens_ray() {
+        let desc = CameraDesc::default();
+        let b = Aabb::new(Vec3::splat(-1.0), Vec3::splat(1.0));
+        let mut cam = Camera::new(&desc, &b, 16, 12);
+        cam.lens = ThinLens {
+            radius: 0.4,
+            focal_distance: 2.5,
+        };
+        let mut s = Sampler::from_seed(11);
+        for k in 0..200u32 {
+            let (i, j) = (k % 16, (k / 16) % 12);
+            let (xi, u) = (Vec2::new(0.25, 0.75), s.next_2d());
+            let r = cam.generate_lens_ray(i, j, xi, u);
+            for t in [1.0, 2.5, 6.0] {
+                let c = cam.connect(r.o + t * r.d, u).unwrap();
+                assert_eq!((c.x, c.y), (i, j), "t = {t}");
+                assert!((c.origin - r.o).length() < 1e-6);
+                assert!((c.dist - t).abs() < 1e-4 && (c.to_eye + r.d).length() < 1e-5);
+            }
+        }
     }
 
     #[test]
