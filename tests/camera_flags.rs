@@ -78,6 +78,8 @@ fn saved_camera_renders_the_same_image() {
         let cam_arg = cam.to_str().unwrap();
         let loaded = render(&with(&["-c", cam_arg]), &dir.path().join("c.exr"), scene);
         assert_eq!(plain.pixels, loaded.pixels, "{scene}");
+        let meta = ember::image_io::read_metadata(&dir.path().join("c.exr")).unwrap();
+        assert_eq!(meta.get("ember.camera_file"), Some(cam_arg));
     }
 }
 
@@ -206,6 +208,9 @@ fn cell_equals_the_full_render() {
             let cell = render(&args, &dir.path().join(format!("cell{t}.exr")), SPHERES);
             assert_eq!((cell.width, cell.height), (17, 11));
             assert_eq!(cell.pixels, expected, "-t {t} {extra:?}");
+            let meta = ember::image_io::read_metadata(&dir.path().join(format!("cell{t}.exr")));
+            let cell_note = meta.unwrap().get("ember.cell").map(String::from);
+            assert!(cell_note.is_some_and(|c| c.contains("pixels 5..22 x 16..27")));
             args.push("--full-frame");
             let framed = render(&args, &dir.path().join(format!("frame{t}.exr")), SPHERES);
             assert_eq!((framed.width, framed.height), (40, 30));
