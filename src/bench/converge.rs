@@ -158,7 +158,7 @@ pub fn methods(base: &RenderSettings, compare_backends: bool) -> Vec<Method> {
                 strategy: default_strategy,
                 ..base.clone()
             },
-            accel: AccelKind::Embree(EmbreeQuality::Medium),
+            accel: AccelKind::embree(EmbreeQuality::Medium),
         });
     }
     v

@@ -1,11 +1,10 @@
 //! `ember bench ...`: each benchmark runs, writes its report, prints its summary.
 
-use super::args::{AccelArg, BenchCommand, BvhArg, QualityArg};
-use super::convert::{accel_kind, check_resolution, threads_invalid};
+use super::args::{BenchCommand, BvhArg, QualityArg};
+use super::convert::{accel_kind, check_resolution, embree_quality, threads_invalid};
 use anyhow::{bail, Context, Result};
-use ember::accel::AccelKind;
 use ember::bench;
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 
 /// `ember bench ...`: each benchmark runs, writes its report, prints its summary.
 pub(super) fn run(which: BenchCommand) -> Result<()> {
@@ -20,16 +19,41 @@ pub(super) fn run(which: BenchCommand) -> Result<()> {
             out,
             repeats,
             ..
-        } => bench_scaling(out, repeats),
+        } => bench_scaling(out.unwrap_or_else(|| "bench-out/scaling".into()), repeats),
         BenchCommand::Accel {
             scenes,
             rays,
             threads,
             repeats,
             quality,
-            mesh_triangles,
+            no_embree_modes,
+            append,
+            out,
             ..
-        } => bench_accel(scenes, rays, threads, repeats, quality, mesh_triangles),
+        } => {
+            if threads_invalid(&threads) {
+                bail!("--threads: each count must be at least 1");
+            }
+            let defaults = bench::accel::AccelBenchOptions::default();
+            let opts = bench::accel::AccelBenchOptions {
+                scenes: if scenes.is_empty() {
+                    defaults.scenes.clone()
+                } else {
+                    scenes
+                },
+                rays,
+                threads,
+                repeats: repeats.max(1),
+                embree_quality: embree_quality(quality),
+                embree_modes: !no_embree_modes,
+                ..defaults
+            };
+            bench_accel(
+                &opts,
+                &out.unwrap_or_else(|| "bench-out/accel".into()),
+                append,
+            )
+        }
         BenchCommand::Converge {
             scene,
             reference,
@@ -114,38 +138,33 @@ fn bench_scaling(out: PathBuf, repeats: usize) -> Result<()> {
     Ok(())
 }
 
-fn bench_accel(
-    scenes: Vec<PathBuf>,
-    rays: usize,
-    threads: Vec<usize>,
-    repeats: usize,
-    quality: QualityArg,
-    mesh_triangles: usize,
-) -> Result<()> {
-    use bench::accel::{run, AccelBenchOptions, BenchScene};
-    let mut opts = AccelBenchOptions {
-        rays,
-        threads,
-        repeats: repeats.max(1),
-        ..Default::default()
+fn bench_accel(opts: &bench::accel::AccelBenchOptions, out: &Path, append: bool) -> Result<()> {
+    use bench::accel::{run, AccelBenchReport};
+    // Read what to append to before the long run, so a missing file fails at once.
+    let earlier = if append {
+        Some(AccelBenchReport::read(out).context("--append")?)
+    } else {
+        None
     };
-    if threads_invalid(&opts.threads) {
-        bail!("--threads: each count must be at least 1");
+    let report = run(opts, |line| ember::errln!("ember: {line}"))?;
+    let report = match earlier {
+        Some(e) => e.merge(report),
+        None => report,
+    };
+    report.write(out)?;
+    ember::outln!("{}", report.table().to_markdown())?;
+    if !report.modes.is_empty() {
+        ember::outln!("{}", report.modes_table().to_markdown())?;
     }
-    if !scenes.is_empty() {
-        opts.scenes = scenes.into_iter().map(BenchScene::File).collect();
-    }
-    opts.scenes
-        .retain(|s| !matches!(s, BenchScene::DisplacedSphere(_)));
-    if mesh_triangles > 0 {
-        opts.scenes
-            .push(BenchScene::DisplacedSphere(mesh_triangles));
-    }
-    if let AccelKind::Embree(q) = accel_kind(AccelArg::Embree, BvhArg::Sah, quality) {
-        opts.embree_quality = q;
-    }
-    let report = run(&opts, |line| ember::errln!("ember: {line}"))?;
-    ember::outln!("{}", report.to_markdown())?;
+    ember::outln!(
+        "wrote {}/accel.csv and accel.md{}",
+        out.display(),
+        if report.modes.is_empty() {
+            ""
+        } else {
+            ", embree_modes.csv and embree_modes.md"
+        }
+    )?;
     Ok(())
 }
 

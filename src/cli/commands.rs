@@ -106,6 +106,12 @@ pub(super) fn info(path: &Path, w: u32, h: u32) -> Result<()> {
     ember::outln!("{}", path.display())?;
     ember::out!("{}", ember::info::scene_info(&scene, w, h))?;
     ember::outln!("{}", accel::backends_info())?;
+    let auto = accel::choose_auto(&scene);
+    ember::outln!(
+        "--accel auto (the default) picks {}: {}",
+        auto.kind,
+        auto.reason
+    )?;
     Ok(())
 }
 
@@ -118,16 +124,10 @@ fn load_scene(path: &Path) -> Result<Scene> {
 }
 
 fn thread_pool(threads: Option<usize>) -> Result<rayon::ThreadPool> {
-    // Flush-to-zero on every tracing thread, as Embree recommends; the native BVH
-    // gives the same image either way (tested).
-    let mut b = rayon::ThreadPoolBuilder::new().start_handler(|_| accel::set_flush_denormals());
-    if let Some(t) = threads {
-        if t == 0 {
-            bail!("-t: thread count must be at least 1");
-        }
-        b = b.num_threads(t);
+    if threads == Some(0) {
+        bail!("-t: thread count must be at least 1");
     }
-    Ok(b.build()?)
+    Ok(accel::tracing_pool(threads)?)
 }
 
 fn progress_bar(total: u64, quiet: bool) -> ProgressBar {

@@ -15,16 +15,25 @@ pub(super) fn check_resolution(w: u32, h: u32) -> Result<()> {
 }
 
 pub(super) fn accel_kind(a: AccelArg, b: BvhArg, q: QualityArg) -> AccelKind {
+    let bvh = match b {
+        BvhArg::Sah => BvhBuilder::Sah,
+        BvhArg::Midpoint => BvhBuilder::Midpoint,
+    };
     match a {
-        AccelArg::Native => AccelKind::Native(match b {
-            BvhArg::Sah => BvhBuilder::Sah,
-            BvhArg::Midpoint => BvhBuilder::Midpoint,
-        }),
-        AccelArg::Embree => AccelKind::Embree(match q {
-            QualityArg::Low => EmbreeQuality::Low,
-            QualityArg::Medium => EmbreeQuality::Medium,
-            QualityArg::High => EmbreeQuality::High,
-        }),
+        AccelArg::Auto => AccelKind::Auto {
+            bvh,
+            embree: embree_quality(q),
+        },
+        AccelArg::Native => AccelKind::Native(bvh),
+        AccelArg::Embree => AccelKind::embree(embree_quality(q)),
+    }
+}
+
+pub(super) fn embree_quality(q: QualityArg) -> EmbreeQuality {
+    match q {
+        QualityArg::Low => EmbreeQuality::Low,
+        QualityArg::Medium => EmbreeQuality::Medium,
+        QualityArg::High => EmbreeQuality::High,
     }
 }
 
