@@ -127,7 +127,7 @@ pub struct AccelBenchRow {
     pub backend: String,
     /// `Some` for Embree rows.
     pub embree_mode: Option<EmbreeMode>,
-    /// The Embree this build of ember links (version and ISA), "none" without one:
+    /// The Embree this build of ember links ("Embree 4.4.0 AVX2"), "none" without one:
     /// tells apart the rows of an Embree 3 and an Embree 4 build in a merged table.
     pub build: String,
     /// Whether `--accel auto` picks this backend for this scene in that build.
@@ -179,17 +179,6 @@ fn backends(quality: EmbreeQuality) -> Vec<AccelKind> {
     list
 }
 
-/// The Embree of this build, as rows name it.
-fn build_name(builder: &AccelBuilder) -> Result<String, AccelError> {
-    #[cfg(any(feature = "embree", feature = "embree4"))]
-    return Ok(builder.embree_device()?.info().to_string());
-    #[cfg(not(any(feature = "embree", feature = "embree4")))]
-    {
-        let _ = builder;
-        Ok("none".into())
-    }
-}
-
 /// Runs the whole benchmark; `progress` hears one line per finished measurement.
 pub fn run(
     opts: &AccelBenchOptions,
@@ -208,7 +197,7 @@ pub fn run(
         for &threads in &opts.threads {
             let pool = accel::tracing_pool(Some(threads))?;
             let builder = AccelBuilder::new(threads);
-            let build = build_name(&builder)?;
+            let build = embree_modes::build_label(&builder)?;
             let kinds = backends(opts.embree_quality);
             let measured = measure_all(&scene, &rays, &pool, &builder, &kinds, repeats)?;
             for (kind, m) in kinds.into_iter().zip(measured) {
@@ -317,6 +306,55 @@ impl AccelBenchReport {
             ]);
         }
         t
+    }
+
+    /// Where `--accel auto` should switch, from these rows: the fewest primitives from
+    /// which, on every measured scene that large, robust Embree traces both
+    /// incoherent and shadow rays faster than the native SAH tree of the same build at
+    /// every thread count. `None` when the largest scene still favours the native tree.
+    pub fn crossover(&self) -> Option<usize> {
+        let embree_ahead = |scene: &str| {
+            self.rows
+                .iter()
+                .filter(|r| r.scene == scene && r.backend == "native SAH")
+                .all(|n| {
+                    self.embree_row(n, true).is_some_and(|e| {
+                        e.measured.incoherent_mrays > n.measured.incoherent_mrays
+                            && e.measured.shadow_mrays > n.measured.shadow_mrays
+                    })
+                })
+        };
+        let mut scenes: Vec<(usize, bool)> = first_seen(self.rows.iter().map(|r| r.scene.clone()))
+            .iter()
+            .map(|s| {
+                let prims = self.rows.iter().find(|r| &r.scene == s).map_or(0, |r| r.prims);
+                (prims, embree_ahead(s))
+            })
+            .collect();
+        scenes.sort_by_key(|&(prims, _)| std::cmp::Reverse(prims));
+        let mut from = None;
+        for (prims, ahead) in scenes {
+            if !ahead {
+                break;
+            }
+            from = Some(prims);
+        }
+        from
+    }
+
+    /// One line on [`AccelBenchReport::crossover`] against the crossover `--accel auto` uses.
+    pub fn crossover_note(&self) -> String {
+        let now = accel::AUTO_EMBREE_MIN_PRIMS;
+        match self.crossover() {
+            Some(p) => format!(
+                "Robust Embree is ahead of native SAH (incoherent and shadow rays, every thread count) \
+                 on every measured scene from {p} primitives up; --accel auto switches at {now}."
+            ),
+            None => format!(
+                "Native SAH keeps up with robust Embree on the largest measured scene \
+                 (incoherent or shadow rays); --accel auto switches at {now}."
+            ),
+        }
     }
 
     fn embree_row(&self, r: &AccelBenchRow, robust: bool) -> Option<&AccelBenchRow> {
@@ -519,6 +557,32 @@ mod tests {
         );
         assert!(md.contains("| 3 | 9 | 2 | 4.25 |"), "{md}");
         assert_eq!(md.lines().count(), 2 + 5);
+    }
+
+    #[test]
+    fn crossover_is_where_embree_stays_ahead() {
+        let at = |scene: &str, prims, kind: AccelKind, mrays| AccelBenchRow {
+            scene: scene.into(),
+            prims,
+            ..row(kind, "e", mrays)
+        };
+        let robust = AccelKind::embree(EmbreeQuality::Medium);
+        let rows = |sizes: &[(usize, f64)]| AccelBenchReport {
+            rows: sizes
+                .iter()
+                .flat_map(|&(p, native)| {
+                    let name = p.to_string();
+                    [at(&name, p, SAH, native), at(&name, p, robust, 1.0)]
+                })
+                .collect(),
+            modes: vec![],
+        };
+        // Native ahead at 10, behind at 100 and 1000, ahead again at 50 (noise).
+        let r = rows(&[(10, 2.0), (50, 1.5), (100, 0.5), (1000, 0.5)]);
+        assert_eq!(r.crossover(), Some(100));
+        assert!(r.crossover_note().contains("from 100 primitives up"));
+        assert_eq!(rows(&[(10, 0.5), (1000, 1.5)]).crossover(), None);
+        assert_eq!(rows(&[(10, 0.5), (1000, 0.5)]).crossover(), Some(10));
     }
 
     #[test]

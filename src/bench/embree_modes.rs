@@ -43,7 +43,7 @@ pub const QUERY_FLAGS: &str = "INCOHERENT (default)";
 #[derive(Clone, Debug, PartialEq)]
 pub struct EmbreeModeRow {
     pub scene: String,
-    /// Version and ISA, e.g. "Embree 4.4.0 (AVX2, native ray packets of 8)".
+    /// [`build_label`]: version and ISA, e.g. "Embree 4.4.0 AVX2".
     pub embree: String,
     pub mode: EmbreeMode,
     /// `rtcSetSceneFlags` as Embree reports it back: "ROBUST" or "NONE".
@@ -52,6 +52,21 @@ pub struct EmbreeModeRow {
     pub threads: usize,
     pub build_ms: f64,
     pub camera_mrays: f64,
+}
+
+/// The Embree of this build as rows name it ("Embree 4.4.0 AVX2"), "none" without one.
+pub fn build_label(builder: &AccelBuilder) -> Result<String, AccelError> {
+    #[cfg(any(feature = "embree", feature = "embree4"))]
+    {
+        let info = builder.embree_device()?.info();
+        let (a, b, c) = info.version;
+        Ok(format!("Embree {a}.{b}.{c} {}", info.isa()))
+    }
+    #[cfg(not(any(feature = "embree", feature = "embree4")))]
+    {
+        let _ = builder;
+        Ok("none".into())
+    }
 }
 
 /// Measures every mode on `scene`'s `camera` rays (in tiled order) with `builder`'s
@@ -69,7 +84,7 @@ pub fn embree_modes(
     use super::median;
     use std::time::Instant;
 
-    let embree = builder.embree_device()?.info().to_string();
+    let embree = build_label(builder)?;
     let mut rows = Vec::new();
     for robust in [true, false] {
         for quality in EmbreeQuality::ALL {

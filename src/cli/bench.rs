@@ -156,6 +156,7 @@ fn bench_accel(opts: &bench::accel::AccelBenchOptions, out: &Path, append: bool)
     if !report.modes.is_empty() {
         ember::outln!("{}", report.modes_table().to_markdown())?;
     }
+    ember::outln!("{}\n", report.crossover_note())?;
     ember::outln!(
         "wrote {}/accel.csv and accel.md{}",
         out.display(),
