@@ -11,6 +11,7 @@ pub use brute::BruteForce;
 pub use bvh::{Bvh, BvhStats};
 
 use crate::geometry::Ray;
+use crate::names::{display_from_table, Named};
 use crate::scene::{PrimHit, Scene};
 
 /// Work done by one traversal, for the BVH-cost heat map.
@@ -53,6 +54,58 @@ pub enum BvhBuilder {
     /// Binned surface-area heuristic.
     #[default]
     Sah,
+}
+
+impl Named for BvhBuilder {
+    const WHAT: &'static str = "BVH builder";
+    const TABLE: &'static [(Self, &'static str, &'static str)] = &[
+        (BvhBuilder::Sah, "sah", "Binned surface-area heuristic"),
+        (
+            BvhBuilder::Midpoint,
+            "midpoint",
+            "The course's split at the centroid midpoint of the longest axis",
+        ),
+    ];
+}
+display_from_table!(BvhBuilder);
+
+/// Which intersection backend, without its build setting (`--accel`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
+pub enum Backend {
+    /// Per scene: [`choose_auto`].
+    #[default]
+    Auto,
+    Native,
+    Embree,
+}
+
+impl Named for Backend {
+    const WHAT: &'static str = "backend";
+    const TABLE: &'static [(Self, &'static str, &'static str)] = &[
+        (
+            Backend::Auto,
+            "auto",
+            "Per scene: the native BVH below a measured primitive count, Embree from it in builds with Embree \
+             (`ember info SCENE` says which and why)",
+        ),
+        (Backend::Native, "native", "ember's own BVH"),
+        (
+            Backend::Embree,
+            "embree",
+            "Intel Embree, robust mode (builds with --features embree or embree4 only)",
+        ),
+    ];
+}
+display_from_table!(Backend);
+
+impl Backend {
+    /// Whether this build can construct the backend.
+    pub fn available(self) -> bool {
+        match self {
+            Backend::Auto | Backend::Native => true,
+            Backend::Embree => cfg!(any(feature = "embree", feature = "embree4")),
+        }
+    }
 }
 
 /// Which backend, and its build setting.
@@ -114,6 +167,29 @@ impl std::fmt::Display for AccelKind {
     }
 }
 
+impl AccelKind {
+    /// `backend` with its own setting: the BVH builder or Embree's quality (the other is unused).
+    pub fn new(backend: Backend, builder: BvhBuilder, quality: EmbreeQuality) -> AccelKind {
+        match backend {
+            Backend::Auto => AccelKind::Auto {
+                bvh: builder,
+                embree: quality,
+            },
+            Backend::Native => AccelKind::Native(builder),
+            Backend::Embree => AccelKind::embree(quality),
+        }
+    }
+
+    pub fn backend(self) -> Backend {
+        match self {
+            AccelKind::Native(_) => Backend::Native,
+            AccelKind::Embree(_) => Backend::Embree,
+            AccelKind::Auto { .. } => Backend::Auto,
+        }
+    }
+}
+
+/// Embree's build quality (`RTC_BUILD_QUALITY_*`).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
 pub enum EmbreeQuality {
     Low,
@@ -122,22 +198,22 @@ pub enum EmbreeQuality {
     High,
 }
 
+impl Named for EmbreeQuality {
+    const WHAT: &'static str = "Embree build quality";
+    const TABLE: &'static [(Self, &'static str, &'static str)] = &[
+        (EmbreeQuality::Low, "low", ""),
+        (EmbreeQuality::Medium, "medium", ""),
+        (EmbreeQuality::High, "high", ""),
+    ];
+}
+display_from_table!(EmbreeQuality);
+
 impl EmbreeQuality {
     pub const ALL: [EmbreeQuality; 3] = [
         EmbreeQuality::Low,
         EmbreeQuality::Medium,
         EmbreeQuality::High,
     ];
-}
-
-impl std::fmt::Display for EmbreeQuality {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        f.write_str(match self {
-            EmbreeQuality::Low => "low",
-            EmbreeQuality::Medium => "medium",
-            EmbreeQuality::High => "high",
-        })
-    }
 }
 
 /// How Embree builds and traverses a scene.

@@ -327,7 +327,11 @@ impl AccelBenchReport {
         let mut scenes: Vec<(usize, bool)> = first_seen(self.rows.iter().map(|r| r.scene.clone()))
             .iter()
             .map(|s| {
-                let prims = self.rows.iter().find(|r| &r.scene == s).map_or(0, |r| r.prims);
+                let prims = self
+                    .rows
+                    .iter()
+                    .find(|r| &r.scene == s)
+                    .map_or(0, |r| r.prims);
                 (prims, embree_ahead(s))
             })
             .collect();

@@ -1,8 +1,9 @@
 //! `ember bench ...`: each benchmark runs, writes its report, prints its summary.
 
-use super::args::{BenchCommand, BvhArg, QualityArg};
-use super::convert::{accel_kind, check_resolution, embree_quality, threads_invalid};
+use super::args::BenchCommand;
+use super::convert::{check_resolution, threads_invalid};
 use anyhow::{bail, Context, Result};
+use ember::accel::{AccelKind, BvhBuilder, EmbreeQuality};
 use ember::bench;
 use std::path::{Path, PathBuf};
 
@@ -44,7 +45,7 @@ pub(super) fn run(which: BenchCommand) -> Result<()> {
                 rays,
                 threads,
                 repeats: repeats.max(1),
-                embree_quality: embree_quality(quality),
+                embree_quality: quality,
                 embree_modes: !no_embree_modes,
                 ..defaults
             };
@@ -66,6 +67,8 @@ pub(super) fn run(which: BenchCommand) -> Result<()> {
             target_rmse,
             out,
             seed,
+            mitsuba,
+            mitsuba_variants,
         } => {
             check_resolution(resolution[0], resolution[1])?;
             bench_converge(bench::converge::ConvergeOptions {
@@ -82,6 +85,10 @@ pub(super) fn run(which: BenchCommand) -> Result<()> {
                 target_rmse,
                 seed,
                 compare_backends: true,
+                mitsuba: mitsuba.map(|python| bench::converge::MitsubaPeer {
+                    python,
+                    variants: mitsuba_variants,
+                }),
             })
         }
         BenchCommand::Render {
@@ -100,7 +107,7 @@ pub(super) fn run(which: BenchCommand) -> Result<()> {
             spp,
             max_depth,
             repeat: repeat.max(1),
-            accel: accel_kind(a, BvhArg::Sah, QualityArg::Medium),
+            accel: AccelKind::new(a, BvhBuilder::default(), EmbreeQuality::default()),
             out_dir: out,
         }),
     }

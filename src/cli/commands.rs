@@ -1,9 +1,7 @@
 //! One short function per subcommand: convert the flags, call the library, report.
 
-use super::args::{AccelArg, ExportArgs, ExportFormat, RenderArgs};
-use super::convert::{
-    accel_kind, adopt_scene_from_adaptive, check_resolution, output_path, settings_from,
-};
+use super::args::{ExportArgs, ExportFormat, RenderArgs};
+use super::convert::{adopt_scene_from_adaptive, check_resolution, output_path, settings_from};
 use anyhow::{bail, Result};
 use ember::accel;
 use ember::render::RenderJob;
@@ -16,7 +14,7 @@ use std::time::Instant;
 /// `ember [OPTIONS] SCENE`: one render to an image file.
 pub(super) fn render(mut args: RenderArgs) -> Result<()> {
     adopt_scene_from_adaptive(&mut args);
-    if args.accel == AccelArg::Embree && !cfg!(any(feature = "embree", feature = "embree4")) {
+    if !args.accel.available() {
         bail!("{}", accel::AccelError::EmbreeUnavailable);
     }
     let Some(scene_path) = args.scene.clone() else {
@@ -35,7 +33,7 @@ pub(super) fn render(mut args: RenderArgs) -> Result<()> {
         )?),
         None => None,
     };
-    let kind = accel_kind(args.accel, args.bvh, args.embree_quality);
+    let kind = accel::AccelKind::new(args.accel, args.bvh, args.embree_quality);
     let pool = thread_pool(args.threads)?;
     let t0 = Instant::now();
     let scene = load_scene(&scene_path)?;
@@ -169,15 +167,11 @@ pub(super) fn export(a: ExportArgs) -> Result<()> {
         .file_stem()
         .map_or("scene".into(), |s| s.to_string_lossy().into_owned());
     let ExportFormat::Mitsuba = a.format;
-    let settings = ember::export::MitsubaSettings {
-        spp: a.spp,
-        max_depth: a.max_depth,
-        roulette_start: match ember::integrators::Roulette::default() {
-            ember::integrators::Roulette::Throughput { start, .. }
-            | ember::integrators::Roulette::Fixed { start, .. } => Some(start),
-            ember::integrators::Roulette::Off => None,
-        },
-    };
+    let settings = ember::export::MitsubaSettings::for_ember(
+        a.spp,
+        a.max_depth,
+        &ember::integrators::Roulette::default(),
+    );
     let summary = ember::export::write_mitsuba(&scene, &camera, &settings, &a.out, &stem)?;
     for w in &summary.warnings {
         ember::errln!("ember: warning: {w}");
