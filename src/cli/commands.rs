@@ -33,7 +33,16 @@ pub(super) fn render(mut args: RenderArgs) -> Result<()> {
         )?),
         None => None,
     };
-    let kind = accel::AccelKind::new(args.accel, args.bvh, args.embree_quality);
+    let kind = match accel::AccelKind::new(args.accel, args.bvh, args.embree_quality) {
+        // The BVH-cost heat map counts the native tree's traversal steps, which
+        // Embree does not expose: auto keeps the native tree for it.
+        accel::AccelKind::Auto { bvh, .. }
+            if settings.shading == ember::render::Shading::BvhCost =>
+        {
+            accel::AccelKind::Native(bvh)
+        }
+        kind => kind,
+    };
     let pool = thread_pool(args.threads)?;
     let t0 = Instant::now();
     let scene = load_scene(&scene_path)?;
