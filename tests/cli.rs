@@ -199,6 +199,16 @@ fn bench_accel_takes_several_thread_counts_and_appends() {
         );
         std::fs::read_to_string(dir.path().join("accel.csv")).unwrap()
     };
+    // Nothing to append to yet: an error naming the file, before any measuring.
+    let st = ember()
+        .args(["bench", "accel", "mesh:2000", "--append", "--out"])
+        .arg(dir.path())
+        .output()
+        .unwrap();
+    assert!(!st.status.success());
+    let err = String::from_utf8_lossy(&st.stderr);
+    assert!(err.contains("accel.csv: cannot read"), "{err}");
+    assert!(!err.contains("Mrays/s"), "measured before failing: {err}");
     let backends = if cfg!(any(feature = "embree", feature = "embree4")) {
         4
     } else {

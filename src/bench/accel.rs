@@ -408,24 +408,24 @@ impl AccelBenchReport {
 
     /// What [`AccelBenchReport::write`] left in `out_dir` (no modes when that file is absent).
     pub fn read(out_dir: &Path) -> anyhow::Result<AccelBenchReport> {
-        let read_table = |stem: &str| -> anyhow::Result<Option<Table>> {
-            let p = out_dir.join(format!("{stem}.csv"));
-            match std::fs::read_to_string(&p) {
-                Ok(text) => Table::from_csv(&text)
-                    .map(Some)
-                    .map_err(|e| anyhow::anyhow!("{}: {e}", p.display())),
-                Err(e) if e.kind() == std::io::ErrorKind::NotFound && stem != "accel" => Ok(None),
-                Err(e) => Err(anyhow::anyhow!("{}: cannot read: {e}", p.display())),
+        let main = out_dir.join("accel.csv");
+        let text = std::fs::read_to_string(&main)
+            .with_context(|| format!("{}: cannot read", main.display()))?;
+        let rows = Table::from_csv(&text)
+            .and_then(|t| Self::rows_from_table(&t))
+            .map_err(|e| anyhow::anyhow!("{}: {e}", main.display()))?;
+        let modes_path = out_dir.join("embree_modes.csv");
+        let modes = match std::fs::read_to_string(&modes_path) {
+            Ok(text) => Table::from_csv(&text)
+                .and_then(|t| embree_modes::rows_from_table(&t))
+                .map_err(|e| anyhow::anyhow!("{}: {e}", modes_path.display()))?,
+            Err(e) if e.kind() == std::io::ErrorKind::NotFound => Vec::new(),
+            Err(e) => {
+                return Err(anyhow::anyhow!(
+                    "{}: cannot read: {e}",
+                    modes_path.display()
+                ))
             }
-        };
-        let main = read_table("accel")?.expect("accel.csv is required");
-        let path = |stem: &str| out_dir.join(format!("{stem}.csv")).display().to_string();
-        let rows =
-            Self::rows_from_table(&main).map_err(|e| anyhow::anyhow!("{}: {e}", path("accel")))?;
-        let modes = match read_table("embree_modes")? {
-            Some(t) => embree_modes::rows_from_table(&t)
-                .map_err(|e| anyhow::anyhow!("{}: {e}", path("embree_modes")))?,
-            None => Vec::new(),
         };
         Ok(AccelBenchReport { rows, modes })
     }
