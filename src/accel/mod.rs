@@ -344,10 +344,13 @@ pub fn tracing_pool(
 }
 
 /// `--accel auto`: scenes with at least this many primitives go to Embree (when
-/// compiled in), smaller ones to the native BVH. Measured with `ember bench accel`
-/// on displaced spheres of several sizes (BENCHMARKS.md, "Where `--accel auto`
-/// switches"): below it the native BVH traces incoherent and shadow rays at least
-/// as fast as robust Embree, above it Embree is ahead.
+/// compiled in), smaller ones to the native BVH. It comes from `ember bench accel`
+/// runs, native and robust Embree interleaved on displaced spheres of several sizes
+/// (BENCHMARKS.md, "Where `--accel auto` switches"; `scripts/benchmarks` prints the
+/// measured crossover beside this value). The sweep behind 85,000 had the native
+/// tree ahead on CBbunny (28.6k) and behind from 249k; a short run on a loaded
+/// machine found Embree ahead from about 12k, so the value is due to be reset from
+/// the full run once the wide native BVH (issue 8) has landed.
 pub const AUTO_EMBREE_MIN_PRIMS: usize = 85_000;
 
 /// What `--accel auto` picks for a scene, and why (for `ember info`).
@@ -381,16 +384,16 @@ fn choose_auto_for(
         AutoChoice {
             kind: AccelKind::embree(quality),
             reason: format!(
-                "{prims} primitives, at or above the measured crossover of \
-                 {AUTO_EMBREE_MIN_PRIMS} where Embree starts to trace faster"
+                "{prims} primitives, at or above the crossover of {AUTO_EMBREE_MIN_PRIMS} \
+                 from which Embree traced faster (BENCHMARKS.md)"
             ),
         }
     } else {
         AutoChoice {
             kind: native,
             reason: format!(
-                "{prims} primitives, below the measured crossover of \
-                 {AUTO_EMBREE_MIN_PRIMS} where Embree starts to trace faster"
+                "{prims} primitives, below the crossover of {AUTO_EMBREE_MIN_PRIMS} \
+                 from which Embree traced faster (BENCHMARKS.md)"
             ),
         }
     }
