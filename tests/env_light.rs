@@ -387,6 +387,28 @@ fn cli_renders_with_e_and_refuses_bad_maps() {
     assert_eq!(err.trim_end().lines().count(), 1, "{err}");
     assert!(err.contains("no/such/map.exr"), "{err}");
     assert!(!bad.exists(), "a failed render left {}", bad.display());
+    let st = ember()
+        .args([
+            "-s",
+            "1",
+            "-r",
+            "8",
+            "6",
+            "--integrator",
+            "light-tracing",
+            "-e",
+        ])
+        .arg(sun_map_path())
+        .arg("-f")
+        .arg(&bad)
+        .arg(&scene)
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&st.stderr);
+    assert!(!st.status.success());
+    assert_eq!(err.trim_end().lines().count(), 1, "{err}");
+    assert!(err.contains("light tracing") && err.contains("-e"), "{err}");
+    assert!(!bad.exists());
 }
 
 /// Case 10 of `ember bench stability` at a small budget: on a map whose light comes

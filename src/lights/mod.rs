@@ -4,6 +4,7 @@
 pub mod ambient;
 pub mod area;
 pub mod directional;
+pub mod emit;
 pub mod environment;
 pub mod point;
 

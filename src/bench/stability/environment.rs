@@ -100,12 +100,9 @@ pub fn sun_sky(b: &Budget) -> Result<EnvironmentCase> {
             ..Default::default()
         });
         let warnings = job.warnings(&settings);
-        runs.push(StrategyRun::from_halves(
-            strategy,
-            name,
-            &job.halves(&settings),
-            warnings,
-        ));
+        let mut run = StrategyRun::from_halves(strategy, &job.halves(&settings), warnings);
+        run.name = name;
+        runs.push(run);
     }
     Ok(EnvironmentCase { runs })
 }
