@@ -374,6 +374,11 @@ fn cli_renders_with_e_and_refuses_bad_maps() {
     );
     let img = ember::image_io::read_image(&out).unwrap();
     assert!(img.pixels.iter().all(|p| p.is_finite()));
+    let meta = ember::image_io::read_metadata(&out).unwrap();
+    assert!(meta
+        .get("ember.env_map")
+        .is_some_and(|m| m.ends_with("env_sun.exr")));
+    assert!(meta.get("ember.env_map.fnv1a64").is_some());
 
     let bad = dir.path().join("bad.png");
     let st = ember()

@@ -141,6 +141,9 @@ fn render_metadata(
     if let Some(file) = &args.camera_file {
         meta.push_file("ember.camera_file", file);
     }
+    if let Some(file) = &args.env_map {
+        meta.push_file("ember.env_map", file);
+    }
     if let (Some(c), Some(r)) = (&args.cell, cell) {
         meta.push(
             "ember.cell",
