@@ -61,7 +61,7 @@ pub const EMBER_DOES: [(&str, &str); 8] = [
     ("3", "MIS (power heuristic) is the default whenever the scene has glossy surfaces: never much worse than the better of light and BSDF sampling."),
     ("4", "Specular chains are followed by BSDF sampling with weight 1 at delta vertices; exact Fresnel; non-finite samples are counted and dropped (0 here)."),
     ("5", "Ray origins are offset by the hit point's own floating-point error bound, shadow rays stop a relative 1e-4 short: every epsilon scales with the scene."),
-    ("6", "Watertight triangle test (Woop et al.), f64 edge functions when f32 rounds to zero; degenerate triangles are never hit; zero-area lights are never sampled. Limitation: below ~2e-4 rad the conservative t ≤ δt rejection (pbrt-v4) drops hits through vertices/edges."),
+    ("6", "Watertight triangle test (Woop et al.), f64 edge functions when f32 rounds to zero; degenerate triangles are never hit; zero-area lights are never sampled; no hit is rejected by a rounding bound on t (pbrt-v4's t ≤ δt, which dropped hits below ~2e-4 rad): rays leaving a surface skip the triangle they left, or reach the sphere they left only at its far side."),
     ("7", "Adaptive::min_samples_if_constant (4·batch by default) keeps a pixel whose samples are all equal sampling beyond the first batch. It only postpones the decision: pixels whose rare light is still unseen after 4 batches stop at 0, so the image stays biased (about half the unguarded bias here)."),
     ("8", "Roulette divides by the continuation probability (unbiased); the default is throughput-based from bounce 3 with q ≥ 0.05."),
 ];
