@@ -7,7 +7,10 @@ pub use job::{average, Halves, PixelRect, RenderJob};
 
 use crate::color::{is_finite, luminance};
 use crate::film::{heat_map, Image};
-use crate::integrators::{debug, DirectStrategy, PathIntegrator, PathSettings, Roulette};
+use crate::integrators::{
+    debug, light_tracing, DirectStrategy, Estimator, PathIntegrator, PathSettings, Roulette,
+};
+use crate::names::{display_from_table, Named};
 use crate::sampling::Sampler;
 use crate::scene::Scene;
 use crate::Color;
@@ -25,14 +28,44 @@ pub enum Shading {
     BvhCost,
 }
 
+impl Named for Shading {
+    const WHAT: &'static str = "shading";
+    const TABLE: &'static [(Self, &'static str, &'static str)] = &[
+        (Shading::Radiance, "radiance", "The physically based image"),
+        (
+            Shading::Normals,
+            "normals",
+            "0.5·n + 0.5 of the shading normal (course parts 1-2)",
+        ),
+        (
+            Shading::BvhCost,
+            "bvh-cost",
+            "Heat map of BVH nodes + primitives tested per camera ray",
+        ),
+    ];
+}
+display_from_table!(Shading);
+
 /// Adaptive sampling (spec §7): stop a pixel once `1.96·σ/√n ≤ tol·μ`.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Adaptive {
     pub batch: u32,
     pub tol: f32,
-    /// A pixel whose samples so far are all equal (σ = 0) keeps sampling until it
-    /// has this many: one batch of zeros says little about a small light.
+    /// A pixel whose samples so far are all equal (σ = 0) keeps sampling until it has
+    /// this many (`StopRule::Neighbourhood`: non-zero constants only).
     pub min_samples_if_constant: u32,
+    pub rule: StopRule,
+}
+
+/// When a pixel whose samples are all equal may stop.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum StopRule {
+    /// The course's rule on the pixel's own samples, after `min_samples_if_constant`.
+    /// Biased where light is rare (stability case 7); kept for comparison.
+    PerPixel,
+    /// `crate::adaptive` (default): a pixel of zeros only when its whole neighbourhood
+    /// looked constant too; a constant non-zero pixel after `min_samples_if_constant`.
+    Neighbourhood,
 }
 
 impl Adaptive {
@@ -41,6 +74,7 @@ impl Adaptive {
             batch: batch.max(1),
             tol,
             min_samples_if_constant: 4 * batch.max(1),
+            rule: StopRule::Neighbourhood,
         }
     }
 }
@@ -52,8 +86,11 @@ pub struct RenderSettings {
     pub light_samples: u32,
     pub max_depth: u32,
     pub accumulate: bool,
-    /// Direct-lighting estimator; `None` chooses one for the scene (`DirectStrategy::auto_for`)
-    /// where the integrator is built.
+    /// Camera paths (with `strategy`) or light tracing; `None` chooses for the scene
+    /// (`Estimator::auto_for`).
+    pub estimator: Option<Estimator>,
+    /// Direct-lighting estimator of camera paths; `None` chooses one for the scene
+    /// (`DirectStrategy::auto_for`) where the integrator is built.
     pub strategy: Option<DirectStrategy>,
     pub roulette: Roulette,
     pub adaptive: Option<Adaptive>,
@@ -62,7 +99,12 @@ pub struct RenderSettings {
 }
 
 impl RenderSettings {
-    /// The estimator these settings use for `scene`.
+    /// Which way these settings build paths in `scene`.
+    pub fn estimator_for(&self, scene: &Scene) -> Estimator {
+        self.estimator.unwrap_or_else(|| Estimator::auto_for(scene))
+    }
+
+    /// The direct-lighting estimator these settings use for `scene`.
     pub fn strategy_for(&self, scene: &Scene) -> DirectStrategy {
         self.strategy
             .unwrap_or_else(|| DirectStrategy::auto_for(scene))
@@ -86,6 +128,7 @@ impl Default for RenderSettings {
             light_samples: 1,
             max_depth: 1,
             accumulate: true,
+            estimator: Some(Estimator::Path),
             strategy: Some(DirectStrategy::Light),
             roulette: Roulette::default(),
             adaptive: None,
@@ -108,6 +151,25 @@ pub struct RenderOutput {
 impl RenderOutput {
     pub fn total_samples(&self) -> u64 {
         self.samples.iter().map(|&s| s as u64).sum()
+    }
+
+    /// This render of pixels `rect` placed in a black `width × height` frame (no samples
+    /// outside `rect`), as a full-size image of one cell.
+    pub fn into_frame(self, rect: PixelRect, width: u32, height: u32) -> RenderOutput {
+        let mut image = Image::new(width, height);
+        let mut samples = vec![0u32; (width * height) as usize];
+        for y in rect.y0..rect.y1 {
+            let src = ((y - rect.y0) * rect.width()) as usize;
+            let dst = (y * width + rect.x0) as usize;
+            let n = rect.width() as usize;
+            image.pixels[dst..dst + n].copy_from_slice(&self.image.pixels[src..src + n]);
+            samples[dst..dst + n].copy_from_slice(&self.samples[src..src + n]);
+        }
+        RenderOutput {
+            image,
+            samples,
+            ..self
+        }
     }
 
     /// The course's sample-rate image: blue few samples, red many (relative to spp).
@@ -144,6 +206,17 @@ fn render_rect(
     rect: PixelRect,
     progress: &(dyn Fn(u64) + Sync),
 ) -> RenderOutput {
+    if settings.shading == Shading::Radiance {
+        if settings.estimator_for(&job.scene) == Estimator::LightTracing {
+            return light_tracing::render(job, settings, rect, progress);
+        }
+        if let Some(a) = settings
+            .adaptive
+            .filter(|a| a.rule == StopRule::Neighbourhood)
+        {
+            return crate::adaptive::render(job, settings, a, rect, progress);
+        }
+    }
     let tiles = tiles(rect);
     let integrator = PathIntegrator::new(
         &job.scene,
@@ -177,13 +250,14 @@ fn render_pixel(
     y: u32,
 ) -> PixelResult {
     let (camera, scene, accel) = (&job.camera, &job.scene, job.accel.as_ref());
-    let mut sampler = Sampler::new(s.seed, (y as u64) * (camera.width as u64) + x as u64, 0);
+    let pixel = (y as u64) * (camera.width as u64) + x as u64;
     let (mut sum, mut s1, mut s2) = (Color::ZERO, 0f64, 0f64);
     let (mut n, mut nonfinite) = (0u32, 0u32);
     let batch = s.adaptive.map_or(s.spp.max(1), |a| a.batch);
     while n < s.spp.max(1) {
         for _ in 0..batch.min(s.spp.max(1) - n) {
-            let ray = camera.generate_ray(x, y, sampler.next_2d());
+            let mut sampler = Sampler::for_sample(s.seed, pixel, n as u64);
+            let ray = camera.sample_ray(x, y, &mut sampler);
             let mut v = match s.shading {
                 Shading::Radiance => integrator.li(ray, &mut sampler),
                 Shading::Normals => debug::normal_color(scene, accel, &ray),
@@ -271,8 +345,14 @@ fn percentile(v: &[f32], q: f32) -> f32 {
 
 /// Cases where the chosen estimator cannot converge to the right image, said out loud.
 fn render_warnings(scene: &Scene, s: &RenderSettings) -> Vec<String> {
-    let mut w = Vec::new();
+    let light_tracing = s.estimator_for(scene) == Estimator::LightTracing;
+    let mut w = if light_tracing {
+        light_tracing::warnings(scene, s)
+    } else {
+        Vec::new()
+    };
     let blind = match s.strategy_for(scene) {
+        _ if light_tracing => None,
         DirectStrategy::Hemisphere => Some("hemisphere sampling (-H)"),
         DirectStrategy::Bsdf => Some("BSDF sampling alone"),
         DirectStrategy::Light | DirectStrategy::Mis => None,
