@@ -49,6 +49,7 @@ impl ImageMetadata {
         m.push("ember.adaptive", format!("{:?}", s.adaptive));
         m.push("ember.shading", format!("{:?}", s.shading));
         m.push("ember.seed", s.seed);
+        m.push("ember.spp_offset", s.spp_offset);
         m.push("ember.backend", job.accel.name());
         m.push("ember.render_seconds", format!("{render_seconds:.3}"));
         m

@@ -2,7 +2,7 @@
 
 use super::args::{AccelArg, ExportArgs, ExportFormat, RenderArgs};
 use super::convert::{
-    accel_kind, adopt_scene_from_adaptive, check_resolution, output_path, settings_from,
+    accel_kind, adopt_scene_from_adaptive, check_resolution, output_path, part_plan, settings_from,
 };
 use anyhow::{bail, Result};
 use ember::accel;
@@ -26,14 +26,15 @@ pub(super) fn render(mut args: RenderArgs) -> Result<()> {
     check_resolution(width, height)?;
     let settings = settings_from(&args)?;
     let out = output_path(&args, &scene_path)?;
+    let part = part_plan(&args, &out, width, height)?;
     // Claim the outputs before loading, so a bad path fails at once and no partial file appears.
     let pending = ember::image_io::PendingImage::claim(&out, &[&scene_path])?;
-    let pending_rate = match settings.adaptive {
-        Some(_) => Some(ember::image_io::PendingImage::claim(
+    let pending_rate = match (settings.adaptive, part) {
+        (Some(_), None) => Some(ember::image_io::PendingImage::claim(
             &rate_path(&out),
             &[&scene_path],
         )?),
-        None => None,
+        _ => None,
     };
     let kind = accel_kind(args.accel, args.bvh, args.embree_quality);
     let pool = thread_pool(args.threads)?;
@@ -46,19 +47,34 @@ pub(super) fn render(mut args: RenderArgs) -> Result<()> {
     for w in job.warnings(&settings) {
         ember::errln!("ember: warning: {w}");
     }
-    let frame = job.full_frame();
-    let pb = progress_bar(frame.area(), args.quiet);
+    let rect = part.map_or(job.full_frame(), |(rect, _)| rect);
+    let pb = progress_bar(rect.area(), args.quiet);
     let t2 = Instant::now();
-    let output = pool.install(|| job.render_rect(&settings, frame, &|n| pb.inc(n)));
+    let output = pool.install(|| job.render_rect(&settings, rect, &|n| pb.inc(n)));
     let t_render = t2.elapsed();
     pb.finish_and_clear();
-    let meta = ember::image_metadata::ImageMetadata::for_render(
+    let mut meta = ember::image_metadata::ImageMetadata::for_render(
         &scene_path,
         &job,
         &settings,
         t_render.as_secs_f64(),
     );
-    pending.write_with_metadata(&output.image, &meta)?;
+    match part {
+        None => pending.write_with_metadata(&output.image, &meta)?,
+        Some((rect, shard)) => {
+            if let Some(shard) = shard {
+                meta.push("ember.shard", shard);
+            }
+            pending.write_part(&ember::shard::Part {
+                name: out.display().to_string(),
+                meta: meta.clone(),
+                frame: (width, height),
+                rect,
+                image: output.image.clone(),
+                samples: output.samples.clone(),
+            })?
+        }
+    }
     if let Some(pending_rate) = pending_rate {
         let rate = pending_rate.path().to_path_buf();
         pending_rate.write_with_metadata(&output.rate_image(settings.spp), &meta)?;
@@ -89,6 +105,27 @@ pub(super) fn render(mut args: RenderArgs) -> Result<()> {
             ember::errln!("ember: bvh-cost scale: blue = 0, red = {s:.0} nodes + primitives tested per camera ray (99th percentile)");
         }
     }
+    Ok(())
+}
+
+/// `ember merge OUT PARTS...`: the parts of a sharded render assembled into one image.
+pub(super) fn merge(out: &Path, parts: &[PathBuf]) -> Result<()> {
+    let inputs: Vec<&Path> = parts.iter().map(PathBuf::as_path).collect();
+    let pending = ember::image_io::PendingImage::claim(out, &inputs)?;
+    let parts = parts
+        .iter()
+        .map(|p| ember::image_io::read_part(p))
+        .collect::<Result<Vec<_>, _>>()?;
+    let merged = ember::shard::merge(&parts)?;
+    pending.write_with_metadata(&merged.image, &merged.meta)?;
+    ember::errln!(
+        "ember: merged {} parts ({}x{}, {} spp) into {}",
+        parts.len(),
+        merged.image.width,
+        merged.image.height,
+        merged.meta.get("ember.spp").unwrap_or("?"),
+        out.display()
+    );
     Ok(())
 }
 
