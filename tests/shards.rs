@@ -325,4 +325,18 @@ fn cli_shards_merge_into_the_whole_render_and_bad_merges_fail() {
     }
     let (ok, err) = run(&["-q", "--shard", "0/2", "-f", "p.png", &scene], d);
     assert!(!ok && err.contains("p.png: a part"), "{err}");
+    // Light tracing (auto's choice for CBempty) splats anywhere: no parts.
+    let empty = shared("scenes/cs184/sky/CBempty.dae").display().to_string();
+    for flag in ["--shard", "--spp-offset"] {
+        let value = if flag == "--shard" { "0/2" } else { "4" };
+        let (ok, err) = run(
+            &["-q", "-r", "40", "30", flag, value, "-f", "lt.exr", &empty],
+            d,
+        );
+        assert!(
+            !ok && err.contains("cannot be used with light tracing"),
+            "{err}"
+        );
+        assert!(!d.join("lt.exr").exists());
+    }
 }

@@ -1,9 +1,9 @@
 //! `ember bench ...`: each benchmark runs, writes its report, prints its summary.
 
-use super::args::{AccelArg, BenchCommand, BvhArg, QualityArg};
-use super::convert::{accel_kind, check_resolution, threads_invalid};
+use super::args::BenchCommand;
+use super::convert::{check_resolution, threads_invalid};
 use anyhow::{bail, Context, Result};
-use ember::accel::AccelKind;
+use ember::accel::{AccelKind, BvhBuilder, EmbreeQuality};
 use ember::bench;
 use std::path::PathBuf;
 
@@ -42,6 +42,8 @@ pub(super) fn run(which: BenchCommand) -> Result<()> {
             target_rmse,
             out,
             seed,
+            mitsuba,
+            mitsuba_variants,
         } => {
             check_resolution(resolution[0], resolution[1])?;
             bench_converge(bench::converge::ConvergeOptions {
@@ -58,6 +60,10 @@ pub(super) fn run(which: BenchCommand) -> Result<()> {
                 target_rmse,
                 seed,
                 compare_backends: true,
+                mitsuba: mitsuba.map(|python| bench::converge::MitsubaPeer {
+                    python,
+                    variants: mitsuba_variants,
+                }),
             })
         }
         BenchCommand::Render {
@@ -76,7 +82,7 @@ pub(super) fn run(which: BenchCommand) -> Result<()> {
             spp,
             max_depth,
             repeat: repeat.max(1),
-            accel: accel_kind(a, BvhArg::Sah, QualityArg::Medium),
+            accel: AccelKind::new(a, BvhBuilder::default(), EmbreeQuality::default()),
             out_dir: out,
         }),
     }
@@ -119,7 +125,7 @@ fn bench_accel(
     rays: usize,
     threads: Vec<usize>,
     repeats: usize,
-    quality: QualityArg,
+    quality: EmbreeQuality,
     mesh_triangles: usize,
 ) -> Result<()> {
     use bench::accel::{run, AccelBenchOptions, BenchScene};
@@ -141,9 +147,7 @@ fn bench_accel(
         opts.scenes
             .push(BenchScene::DisplacedSphere(mesh_triangles));
     }
-    if let AccelKind::Embree(q) = accel_kind(AccelArg::Embree, BvhArg::Sah, quality) {
-        opts.embree_quality = q;
-    }
+    opts.embree_quality = quality;
     let report = run(&opts, |line| ember::errln!("ember: {line}"))?;
     ember::outln!("{}", report.to_markdown())?;
     Ok(())

@@ -1,11 +1,12 @@
 //! One short function per subcommand: convert the flags, call the library, report.
 
-use super::args::{AccelArg, ExportArgs, ExportFormat, RenderArgs};
+use super::args::{ExportArgs, ExportFormat, RenderArgs};
 use super::convert::{
-    accel_kind, adopt_scene_from_adaptive, check_resolution, output_path, part_plan, settings_from,
+    adopt_scene_from_adaptive, check_resolution, output_path, part_plan, settings_from,
 };
 use anyhow::{bail, Result};
 use ember::accel;
+use ember::integrators::Estimator;
 use ember::render::RenderJob;
 use ember::scene::{collada, Scene};
 use indicatif::{ProgressBar, ProgressStyle};
@@ -16,7 +17,7 @@ use std::time::Instant;
 /// `ember [OPTIONS] SCENE`: one render to an image file.
 pub(super) fn render(mut args: RenderArgs) -> Result<()> {
     adopt_scene_from_adaptive(&mut args);
-    if args.accel == AccelArg::Embree && !cfg!(any(feature = "embree", feature = "embree4")) {
+    if !args.accel.available() {
         bail!("{}", accel::AccelError::EmbreeUnavailable);
     }
     let Some(scene_path) = args.scene.clone() else {
@@ -36,11 +37,14 @@ pub(super) fn render(mut args: RenderArgs) -> Result<()> {
         )?),
         _ => None,
     };
-    let kind = accel_kind(args.accel, args.bvh, args.embree_quality);
+    let kind = accel::AccelKind::new(args.accel, args.bvh, args.embree_quality);
     let pool = thread_pool(args.threads)?;
     let t0 = Instant::now();
     let scene = load_scene(&scene_path)?;
     let t_load = t0.elapsed();
+    if part.is_some() && settings.estimator_for(&scene) == Estimator::LightTracing {
+        bail!("--shard/--spp-offset cannot be used with light tracing (the estimator for {}): its light paths splat anywhere in the image, so every band would trace all of them, and its paths are not numbered by sample; use --integrator path", scene_path.display());
+    }
     let t1 = Instant::now();
     let job = pool.install(|| RenderJob::new(scene, kind, width, height))?;
     let t_build = t1.elapsed();
@@ -206,15 +210,11 @@ pub(super) fn export(a: ExportArgs) -> Result<()> {
         .file_stem()
         .map_or("scene".into(), |s| s.to_string_lossy().into_owned());
     let ExportFormat::Mitsuba = a.format;
-    let settings = ember::export::MitsubaSettings {
-        spp: a.spp,
-        max_depth: a.max_depth,
-        roulette_start: match ember::integrators::Roulette::default() {
-            ember::integrators::Roulette::Throughput { start, .. }
-            | ember::integrators::Roulette::Fixed { start, .. } => Some(start),
-            ember::integrators::Roulette::Off => None,
-        },
-    };
+    let settings = ember::export::MitsubaSettings::for_ember(
+        a.spp,
+        a.max_depth,
+        &ember::integrators::Roulette::default(),
+    );
     let summary = ember::export::write_mitsuba(&scene, &camera, &settings, &a.out, &stem)?;
     for w in &summary.warnings {
         ember::errln!("ember: warning: {w}");

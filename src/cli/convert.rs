@@ -1,9 +1,8 @@
 //! Flags into library settings: every check and translation of a flag's value lives here.
 
-use super::args::{AccelArg, BvhArg, IntegratorArg, QualityArg, RenderArgs, ShadingArg};
+use super::args::RenderArgs;
 use anyhow::{bail, Context, Result};
-use ember::accel::{AccelKind, BvhBuilder, EmbreeQuality};
-use ember::integrators::{DirectStrategy, Roulette};
+use ember::integrators::{DirectStrategy, Estimator, Roulette};
 use ember::render::{Adaptive, PixelRect, RenderSettings, Shading};
 use ember::shard::Shard;
 use std::path::{Path, PathBuf};
@@ -13,20 +12,6 @@ pub(super) fn check_resolution(w: u32, h: u32) -> Result<()> {
         bail!("resolution {w}x{h} is out of range (each side ≥ 1, at most 2^28 pixels)");
     }
     Ok(())
-}
-
-pub(super) fn accel_kind(a: AccelArg, b: BvhArg, q: QualityArg) -> AccelKind {
-    match a {
-        AccelArg::Native => AccelKind::Native(match b {
-            BvhArg::Sah => BvhBuilder::Sah,
-            BvhArg::Midpoint => BvhBuilder::Midpoint,
-        }),
-        AccelArg::Embree => AccelKind::Embree(match q {
-            QualityArg::Low => EmbreeQuality::Low,
-            QualityArg::Medium => EmbreeQuality::Medium,
-            QualityArg::High => EmbreeQuality::High,
-        }),
-    }
 }
 
 pub(super) fn parse_adaptive(a: &Option<Vec<String>>) -> Result<Option<Adaptive>> {
@@ -75,13 +60,15 @@ pub(super) fn strategy(args: &RenderArgs) -> Option<DirectStrategy> {
     if args.hemisphere {
         return Some(DirectStrategy::Hemisphere);
     }
-    match args.integrator {
-        IntegratorArg::Light => Some(DirectStrategy::Light),
-        IntegratorArg::Mis => Some(DirectStrategy::Mis),
-        IntegratorArg::Hemisphere => Some(DirectStrategy::Hemisphere),
-        IntegratorArg::Bsdf => Some(DirectStrategy::Bsdf),
-        IntegratorArg::Auto => None,
-    }
+    args.integrator.strategy
+}
+
+/// Which way paths are built; `None` for auto (`Estimator::auto_for` the scene).
+/// `-H` means path tracing unless an estimator was named.
+pub(super) fn estimator(args: &RenderArgs) -> Option<Estimator> {
+    args.integrator
+        .estimator
+        .or(args.hemisphere.then_some(Estimator::Path))
 }
 
 pub(super) fn settings_from(args: &RenderArgs) -> Result<RenderSettings> {
@@ -105,14 +92,11 @@ pub(super) fn settings_from(args: &RenderArgs) -> Result<RenderSettings> {
         light_samples: args.light_samples.max(1),
         max_depth: args.max_depth,
         accumulate: args.accumulate == 1,
+        estimator: estimator(args),
         strategy: strategy(args),
         roulette: parse_roulette(&args.rr, args.rr_start)?,
         adaptive,
-        shading: match args.shading {
-            ShadingArg::Radiance => Shading::Radiance,
-            ShadingArg::Normals => Shading::Normals,
-            ShadingArg::BvhCost => Shading::BvhCost,
-        },
+        shading: args.shading,
         seed: args.seed,
         spp_offset: args.spp_offset.unwrap_or(0),
     })
@@ -136,7 +120,7 @@ pub(super) fn part_plan(
             out.display()
         );
     }
-    if args.shading == ShadingArg::BvhCost {
+    if args.shading == Shading::BvhCost {
         bail!("--shading bvh-cost cannot be rendered in parts: its colour scale depends on every pixel");
     }
     let Some(text) = &args.shard else {
