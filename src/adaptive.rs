@@ -133,7 +133,7 @@ pub fn render(
         let pixel = y as u64 * w as u64 + x as u64;
         let index = settings.spp_offset as u64 + p.n as u64;
         let mut s = Sampler::for_sample(settings.seed, pixel, index);
-        p.add(integrator.li(camera.generate_ray(x, y, s.next_2d()), &mut s));
+        p.add(integrator.li(camera.sample_ray(x, y, &mut s), &mut s));
     };
     let r = QUIET_RADIUS;
     let halo = PixelRect {

@@ -63,7 +63,8 @@ impl fmt::Display for Shard {
 }
 
 /// Metadata keys that differ between the parts of one render; every other key must agree.
-pub const PER_PART_KEYS: [&str; 7] = [
+pub const PER_PART_KEYS: [&str; 8] = [
+    "ember.camera_file",
     "ember.command_line",
     "ember.cpu",
     "ember.render_seconds",

@@ -316,6 +316,10 @@ fn cli_shards_merge_into_the_whole_render_and_bad_merges_fail() {
             vec!["--shard", "0/2", "--shading", "bvh-cost"],
             "bvh-cost cannot be rendered in parts",
         ),
+        (
+            vec!["--shard", "0/2", "-p", "0", "0", "8", "8"],
+            "-p cannot be used with --shard",
+        ),
     ] {
         let mut a = vec!["-q", "-r", "40", "30", "-f", "p.exr"];
         a.extend(extra);

@@ -1,13 +1,16 @@
 //! One short function per subcommand: convert the flags, call the library, report.
 
-use super::args::{ExportArgs, ExportFormat, RenderArgs};
+use super::args::{CameraArgs, ExportArgs, ExportFormat, RenderArgs};
 use super::convert::{
-    adopt_scene_from_adaptive, check_resolution, output_path, part_plan, settings_from,
+    self, adopt_scene_from_adaptive, cell_rect, check_lens, check_resolution, output_path,
+    part_plan, settings_from,
 };
 use anyhow::{bail, Result};
 use ember::accel;
+use ember::camera::course_file::CourseCameraFile;
+use ember::image_metadata::ImageMetadata;
 use ember::integrators::Estimator;
-use ember::render::RenderJob;
+use ember::render::{PixelRect, RenderJob, RenderSettings};
 use ember::scene::{collada, Scene};
 use indicatif::{ProgressBar, ProgressStyle};
 use std::io::IsTerminal;
@@ -26,6 +29,13 @@ pub(super) fn render(mut args: RenderArgs) -> Result<()> {
     let (width, height) = (args.resolution[0], args.resolution[1]);
     check_resolution(width, height)?;
     let settings = settings_from(&args)?;
+    check_lens(&args.lens)?;
+    let camera_file = (args.camera_file.as_deref())
+        .map(CourseCameraFile::read)
+        .transpose()?;
+    let cell = (args.cell.as_deref())
+        .map(|c| cell_rect(c, width, height))
+        .transpose()?;
     let out = output_path(&args, &scene_path)?;
     let part = part_plan(&args, &out, width, height)?;
     // Claim the outputs before loading, so a bad path fails at once and no partial file appears.
@@ -45,22 +55,39 @@ pub(super) fn render(mut args: RenderArgs) -> Result<()> {
     if part.is_some() && settings.estimator_for(&scene) == Estimator::LightTracing {
         bail!("--shard/--spp-offset cannot be used with light tracing (the estimator for {}): its light paths splat anywhere in the image, so every band would trace all of them, and its paths are not numbered by sample; use --integrator path", scene_path.display());
     }
+    let (camera, camera_warning) =
+        convert::camera(&scene, camera_file.as_ref(), &args.lens, (width, height))?;
+    if let (Some(w), Some(file)) = (camera_warning, &args.camera_file) {
+        ember::errln!("ember: warning: {}: {w}", file.display());
+    }
     let t1 = Instant::now();
-    let job = pool.install(|| RenderJob::new(scene, kind, width, height))?;
+    let job = pool.install(|| RenderJob::with_camera(scene, kind, camera))?;
     let t_build = t1.elapsed();
     for w in job.warnings(&settings) {
         ember::errln!("ember: warning: {w}");
     }
-    let rect = part.map_or(job.full_frame(), |(rect, _)| rect);
+    if cell.is_some() && settings.shading == ember::render::Shading::BvhCost {
+        ember::errln!("ember: warning: -p: the bvh-cost heat map is scaled to the cell's own pixels, not the full image's");
+    }
+    let rect = match (part, cell) {
+        (Some((band, _)), _) => band,
+        (None, Some(cell)) => cell,
+        (None, None) => job.full_frame(),
+    };
     let pb = progress_bar(rect.area(), args.quiet);
     let t2 = Instant::now();
-    let output = pool.install(|| job.render_rect(&settings, rect, &|n| pb.inc(n)));
+    let mut output = pool.install(|| job.render_rect(&settings, rect, &|n| pb.inc(n)));
     let t_render = t2.elapsed();
     pb.finish_and_clear();
-    let mut meta = ember::image_metadata::ImageMetadata::for_render(
+    if args.full_frame {
+        output = output.into_frame(rect, width, height);
+    }
+    let mut meta = render_metadata(
         &scene_path,
+        &args,
         &job,
         &settings,
+        cell,
         t_render.as_secs_f64(),
     );
     match part {
@@ -131,6 +158,67 @@ pub(super) fn merge(out: &Path, parts: &[PathBuf]) -> Result<()> {
         out.display()
     );
     Ok(())
+}
+
+/// What the image records: the render's settings, and the camera file and cell if given.
+fn render_metadata(
+    scene: &Path,
+    args: &RenderArgs,
+    job: &RenderJob,
+    settings: &RenderSettings,
+    cell: Option<PixelRect>,
+    seconds: f64,
+) -> ImageMetadata {
+    let mut meta = ImageMetadata::for_render(scene, job, settings, seconds);
+    if let Some(file) = &args.camera_file {
+        meta.push_file("ember.camera_file", file);
+    }
+    if let (Some(c), Some(r)) = (&args.cell, cell) {
+        meta.push(
+            "ember.cell",
+            format!(
+                "X Y DX DY = {} {} {} {} (pixels {}..{} x {}..{} from the top left){}",
+                c[0],
+                c[1],
+                c[2],
+                c[3],
+                r.x0,
+                r.x1,
+                r.y0,
+                r.y1,
+                if args.full_frame { ", full frame" } else { "" }
+            ),
+        );
+    }
+    meta
+}
+
+/// `ember camera SCENE [--save FILE]`: the course's camera settings file of the scene's camera.
+pub(super) fn camera(a: CameraArgs) -> Result<()> {
+    let (w, h) = (a.resolution[0], a.resolution[1]);
+    check_resolution(w, h)?;
+    check_lens(&a.lens)?;
+    let scene = load_scene(&a.scene)?;
+    let (camera, _) = convert::camera(&scene, None, &a.lens, (w, h))?;
+    let text = CourseCameraFile::from_camera(&camera, &scene.bounds).to_text();
+    match &a.save {
+        None => ember::out!("{text}")?,
+        Some(path) => write_text_file(path, &text)?,
+    }
+    Ok(())
+}
+
+/// Writes `text` to `path` through a temporary sibling, so no partial file is ever left.
+fn write_text_file(path: &Path, text: &str) -> Result<()> {
+    let fail = |e: std::io::Error| anyhow::anyhow!("{}: cannot write: {e}", path.display());
+    let mut tmp_name = path.file_name().unwrap_or_default().to_os_string();
+    tmp_name.push(".ember-tmp");
+    let tmp = path.with_file_name(tmp_name);
+    std::fs::write(&tmp, text).map_err(fail)?;
+    std::fs::rename(&tmp, path).map_err(|e| {
+        let _ = std::fs::remove_file(&tmp);
+        fail(e)
+    })
 }
 
 /// `ember info SCENE`: what the scene holds and the backends of this build.

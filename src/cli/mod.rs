@@ -18,6 +18,7 @@ pub fn run(cli: Cli) -> anyhow::Result<()> {
         }
         Some(Command::Export(args)) => commands::export(args),
         Some(Command::Merge { out, parts }) => commands::merge(&out, &parts),
+        Some(Command::Camera(args)) => commands::camera(args),
         #[cfg(feature = "bench")]
         Some(Command::Bench { which }) => bench::run(which),
         None => commands::render(cli.render),
