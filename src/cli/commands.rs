@@ -47,7 +47,16 @@ pub(super) fn render(mut args: RenderArgs) -> Result<()> {
         )?),
         _ => None,
     };
-    let kind = accel::AccelKind::new(args.accel, args.bvh, args.embree_quality);
+    let kind = match accel::AccelKind::new(args.accel, args.bvh, args.embree_quality) {
+        // The BVH-cost heat map counts the native tree's traversal steps, which
+        // Embree does not expose: auto keeps the native tree for it.
+        accel::AccelKind::Auto { bvh, .. }
+            if settings.shading == ember::render::Shading::BvhCost =>
+        {
+            accel::AccelKind::Native(bvh)
+        }
+        kind => kind,
+    };
     let pool = thread_pool(args.threads)?;
     let t0 = Instant::now();
     let scene = load_scene(&scene_path)?;
@@ -235,6 +244,12 @@ pub(super) fn info(path: &Path, w: u32, h: u32) -> Result<()> {
     ember::outln!("{}", path.display())?;
     ember::out!("{}", ember::info::scene_info(&scene, w, h))?;
     ember::outln!("{}", accel::backends_info())?;
+    let auto = accel::choose_auto(&scene);
+    ember::outln!(
+        "--accel auto (the default) picks {}: {}",
+        auto.kind,
+        auto.reason
+    )?;
     Ok(())
 }
 
@@ -247,16 +262,10 @@ fn load_scene(path: &Path) -> Result<Scene> {
 }
 
 fn thread_pool(threads: Option<usize>) -> Result<rayon::ThreadPool> {
-    // Flush-to-zero on every tracing thread, as Embree recommends; the native BVH
-    // gives the same image either way (tested).
-    let mut b = rayon::ThreadPoolBuilder::new().start_handler(|_| accel::set_flush_denormals());
-    if let Some(t) = threads {
-        if t == 0 {
-            bail!("-t: thread count must be at least 1");
-        }
-        b = b.num_threads(t);
+    if threads == Some(0) {
+        bail!("-t: thread count must be at least 1");
     }
-    Ok(b.build()?)
+    Ok(accel::tracing_pool(threads)?)
 }
 
 fn progress_bar(total: u64, quiet: bool) -> ProgressBar {
