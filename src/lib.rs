@@ -24,6 +24,7 @@ pub mod output;
 pub mod render;
 pub mod sampling;
 pub mod scene;
+pub mod shard;
 
 pub use color::Color;
 pub use glam::{Vec2, Vec3};

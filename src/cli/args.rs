@@ -23,6 +23,16 @@ pub struct Cli {
 
 #[derive(Subcommand, Debug)]
 pub enum Command {
+    /// Assemble the parts of a render made on many machines (`--shard`, `--spp-offset`):
+    /// bands are copied, sample ranges averaged by their sample counts. Refuses parts of
+    /// different renders, gaps, overlaps and duplicates.
+    Merge {
+        /// The merged image; .png or .exr.
+        out: PathBuf,
+        /// The parts (.exr files written with --shard K/N and/or --spp-offset S).
+        #[arg(required = true)]
+        parts: Vec<PathBuf>,
+    },
     /// Print what a scene contains (geometry, lights, materials, camera, bounds) and the backends of this build.
     Info {
         /// The .dae scene file.
@@ -324,6 +334,16 @@ pub struct RenderArgs {
     /// Random seed; the same seed gives the same image whatever -t is.
     #[arg(long, default_value_t = 0)]
     pub seed: u64,
+
+    /// Render only band K of N bands of rows (floor(K·H/N) to floor((K+1)·H/N)) into an
+    /// .exr part for `ember merge`; the bands merge into exactly the whole render.
+    #[arg(long, value_name = "K/N")]
+    pub shard: Option<String>,
+
+    /// Render samples S..S+SPP of every pixel (with -s SPP) into an .exr part for
+    /// `ember merge`, which averages sample ranges into a render of more samples. Not with -a.
+    #[arg(long, value_name = "S")]
+    pub spp_offset: Option<u32>,
 
     /// No progress bar and no summary.
     #[arg(short = 'q', long)]

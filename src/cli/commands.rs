@@ -3,12 +3,13 @@
 use super::args::{CameraArgs, ExportArgs, ExportFormat, RenderArgs};
 use super::convert::{
     self, adopt_scene_from_adaptive, apply_env_map, cell_rect, check_lens, check_resolution,
-    output_path, settings_from,
+    output_path, part_plan, settings_from,
 };
 use anyhow::{bail, Result};
 use ember::accel;
 use ember::camera::course_file::CourseCameraFile;
 use ember::image_metadata::ImageMetadata;
+use ember::integrators::Estimator;
 use ember::render::{PixelRect, RenderJob, RenderSettings};
 use ember::scene::{collada, Scene};
 use indicatif::{ProgressBar, ProgressStyle};
@@ -36,17 +37,18 @@ pub(super) fn render(mut args: RenderArgs) -> Result<()> {
         .map(|c| cell_rect(c, width, height))
         .transpose()?;
     let out = output_path(&args, &scene_path)?;
+    let part = part_plan(&args, &out, width, height)?;
     // Claim the outputs before loading, so a bad path fails at once and no partial file appears.
     let inputs: Vec<&Path> = std::iter::once(scene_path.as_path())
         .chain(args.env_map.as_deref())
         .collect();
     let pending = ember::image_io::PendingImage::claim(&out, &inputs)?;
-    let pending_rate = match settings.adaptive {
-        Some(_) => Some(ember::image_io::PendingImage::claim(
+    let pending_rate = match (settings.adaptive, part) {
+        (Some(_), None) => Some(ember::image_io::PendingImage::claim(
             &rate_path(&out),
             &inputs,
         )?),
-        None => None,
+        _ => None,
     };
     let kind = match accel::AccelKind::new(args.accel, args.bvh, args.embree_quality) {
         // The BVH-cost heat map counts the native tree's traversal steps, which
@@ -63,6 +65,9 @@ pub(super) fn render(mut args: RenderArgs) -> Result<()> {
     let mut scene = load_scene(&scene_path)?;
     apply_env_map(args.env_map.as_deref(), &mut scene)?;
     let t_load = t0.elapsed();
+    if part.is_some() && settings.estimator_for(&scene) == Estimator::LightTracing {
+        bail!("--shard/--spp-offset cannot be used with light tracing (the estimator for {}): its light paths splat anywhere in the image, so every band would trace all of them, and its paths are not numbered by sample; use --integrator path", scene_path.display());
+    }
     let (camera, camera_warning) =
         convert::camera(&scene, camera_file.as_ref(), &args.lens, (width, height))?;
     if let (Some(w), Some(file)) = (camera_warning, &args.camera_file) {
@@ -77,7 +82,11 @@ pub(super) fn render(mut args: RenderArgs) -> Result<()> {
     if cell.is_some() && settings.shading == ember::render::Shading::BvhCost {
         ember::errln!("ember: warning: -p: the bvh-cost heat map is scaled to the cell's own pixels, not the full image's");
     }
-    let rect = cell.unwrap_or_else(|| job.full_frame());
+    let rect = match (part, cell) {
+        (Some((band, _)), _) => band,
+        (None, Some(cell)) => cell,
+        (None, None) => job.full_frame(),
+    };
     let pb = progress_bar(rect.area(), args.quiet);
     let t2 = Instant::now();
     let mut output = pool.install(|| job.render_rect(&settings, rect, &|n| pb.inc(n)));
@@ -86,7 +95,7 @@ pub(super) fn render(mut args: RenderArgs) -> Result<()> {
     if args.full_frame {
         output = output.into_frame(rect, width, height);
     }
-    let meta = render_metadata(
+    let mut meta = render_metadata(
         &scene_path,
         &args,
         &job,
@@ -94,7 +103,22 @@ pub(super) fn render(mut args: RenderArgs) -> Result<()> {
         cell,
         t_render.as_secs_f64(),
     );
-    pending.write_with_metadata(&output.image, &meta)?;
+    match part {
+        None => pending.write_with_metadata(&output.image, &meta)?,
+        Some((rect, shard)) => {
+            if let Some(shard) = shard {
+                meta.push("ember.shard", shard);
+            }
+            pending.write_part(&ember::shard::Part {
+                name: out.display().to_string(),
+                meta: meta.clone(),
+                frame: (width, height),
+                rect,
+                image: output.image.clone(),
+                samples: output.samples.clone(),
+            })?
+        }
+    }
     if let Some(pending_rate) = pending_rate {
         let rate = pending_rate.path().to_path_buf();
         pending_rate.write_with_metadata(&output.rate_image(settings.spp), &meta)?;
@@ -125,6 +149,27 @@ pub(super) fn render(mut args: RenderArgs) -> Result<()> {
             ember::errln!("ember: bvh-cost scale: blue = 0, red = {s:.0} nodes + primitives tested per camera ray (99th percentile)");
         }
     }
+    Ok(())
+}
+
+/// `ember merge OUT PARTS...`: the parts of a sharded render assembled into one image.
+pub(super) fn merge(out: &Path, parts: &[PathBuf]) -> Result<()> {
+    let inputs: Vec<&Path> = parts.iter().map(PathBuf::as_path).collect();
+    let pending = ember::image_io::PendingImage::claim(out, &inputs)?;
+    let parts = parts
+        .iter()
+        .map(|p| ember::image_io::read_part(p))
+        .collect::<Result<Vec<_>, _>>()?;
+    let merged = ember::shard::merge(&parts)?;
+    pending.write_with_metadata(&merged.image, &merged.meta)?;
+    ember::errln!(
+        "ember: merged {} parts ({}x{}, {} spp) into {}",
+        parts.len(),
+        merged.image.width,
+        merged.image.height,
+        merged.meta.get("ember.spp").unwrap_or("?"),
+        out.display()
+    );
     Ok(())
 }
 
