@@ -39,25 +39,25 @@ const CASES: &[Case] = &[
         scene: "scenes/cs184/sky/CBspheres_lambertian.dae",
         max_depth: 1,
         strategy: DirectStrategy::Light,
-        expected: 0x59fc_ea9b_7a8e_7487,
+        expected: 0x3ce3_7a7f_dd8a_68a6,
     },
     Case {
         scene: "scenes/cs184/sky/CBspheres_lambertian.dae",
         max_depth: 5,
         strategy: DirectStrategy::Mis,
-        expected: 0x3574_5f23_5995_10e4,
+        expected: 0xccbc_76dc_44fe_41be,
     },
     Case {
         scene: "scenes/cs184/sky/CBspheres.dae",
         max_depth: 5,
         strategy: DirectStrategy::Light,
-        expected: 0xaf02_96d4_629a_81cc,
+        expected: 0x8047_097d_4468_ba1f,
     },
     Case {
         scene: "scenes/cs184/sky/CBbunny_microfacet_cu.dae",
         max_depth: 5,
         strategy: DirectStrategy::Mis,
-        expected: 0x3631_4f11_bbf2_7bcf,
+        expected: 0x7d6a_2642_4a1b_a40e,
     },
 ];
 

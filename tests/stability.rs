@@ -168,6 +168,19 @@ fn case4_caustic_exists_and_glass_transmits_what_fresnel_predicts() {
 fn case5_scaled_and_translated_scenes_render_the_same_image() {
     let c = robust::scale(&budget(64, 48, 16)).unwrap();
     for r in &c.runs {
+        eprintln!(
+            "{}: mean {:+.3}% ± {:.3}%, surfaces {:+.3}% ± {:.3}%, {:.2}% beyond 4σ, worst block {:.1}σ, {:.1}% changed",
+            r.name,
+            100.0 * (r.mean / c.base_mean - 1.0),
+            100.0 * r.diff_se / c.base_mean,
+            100.0 * r.surface_rel_diff,
+            100.0 * r.surface_rel_se,
+            100.0 * r.frac_beyond_noise,
+            r.max_block_z,
+            100.0 * r.frac_changed
+        );
+    }
+    for r in &c.runs {
         assert_eq!(r.nonfinite, 0, "{}", r.name);
         if r.offset == 0.0 {
             // Pure scaling: every epsilon is relative, so the same seed traces the same paths.

@@ -45,10 +45,11 @@ pub struct ScaleCase {
     pub runs: Vec<ScaledRun>,
 }
 
-pub const SCALE_VARIANTS: [(&str, f32, f32); 4] = [
+pub const SCALE_VARIANTS: [(&str, f32, f32); 5] = [
     ("scale 1e-3", 1e-3, 0.0),
     ("scale 1e3", 1e3, 0.0),
     ("translate 1e4", 1.0, 1e4),
+    ("translate 1e5", 1.0, 1e5),
     ("scale 1e-3, translate 1", 1e-3, 1.0),
 ];
 
