@@ -166,10 +166,12 @@ fn case4_caustic_exists_and_glass_transmits_what_fresnel_predicts() {
 
 #[test]
 fn case5_scaled_and_translated_scenes_render_the_same_image() {
-    let c = robust::scale(&budget(64, 48, 16)).unwrap();
+    // The report's own budget: the surface mean's paired s.e. is ~0.2 % at 1e4, small
+    // enough to see the +0.8…1.6 % that offset ray origins used to add there.
+    let c = robust::scale(&budget(160, 120, 64)).unwrap();
     for r in &c.runs {
         eprintln!(
-            "{}: mean {:+.3}% ± {:.3}%, surfaces {:+.3}% ± {:.3}%, {:.2}% beyond 4σ, worst block {:.1}σ, {:.1}% changed",
+            "{}: mean {:+.3}% ± {:.3}%, surfaces {:+.3}% ± {:.3}%, {:.2}% beyond 4σ, worst surface block {:.1}σ, {:.1}% changed",
             r.name,
             100.0 * (r.mean / c.base_mean - 1.0),
             100.0 * r.diff_se / c.base_mean,
@@ -192,17 +194,27 @@ fn case5_scaled_and_translated_scenes_render_the_same_image() {
             );
             assert_eq!(r.frac_beyond_noise, 0.0, "{}", r.name);
         } else {
-            // Far from the origin the f32 grid is ~1e-3 of the box (translation 1e4, box 2):
-            // paths diverge, but surfaces must not darken (acne) or brighten (leaks)
-            // beyond the paired standard error plus 1% for the quantized geometry, and
-            // few pixels may differ by more than 4 σ (two independent renders: ~0.5%).
+            // Far from the origin paths diverge (the f32 grid is 1e-3 at 1e4, 8e-3 at 1e5),
+            // but surfaces must not darken (acne) or brighten (rays seeing the scene from
+            // their offset origins) beyond the paired standard error, plus 0.2 % for the
+            // geometry itself, which moves by up to half that grid (the light's 1 cm gap
+            // under the ceiling becomes 0.8 or 1.6 cm at 1e5).
             assert!(
-                r.surface_rel_diff.abs() <= Z_MAX * r.surface_rel_se + 0.01,
+                r.surface_rel_diff.abs() <= Z_MAX * r.surface_rel_se + 0.002,
                 "{}: surfaces {:+.3}% ± {:.3}%",
                 r.name,
                 100.0 * r.surface_rel_diff,
                 100.0 * r.surface_rel_se
             );
+            // No region either: every 8×8 surface block within 5 of its own noise σ
+            // (≤ 300 blocks; 64 pixels estimate each block's noise).
+            assert!(
+                r.max_block_z <= 5.0,
+                "{}: worst surface block {:.1} σ",
+                r.name,
+                r.max_block_z
+            );
+            // Few pixels may differ by more than 4 σ: light edges move with the geometry.
             assert!(
                 r.frac_beyond_noise <= 0.02,
                 "{}: {:.2}% of pixels beyond 4σ",

@@ -183,9 +183,9 @@ impl<'a> PathIntegrator<'a> {
     /// meets before what `ray` hit, and its MIS-weighted emission.
     ///
     /// `ray` starts off the surface by the point's rounding error (`offset_ray_origin`:
-    /// ~4 ulps of the coordinates, 4e-3 at 1e4, 4e-2 at 1e5), on a line parallel to the
+    /// a few ulps of the coordinates, 1e-3…4e-3 at 1e4), on a line parallel to the
     /// sampled one and that much closer to what it finds: seen from there an area light
-    /// covers more directions (a floor 2 below a light gains 2·4e-3/2 = 0.4 % at 1e4;
+    /// covers more directions (a floor 2 below a light gains 2·δ/2: 0.4 % for δ = 4e-3;
     /// stability case 5), and with MIS those extra directions get the full BSDF weight,
     /// because the light's pdf from `v.p` is 0 there. So which light the sampled line
     /// reaches is decided analytically from `v.p`, relative to each light (`AreaLight::
@@ -220,8 +220,9 @@ impl<'a> PathIntegrator<'a> {
             return le;
         }
         let light = (si.light != NO_LIGHT).then(|| &self.scene.lights[si.light as usize]);
+        // `area_light_on_line` already counted any area light the sampled line meets.
         if let (Some(v), Some(l)) = (prev, light) {
-            if !v.delta && !l.seen_along(v.p, -wo) {
+            if !l.seen_along(v.p, -wo) {
                 return Color::ZERO;
             }
         }

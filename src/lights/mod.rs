@@ -87,10 +87,9 @@ impl Light {
 
     /// Whether the line from surface point `p` along unit `w` meets this light (always,
     /// for lights without a shape). A ray spawned at `p` starts off the surface, by `p`'s
-    /// rounding error (pbrt's `OffsetRayOrigin`: ~4 ulps of the coordinates, 4e-3 at 1e4),
-    /// on a parallel line that is that much closer to what it finds: an area light seen
-    /// from there covers more directions than from `p` (the floor under a light 2 away
-    /// is 0.4 % brighter at 1e4, 4 % at 1e5; stability case 5). A light found by such a
+    /// rounding error (pbrt's `OffsetRayOrigin`: a few ulps of the coordinates), on a
+    /// parallel line that much closer to what it finds: an area light seen from there
+    /// covers more directions than from `p` (stability case 5). A light found by such a
     /// ray counts only if this test, relative to the light, says `p` sees it too.
     pub fn seen_along(&self, p: Vec3, w: Vec3) -> bool {
         match self {
