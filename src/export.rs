@@ -11,6 +11,7 @@
 use crate::camera::Camera;
 use crate::film::Image;
 use crate::image_io::{write_image, ImageIoError};
+use crate::integrators::Roulette;
 use crate::lights::Light;
 use crate::materials::Material;
 use crate::scene::{Scene, NO_LIGHT};
@@ -30,6 +31,18 @@ pub struct MitsubaSettings {
     /// The bounce from which ember's default roulette runs; Mitsuba's `rr_depth`.
     /// `None` turns roulette off (Mitsuba: `rr_depth` past `max_depth`).
     pub roulette_start: Option<u32>,
+}
+
+impl MitsubaSettings {
+    /// The settings that make Mitsuba render what ember renders with `-s spp -m max_depth`
+    /// and roulette policy `roulette`.
+    pub fn for_ember(spp: u32, max_depth: u32, roulette: &Roulette) -> Self {
+        MitsubaSettings {
+            spp,
+            max_depth,
+            roulette_start: roulette.start(),
+        }
+    }
 }
 
 /// What an export wrote, and what Mitsuba cannot express exactly.
@@ -226,12 +239,13 @@ fn bsdf_xml(m: &Material, warnings: &mut Vec<String>) -> String {
              <rgb name=\"specular_reflectance\" value=\"{}\"/></bsdf>\n",
             rgb(reflectance)
         )),
-        Material::Microfacet { alpha, eta, k } => two_sided(format!(
+        Material::Microfacet(c) => two_sided(format!(
             "  <bsdf type=\"roughconductor\"><string name=\"distribution\" value=\"beckmann\"/>\
-             <float name=\"alpha\" value=\"{alpha}\"/><rgb name=\"eta\" value=\"{}\"/>\
+             <float name=\"alpha\" value=\"{}\"/><rgb name=\"eta\" value=\"{}\"/>\
              <rgb name=\"k\" value=\"{}\"/></bsdf>\n",
-            rgb(eta),
-            rgb(k)
+            c.alpha,
+            rgb(c.eta()),
+            rgb(c.k())
         )),
         Material::Glass {
             ior,

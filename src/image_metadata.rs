@@ -41,14 +41,21 @@ impl ImageMetadata {
         m.push("ember.light_samples", s.light_samples);
         m.push("ember.max_depth", s.max_depth);
         m.push("ember.accumulate", s.accumulate);
-        m.push(
-            "ember.estimator",
-            format!("{:?}", s.strategy_for(&job.scene)),
-        );
+        m.push("ember.estimator", s.strategy_for(&job.scene));
         m.push("ember.roulette", format!("{:?}", s.roulette));
         m.push("ember.adaptive", format!("{:?}", s.adaptive));
-        m.push("ember.shading", format!("{:?}", s.shading));
+        m.push("ember.shading", s.shading);
         m.push("ember.seed", s.seed);
+        let lens = job.camera.lens;
+        if !lens.is_pinhole() {
+            m.push(
+                "ember.lens",
+                format!(
+                    "radius {} focal distance {}",
+                    lens.radius, lens.focal_distance
+                ),
+            );
+        }
         m.push("ember.backend", job.accel.name());
         m.push("ember.render_seconds", format!("{render_seconds:.3}"));
         m

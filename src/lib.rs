@@ -18,6 +18,7 @@ pub mod info;
 pub mod integrators;
 pub mod lights;
 pub mod materials;
+pub mod names;
 pub mod output;
 pub mod render;
 pub mod sampling;

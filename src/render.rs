@@ -10,6 +10,7 @@ use crate::film::{heat_map, Image};
 use crate::integrators::{
     debug, light_tracing, DirectStrategy, Estimator, PathIntegrator, PathSettings, Roulette,
 };
+use crate::names::{display_from_table, Named};
 use crate::sampling::Sampler;
 use crate::scene::Scene;
 use crate::Color;
@@ -26,6 +27,24 @@ pub enum Shading {
     /// Heat map of BVH nodes + primitives tested per camera ray.
     BvhCost,
 }
+
+impl Named for Shading {
+    const WHAT: &'static str = "shading";
+    const TABLE: &'static [(Self, &'static str, &'static str)] = &[
+        (Shading::Radiance, "radiance", "The physically based image"),
+        (
+            Shading::Normals,
+            "normals",
+            "0.5·n + 0.5 of the shading normal (course parts 1-2)",
+        ),
+        (
+            Shading::BvhCost,
+            "bvh-cost",
+            "Heat map of BVH nodes + primitives tested per camera ray",
+        ),
+    ];
+}
+display_from_table!(Shading);
 
 /// Adaptive sampling (spec §7): stop a pixel once `1.96·σ/√n ≤ tol·μ`.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -134,6 +153,25 @@ impl RenderOutput {
         self.samples.iter().map(|&s| s as u64).sum()
     }
 
+    /// This render of pixels `rect` placed in a black `width × height` frame (no samples
+    /// outside `rect`), as a full-size image of one cell.
+    pub fn into_frame(self, rect: PixelRect, width: u32, height: u32) -> RenderOutput {
+        let mut image = Image::new(width, height);
+        let mut samples = vec![0u32; (width * height) as usize];
+        for y in rect.y0..rect.y1 {
+            let src = ((y - rect.y0) * rect.width()) as usize;
+            let dst = (y * width + rect.x0) as usize;
+            let n = rect.width() as usize;
+            image.pixels[dst..dst + n].copy_from_slice(&self.image.pixels[src..src + n]);
+            samples[dst..dst + n].copy_from_slice(&self.samples[src..src + n]);
+        }
+        RenderOutput {
+            image,
+            samples,
+            ..self
+        }
+    }
+
     /// The course's sample-rate image: blue few samples, red many (relative to spp).
     pub fn rate_image(&self, spp: u32) -> Image {
         let counts: Vec<f32> = self.samples.iter().map(|&s| s as f32).collect();
@@ -212,13 +250,14 @@ fn render_pixel(
     y: u32,
 ) -> PixelResult {
     let (camera, scene, accel) = (&job.camera, &job.scene, job.accel.as_ref());
-    let mut sampler = Sampler::new(s.seed, (y as u64) * (camera.width as u64) + x as u64, 0);
+    let pixel = (y as u64) * (camera.width as u64) + x as u64;
     let (mut sum, mut s1, mut s2) = (Color::ZERO, 0f64, 0f64);
     let (mut n, mut nonfinite) = (0u32, 0u32);
     let batch = s.adaptive.map_or(s.spp.max(1), |a| a.batch);
     while n < s.spp.max(1) {
         for _ in 0..batch.min(s.spp.max(1) - n) {
-            let ray = camera.generate_ray(x, y, sampler.next_2d());
+            let mut sampler = Sampler::for_sample(s.seed, pixel, n as u64);
+            let ray = camera.sample_ray(x, y, &mut sampler);
             let mut v = match s.shading {
                 Shading::Radiance => integrator.li(ray, &mut sampler),
                 Shading::Normals => debug::normal_color(scene, accel, &ray),

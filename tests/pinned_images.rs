@@ -39,25 +39,25 @@ const CASES: &[Case] = &[
         scene: "scenes/cs184/sky/CBspheres_lambertian.dae",
         max_depth: 1,
         strategy: DirectStrategy::Light,
-        expected: 0x3ce3_7a7f_dd8a_68a6,
+        expected: 0x9a99_602d_c069_8556,
     },
     Case {
         scene: "scenes/cs184/sky/CBspheres_lambertian.dae",
         max_depth: 5,
         strategy: DirectStrategy::Mis,
-        expected: 0xccbc_76dc_44fe_41be,
+        expected: 0xed25_3be2_e409_459b,
     },
     Case {
         scene: "scenes/cs184/sky/CBspheres.dae",
         max_depth: 5,
         strategy: DirectStrategy::Light,
-        expected: 0x8047_097d_4468_ba1f,
+        expected: 0xe36e_6798_da76_463e,
     },
     Case {
         scene: "scenes/cs184/sky/CBbunny_microfacet_cu.dae",
         max_depth: 5,
         strategy: DirectStrategy::Mis,
-        expected: 0x7d6a_2642_4a1b_a40e,
+        expected: 0x4158_9942_f75a_82c0,
     },
 ];
 

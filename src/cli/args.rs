@@ -1,6 +1,11 @@
 //! The flags: clap definitions only. `convert` turns them into library settings.
 
+use clap::builder::{PossibleValue, PossibleValuesParser, TypedValueParser};
 use clap::{Args, Parser, Subcommand, ValueEnum};
+use ember::accel::{Backend, BvhBuilder, EmbreeQuality};
+use ember::integrators::{DirectStrategy, Estimator};
+use ember::names::Named;
+use ember::render::Shading;
 use std::path::PathBuf;
 
 /// ember — a physically based CPU path tracer for the CS184 COLLADA scenes.
@@ -26,6 +31,9 @@ pub enum Command {
         #[arg(short = 'r', num_args = 2, action = clap::ArgAction::Set, value_names = ["WIDTH", "HEIGHT"], default_values_t = [480, 360])]
         resolution: Vec<u32>,
     },
+    /// Write the course's camera settings file (what -c reads) for a scene's own camera at
+    /// resolution -r: `ember camera --save view.cam SCENE.dae`. Without --save, print it.
+    Camera(CameraArgs),
     /// Write the scene for another renderer, meaning exactly what ember renders
     /// (spec semantics): `ember export --format mitsuba SCENE.dae -r W H -s SPP -m M --out DIR`.
     Export(ExportArgs),
@@ -35,6 +43,36 @@ pub enum Command {
         #[command(subcommand)]
         which: BenchCommand,
     },
+}
+
+#[derive(Args, Debug)]
+pub struct CameraArgs {
+    /// The .dae scene file.
+    pub scene: PathBuf,
+    /// Write the settings to FILE instead of standard output.
+    #[arg(long, value_name = "FILE")]
+    pub save: Option<PathBuf>,
+    /// Resolution whose field of view and screen size the file records.
+    #[arg(short = 'r', num_args = 2, action = clap::ArgAction::Set, value_names = ["WIDTH", "HEIGHT"], default_values_t = [480, 360])]
+    pub resolution: Vec<u32>,
+    #[command(flatten)]
+    pub lens: LensArgs,
+}
+
+/// The thin lens (course project 3-2 part 4).
+#[derive(Args, Debug)]
+pub struct LensArgs {
+    /// Thin-lens radius, in scene units: depth of field, the lens sampled uniformly over its disk.
+    /// 0 (default) is the pinhole. Replaces the -c file's lensRadius (in the course, -b or its default 0
+    /// always does). Stricter than the course: must be at least 0.
+    #[arg(short = 'b', value_name = "RADIUS", allow_negative_numbers = true)]
+    pub lens_radius: Option<f32>,
+
+    /// Focal distance of the lens, in scene units, measured along the view direction: the plane at this
+    /// depth is sharp. Default: the -c file's focalDistance, else the course's 4.7. Stricter than the
+    /// course: must be positive.
+    #[arg(short = 'd', value_name = "DISTANCE", allow_negative_numbers = true)]
+    pub focal_distance: Option<f32>,
 }
 
 #[derive(Args, Debug)]
@@ -80,33 +118,42 @@ pub enum BenchCommand {
         #[arg(long, default_value_t = 0)]
         seed: u64,
     },
-    /// Build time, memory and Mrays/s (camera, incoherent, shadow rays) of every backend this build has,
-    /// at each thread count, with the native/Embree ratio. Default scenes: CBbunny, CBspheres_lambertian, a ~1M-triangle displaced sphere.
+    /// Build time, memory, tree shape (nodes, leaves, depth, SAH cost) and Mrays/s (camera, incoherent, shadow rays)
+    /// of every backend this build has (native midpoint and SAH; Embree robust and fast), at each thread count, with the
+    /// native/Embree ratios; with Embree, also every Embree mode (scene flags × build quality × rtcIntersect1/4/8/16) on
+    /// camera rays. Writes accel.csv/.md and embree_modes.csv/.md to --out. Default scenes: CBbunny, CBspheres_lambertian,
+    /// mesh:1M. Merge an Embree 3 and an Embree 4 build's tables by running the second with --append.
     Accel {
-        /// Scenes to measure instead of the defaults.
-        scenes: Vec<PathBuf>,
-        /// Incoherent and shadow rays per measurement (camera rays are 480x360).
+        /// Scenes to measure instead of the defaults: .dae files, or mesh:N for a generated displaced sphere of about
+        /// N triangles (mesh:250k, mesh:1M).
+        #[arg(value_parser = parse_bench_scene)]
+        scenes: Vec<ember::bench::accel::BenchScene>,
+        /// Incoherent and shadow rays per measurement (camera rays: one per pixel of a 480x360 render).
         #[arg(long, default_value_t = 500_000)]
         rays: usize,
-        /// Thread counts to measure.
-        #[arg(long, value_delimiter = ',', default_values_t = [1, 2])]
+        /// Thread counts to measure: `-t 1 2` or `-t 1,2`.
+        #[arg(short = 't', long, num_args = 1.., value_delimiter = ',', default_values_t = [1, 2])]
         threads: Vec<usize>,
         /// Each figure is the median of this many runs.
         #[arg(long, default_value_t = 5)]
         repeats: usize,
-        /// Embree's build quality.
-        #[arg(long, value_enum, default_value_t = QualityArg::Medium)]
-        quality: QualityArg,
-        /// Triangle count of the generated displaced sphere (0 leaves it out).
-        #[arg(long, default_value_t = 1_000_000)]
-        mesh_triangles: usize,
+        /// Embree's build quality in the main table (the Embree modes table has all three).
+        #[arg(long, value_parser = named::<EmbreeQuality>(), default_value_t = EmbreeQuality::default())]
+        quality: EmbreeQuality,
+        /// Leave out the Embree modes table.
+        #[arg(long)]
+        no_embree_modes: bool,
+        /// Add this run's rows to the tables already in --out (e.g. an Embree 4 build's after an Embree 3 build's)
+        /// instead of replacing them.
+        #[arg(long, conflicts_with = "scaling")]
+        append: bool,
         /// Instead: generated meshes (displaced sphere, random soup) from 1k to 4M triangles, every native builder and
         /// Embree quality, charted against triangle count (log-log) with fitted growth. Writes CSV, Markdown and charts to --out.
         #[arg(long)]
         scaling: bool,
-        /// Output folder of --scaling.
-        #[arg(long, default_value = "bench-out/scaling")]
-        out: PathBuf,
+        /// Output folder (default: bench-out/accel, or bench-out/scaling with --scaling).
+        #[arg(long)]
+        out: Option<PathBuf>,
     },
     /// Error against render time for each method (direct: hemisphere / light / MIS; GI: roulette, -l, adaptive, backends).
     /// Writes <out>/<scene>_m<M>.csv and error-vs-time charts (PNG and SVG), prints the time each method needs to reach an error.
@@ -143,6 +190,12 @@ pub enum BenchCommand {
         /// Random seed.
         #[arg(long, default_value_t = 0)]
         seed: u64,
+        /// Also run Mitsuba 3 as a method, through this Python (one that imports `mitsuba`; scripts/mitsuba-env creates one and prints its path). Each point is the warm, render-only time of its own process.
+        #[arg(long, value_name = "PYTHON")]
+        mitsuba: Option<PathBuf>,
+        /// Mitsuba variants to run with --mitsuba, comma-separated.
+        #[arg(long, value_delimiter = ',', default_value = "llvm_ad_rgb")]
+        mitsuba_variants: Vec<String>,
     },
     /// Samples per second for CBspheres_lambertian and CBbunny at 480x360, 64 spp, -m 5.
     Render {
@@ -157,13 +210,18 @@ pub enum BenchCommand {
         /// Repetitions per scene (the median is reported).
         #[arg(long, default_value_t = 3)]
         repeat: u32,
-        /// Backend.
-        #[arg(long, value_enum, default_value_t = AccelArg::Native)]
-        accel: AccelArg,
+        /// Backend (auto: as for a render).
+        #[arg(long, value_parser = named::<Backend>(), default_value_t = Backend::Auto)]
+        accel: Backend,
         /// Output folder (render.csv, render.md).
         #[arg(long, default_value = "bench-out/render")]
         out: PathBuf,
     },
+}
+
+#[cfg(feature = "bench")]
+fn parse_bench_scene(s: &str) -> Result<ember::bench::accel::BenchScene, String> {
+    ember::bench::accel::BenchScene::parse(s)
 }
 
 #[derive(Args, Debug)]
@@ -207,25 +265,46 @@ pub struct RenderArgs {
     #[arg(short = 'r', num_args = 2, action = clap::ArgAction::Set, value_names = ["WIDTH", "HEIGHT"], default_values_t = [480, 360])]
     pub resolution: Vec<u32>,
 
-    /// Intersection backend.
-    #[arg(long, value_enum, default_value_t = AccelArg::Native)]
-    pub accel: AccelArg,
+    /// Camera settings file as the course's viewer saves it (`ember camera --save` writes one): its eye,
+    /// orientation, field of view and lens replace the scene's camera. A field of view of another aspect
+    /// than -r is widened to it (the course stretches the image). Stricter than the course: every field
+    /// must be a number in range, c2w a rotation, nothing may follow the 30 numbers.
+    #[arg(short = 'c', value_name = "FILE")]
+    pub camera_file: Option<PathBuf>,
+
+    /// Render only the cell of DX x DY pixels starting at pixel (X, Y), X from the left and Y from the
+    /// bottom as in the course; its pixels equal the full render's bit for bit. Writes the cell alone
+    /// (as the course does) unless --full-frame. Stricter than the course: the cell must lie in the image.
+    #[arg(short = 'p', num_args = 4, action = clap::ArgAction::Set, value_names = ["X", "Y", "DX", "DY"])]
+    pub cell: Option<Vec<u32>>,
+
+    /// With -p: write the full-size image, black outside the cell.
+    #[arg(long, requires = "cell")]
+    pub full_frame: bool,
+
+    #[command(flatten)]
+    pub lens: LensArgs,
+
+    /// Intersection backend. auto: the native BVH below a measured primitive count, Embree from it (in builds
+    /// with Embree; `ember info SCENE` says which and why).
+    #[arg(long, value_parser = named::<Backend>(), default_value_t = Backend::Auto)]
+    pub accel: Backend,
 
     /// How the native BVH is built.
-    #[arg(long, value_enum, default_value_t = BvhArg::Sah)]
-    pub bvh: BvhArg,
+    #[arg(long, value_parser = named::<BvhBuilder>(), default_value_t = BvhBuilder::Sah)]
+    pub bvh: BvhBuilder,
 
     /// Embree's build quality (with --accel embree).
-    #[arg(long, value_enum, default_value_t = QualityArg::Medium)]
-    pub embree_quality: QualityArg,
+    #[arg(long, value_parser = named::<EmbreeQuality>(), default_value_t = EmbreeQuality::Medium)]
+    pub embree_quality: EmbreeQuality,
 
     /// What each pixel shows.
-    #[arg(long, value_enum, default_value_t = ShadingArg::Radiance)]
-    pub shading: ShadingArg,
+    #[arg(long, value_parser = named::<Shading>(), default_value_t = Shading::Radiance)]
+    pub shading: Shading,
 
-    /// Estimator. auto: light tracing when every light is a point light and nothing is specular or self-emitting (CBempty: see BENCHMARKS.md, stability case 9); otherwise path tracing with MIS (light + BSDF sampling) when the scene has glossy surfaces or an ambient light, light sampling otherwise. -H forces hemisphere.
-    #[arg(long, value_enum, default_value_t = IntegratorArg::Auto)]
-    pub integrator: IntegratorArg,
+    /// Estimator. auto: light tracing when every light is a point light and nothing is specular or self-emitting (CBempty: see BENCHMARKS.md, stability case 9); otherwise path tracing with MIS (light + BSDF sampling) when the scene has glossy surfaces or an ambient light, light sampling otherwise. A direct-lighting strategy name means path tracing with it. -H forces hemisphere.
+    #[arg(long, value_parser = integrator(), default_value = AUTO)]
+    pub integrator: IntegratorChoice,
 
     /// Russian roulette: off, throughput (continue with probability max(throughput), at least 0.05), or a fixed probability like 0.5.
     #[arg(long, default_value = "throughput", value_name = "off|throughput|PROB")]
@@ -244,50 +323,102 @@ pub struct RenderArgs {
     pub quiet: bool,
 }
 
-#[derive(Clone, Copy, Debug, ValueEnum, PartialEq, Eq)]
-pub enum AccelArg {
-    /// ember's own BVH.
-    Native,
-    /// Intel Embree (builds with --features embree only).
-    Embree,
+/// A flag parsed straight into a library enum through its name table; `--help`
+/// lists every name with its description.
+fn named<T: Named + Send + Sync>() -> impl TypedValueParser<Value = T> {
+    PossibleValuesParser::new(T::TABLE.iter().map(|&(_, name, help)| possible(name, help)))
+        .try_map(|s| T::from_name(&s))
 }
 
-#[derive(Clone, Copy, Debug, ValueEnum)]
-pub enum BvhArg {
-    /// Binned surface-area heuristic.
-    Sah,
-    /// The course's split at the centroid midpoint of the longest axis.
-    Midpoint,
+fn possible(name: &'static str, help: &'static str) -> PossibleValue {
+    let v = PossibleValue::new(name);
+    if help.is_empty() {
+        v
+    } else {
+        v.help(help)
+    }
 }
 
-#[derive(Clone, Copy, Debug, ValueEnum)]
-pub enum QualityArg {
-    Low,
-    Medium,
-    High,
+/// `--integrator`'s word for "let the scene choose" (`DirectStrategy::auto_for`).
+const AUTO: &str = "auto";
+
+/// What `--integrator` names: an estimator and, for path tracing, its direct-lighting
+/// strategy; a `None` is chosen from the scene.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct IntegratorChoice {
+    pub estimator: Option<Estimator>,
+    pub strategy: Option<DirectStrategy>,
 }
 
-#[derive(Clone, Copy, Debug, ValueEnum, PartialEq, Eq)]
-pub enum ShadingArg {
-    /// The physically based image.
-    Radiance,
-    /// 0.5·n + 0.5 of the shading normal (course parts 1-2).
-    Normals,
-    /// Heat map of BVH nodes + primitives tested per camera ray.
-    BvhCost,
+/// `--integrator`: `auto`, an estimator (`path`, `light-tracing`), or a path-tracing
+/// strategy, each from the library's name tables.
+fn integrator() -> impl TypedValueParser<Value = IntegratorChoice> {
+    let auto = PossibleValue::new(AUTO).help("Chosen from the scene (see above)");
+    let estimators = Estimator::TABLE.iter().map(|&(_, n, h)| possible(n, h));
+    let strategies = DirectStrategy::TABLE
+        .iter()
+        .map(|&(_, n, h)| possible(n, h));
+    let values = std::iter::once(auto).chain(estimators).chain(strategies);
+    PossibleValuesParser::new(values).try_map(|s| {
+        if s == AUTO {
+            return Ok(IntegratorChoice::default());
+        }
+        if let Ok(e) = Estimator::from_name(&s) {
+            return Ok(IntegratorChoice {
+                estimator: Some(e),
+                strategy: None,
+            });
+        }
+        DirectStrategy::from_name(&s).map(|d| IntegratorChoice {
+            estimator: Some(Estimator::Path),
+            strategy: Some(d),
+        })
+    })
 }
 
-#[derive(Clone, Copy, Debug, ValueEnum, PartialEq, Eq)]
-pub enum IntegratorArg {
-    Auto,
-    /// Light sampling only.
-    Light,
-    /// Light and BSDF sampling, power heuristic.
-    Mis,
-    /// Uniform hemisphere sampling (same as -H).
-    Hemisphere,
-    /// BSDF sampling alone, no light sampling (cannot see point/directional lights).
-    Bsdf,
-    /// Light tracing: paths start on the lights and connect to the camera (not for mirrors/glass).
-    LightTracing,
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use clap::CommandFactory;
+
+    /// The values `--help` lists for the render flag `--long`.
+    fn listed(long: &str) -> Vec<String> {
+        let cmd = Cli::command();
+        let arg = cmd
+            .get_arguments()
+            .find(|a| a.get_long() == Some(long))
+            .unwrap_or_else(|| panic!("no --{long}"));
+        arg.get_possible_values()
+            .iter()
+            .map(|v| v.get_name().to_string())
+            .collect()
+    }
+
+    /// Every name of the library's table is listed by `--help` and parses into its value.
+    fn check<T: Named + std::fmt::Debug>(long: &str, get: impl Fn(&RenderArgs) -> T) {
+        let listed = listed(long);
+        for &(value, name, _) in T::TABLE {
+            assert!(
+                listed.iter().any(|l| l == name),
+                "--{long} does not list {name}"
+            );
+            let flag = format!("--{long}");
+            let cli = Cli::try_parse_from(["ember", flag.as_str(), name, "scene.dae"])
+                .unwrap_or_else(|e| panic!("--{long} {name}: {e}"));
+            assert_eq!(get(&cli.render), value, "--{long} {name}");
+        }
+    }
+
+    #[test]
+    fn flags_take_every_name_of_the_library_tables() {
+        check("accel", |a| a.accel);
+        check("bvh", |a| a.bvh);
+        check("embree-quality", |a| a.embree_quality);
+        check("shading", |a| a.shading);
+        let integrators = listed("integrator");
+        for &(_, name, _) in DirectStrategy::TABLE {
+            assert!(integrators.iter().any(|l| l == name), "--integrator {name}");
+        }
+        assert!(Cli::try_parse_from(["ember", "--bvh", "octree", "scene.dae"]).is_err());
+    }
 }

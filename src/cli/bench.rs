@@ -1,11 +1,11 @@
 //! `ember bench ...`: each benchmark runs, writes its report, prints its summary.
 
-use super::args::{AccelArg, BenchCommand, BvhArg, QualityArg};
-use super::convert::{accel_kind, check_resolution, threads_invalid};
+use super::args::BenchCommand;
+use super::convert::{check_resolution, threads_invalid};
 use anyhow::{bail, Context, Result};
-use ember::accel::AccelKind;
-use ember::bench;
-use std::path::PathBuf;
+use ember::accel::{AccelKind, BvhBuilder, EmbreeQuality};
+use ember::bench::{self, Report};
+use std::path::{Path, PathBuf};
 
 /// `ember bench ...`: each benchmark runs, writes its report, prints its summary.
 pub(super) fn run(which: BenchCommand) -> Result<()> {
@@ -20,16 +20,41 @@ pub(super) fn run(which: BenchCommand) -> Result<()> {
             out,
             repeats,
             ..
-        } => bench_scaling(out, repeats),
+        } => bench_scaling(out.unwrap_or_else(|| "bench-out/scaling".into()), repeats),
         BenchCommand::Accel {
             scenes,
             rays,
             threads,
             repeats,
             quality,
-            mesh_triangles,
+            no_embree_modes,
+            append,
+            out,
             ..
-        } => bench_accel(scenes, rays, threads, repeats, quality, mesh_triangles),
+        } => {
+            if threads_invalid(&threads) {
+                bail!("--threads: each count must be at least 1");
+            }
+            let defaults = bench::accel::AccelBenchOptions::default();
+            let opts = bench::accel::AccelBenchOptions {
+                scenes: if scenes.is_empty() {
+                    defaults.scenes.clone()
+                } else {
+                    scenes
+                },
+                rays,
+                threads,
+                repeats: repeats.max(1),
+                embree_quality: quality,
+                embree_modes: !no_embree_modes,
+                ..defaults
+            };
+            bench_accel(
+                &opts,
+                &out.unwrap_or_else(|| "bench-out/accel".into()),
+                append,
+            )
+        }
         BenchCommand::Converge {
             scene,
             reference,
@@ -42,6 +67,8 @@ pub(super) fn run(which: BenchCommand) -> Result<()> {
             target_rmse,
             out,
             seed,
+            mitsuba,
+            mitsuba_variants,
         } => {
             check_resolution(resolution[0], resolution[1])?;
             bench_converge(bench::converge::ConvergeOptions {
@@ -58,6 +85,10 @@ pub(super) fn run(which: BenchCommand) -> Result<()> {
                 target_rmse,
                 seed,
                 compare_backends: true,
+                mitsuba: mitsuba.map(|python| bench::converge::MitsubaPeer {
+                    python,
+                    variants: mitsuba_variants,
+                }),
             })
         }
         BenchCommand::Render {
@@ -67,18 +98,20 @@ pub(super) fn run(which: BenchCommand) -> Result<()> {
             repeat,
             accel: a,
             out,
-        } => bench_render(bench::render::RenderBenchOptions {
-            scenes: if scenes.is_empty() {
-                bench::render::RenderBenchOptions::default_scenes()
-            } else {
-                scenes
+        } => bench_render(
+            bench::render::RenderBenchOptions {
+                scenes: if scenes.is_empty() {
+                    bench::render::RenderBenchOptions::default_scenes()
+                } else {
+                    scenes
+                },
+                spp,
+                max_depth,
+                repeat: repeat.max(1),
+                accel: AccelKind::new(a, BvhBuilder::default(), EmbreeQuality::default()),
             },
-            spp,
-            max_depth,
-            repeat: repeat.max(1),
-            accel: accel_kind(a, BvhArg::Sah, QualityArg::Medium),
-            out_dir: out,
-        }),
+            out,
+        ),
     }
 }
 
@@ -86,99 +119,49 @@ fn bench_stability(out: PathBuf, spp_scale: f32, seed: u64) -> Result<()> {
     if !(spp_scale.is_finite() && spp_scale > 0.0) {
         bail!("--spp-scale must be a positive number");
     }
-    let opts = bench::stability::StabilityOptions {
-        out_dir: out.clone(),
-        spp_scale,
-        seed,
-    };
-    // run_stability writes its report.
-    let report = bench::stability::run_stability(&opts)?;
-    ember::outln!("{}", report.to_markdown())?;
-    ember::outln!(
-        "wrote {}/stability.csv, stability.md and stability_noise.png/.svg",
-        out.display()
-    )?;
-    Ok(())
+    let opts = bench::stability::StabilityOptions { spp_scale, seed };
+    finish(&bench::stability::run_stability(&opts)?, &out)
 }
 
 fn bench_scaling(out: PathBuf, repeats: usize) -> Result<()> {
     let opts = bench::scaling::ScalingOptions {
-        out_dir: out.clone(),
         repeats: repeats.max(1),
         ..Default::default()
     };
-    // run_scaling writes its report.
     let report = bench::scaling::run_scaling(&opts, |line| ember::errln!("ember: {line}"))?;
-    ember::outln!("{}", report.to_markdown())?;
-    ember::outln!("wrote {}/scaling.csv, scaling.md and charts", out.display())?;
-    Ok(())
+    finish(&report, &out)
 }
 
-fn bench_accel(
-    scenes: Vec<PathBuf>,
-    rays: usize,
-    threads: Vec<usize>,
-    repeats: usize,
-    quality: QualityArg,
-    mesh_triangles: usize,
-) -> Result<()> {
-    use bench::accel::{run, AccelBenchOptions, BenchScene};
-    let mut opts = AccelBenchOptions {
-        rays,
-        threads,
-        repeats: repeats.max(1),
-        ..Default::default()
+fn bench_accel(opts: &bench::accel::AccelBenchOptions, out: &Path, append: bool) -> Result<()> {
+    use bench::accel::{run, AccelBenchReport};
+    // Read what to append to before the long run, so a missing file fails at once.
+    let earlier = if append {
+        Some(AccelBenchReport::read(out).context("--append")?)
+    } else {
+        None
     };
-    if threads_invalid(&opts.threads) {
-        bail!("--threads: each count must be at least 1");
-    }
-    if !scenes.is_empty() {
-        opts.scenes = scenes.into_iter().map(BenchScene::File).collect();
-    }
-    opts.scenes
-        .retain(|s| !matches!(s, BenchScene::DisplacedSphere(_)));
-    if mesh_triangles > 0 {
-        opts.scenes
-            .push(BenchScene::DisplacedSphere(mesh_triangles));
-    }
-    if let AccelKind::Embree(q) = accel_kind(AccelArg::Embree, BvhArg::Sah, quality) {
-        opts.embree_quality = q;
-    }
-    let report = run(&opts, |line| ember::errln!("ember: {line}"))?;
-    ember::outln!("{}", report.to_markdown())?;
-    Ok(())
+    let report = run(opts, |line| ember::errln!("ember: {line}"))?;
+    let report = match earlier {
+        Some(e) => e.merge(report),
+        None => report,
+    };
+    finish(&report, out)
 }
 
 fn bench_converge(opts: bench::converge::ConvergeOptions) -> Result<()> {
-    let out = &opts.out_dir;
-    std::fs::create_dir_all(out).with_context(|| format!("{}: cannot create", out.display()))?;
     let report = bench::converge::run(&opts, &mut |m| ember::errln!("ember: {m}"))?;
-    let stem_name = opts
-        .scene
-        .file_stem()
-        .map(|s| s.to_string_lossy().into_owned())
-        .unwrap_or_default();
-    let stem = out.join(format!("{stem_name}_m{}", opts.max_depth));
-    let title = format!(
-        "{stem_name}, -m {}, {}x{}: error vs time",
-        opts.max_depth, opts.width, opts.height
-    );
-    report.write(&stem, &stem_name, &title)?;
-    ember::outln!("{}", report.reference_note)?;
-    ember::outln!("{}", report.efficiency_table())?;
-    ember::outln!(
-        "wrote {}.csv and {}_rmse.png/.svg, {}_relmse.png/.svg",
-        stem.display(),
-        stem.display(),
-        stem.display()
-    )?;
-    Ok(())
+    finish(&report, &opts.out_dir)
 }
 
-fn bench_render(opts: bench::render::RenderBenchOptions) -> Result<()> {
-    let report = bench::render::run(&opts)?;
-    report.write(&opts.out_dir)?;
-    ember::out!("{}", report.to_markdown())?;
-    ember::outln!("wrote {}/render.csv and render.md", opts.out_dir.display())?;
+fn bench_render(opts: bench::render::RenderBenchOptions, out: PathBuf) -> Result<()> {
+    finish(&bench::render::run(&opts)?, &out)
+}
+
+/// The end of every benchmark: write its report into `out`, print its summary and the files.
+fn finish(report: &impl Report, out: &Path) -> Result<()> {
+    let files = report.write(out)?;
+    ember::outln!("{}", report.summary().trim_end())?;
+    let files: Vec<String> = files.iter().map(|f| f.display().to_string()).collect();
+    ember::outln!("wrote {}", files.join(", "))?;
     Ok(())
 }

@@ -1,12 +1,15 @@
 //! One short function per subcommand: convert the flags, call the library, report.
 
-use super::args::{AccelArg, ExportArgs, ExportFormat, RenderArgs};
+use super::args::{CameraArgs, ExportArgs, ExportFormat, RenderArgs};
 use super::convert::{
-    accel_kind, adopt_scene_from_adaptive, check_resolution, output_path, settings_from,
+    self, adopt_scene_from_adaptive, cell_rect, check_lens, check_resolution, output_path,
+    settings_from,
 };
 use anyhow::{bail, Result};
 use ember::accel;
-use ember::render::RenderJob;
+use ember::camera::course_file::CourseCameraFile;
+use ember::image_metadata::ImageMetadata;
+use ember::render::{PixelRect, RenderJob, RenderSettings};
 use ember::scene::{collada, Scene};
 use indicatif::{ProgressBar, ProgressStyle};
 use std::io::IsTerminal;
@@ -16,7 +19,7 @@ use std::time::Instant;
 /// `ember [OPTIONS] SCENE`: one render to an image file.
 pub(super) fn render(mut args: RenderArgs) -> Result<()> {
     adopt_scene_from_adaptive(&mut args);
-    if args.accel == AccelArg::Embree && !cfg!(any(feature = "embree", feature = "embree4")) {
+    if !args.accel.available() {
         bail!("{}", accel::AccelError::EmbreeUnavailable);
     }
     let Some(scene_path) = args.scene.clone() else {
@@ -25,6 +28,13 @@ pub(super) fn render(mut args: RenderArgs) -> Result<()> {
     let (width, height) = (args.resolution[0], args.resolution[1]);
     check_resolution(width, height)?;
     let settings = settings_from(&args)?;
+    check_lens(&args.lens)?;
+    let camera_file = (args.camera_file.as_deref())
+        .map(CourseCameraFile::read)
+        .transpose()?;
+    let cell = (args.cell.as_deref())
+        .map(|c| cell_rect(c, width, height))
+        .transpose()?;
     let out = output_path(&args, &scene_path)?;
     // Claim the outputs before loading, so a bad path fails at once and no partial file appears.
     let pending = ember::image_io::PendingImage::claim(&out, &[&scene_path])?;
@@ -35,27 +45,49 @@ pub(super) fn render(mut args: RenderArgs) -> Result<()> {
         )?),
         None => None,
     };
-    let kind = accel_kind(args.accel, args.bvh, args.embree_quality);
+    let kind = match accel::AccelKind::new(args.accel, args.bvh, args.embree_quality) {
+        // The BVH-cost heat map counts the native tree's traversal steps, which
+        // Embree does not expose: auto keeps the native tree for it.
+        accel::AccelKind::Auto { bvh, .. }
+            if settings.shading == ember::render::Shading::BvhCost =>
+        {
+            accel::AccelKind::Native(bvh)
+        }
+        kind => kind,
+    };
     let pool = thread_pool(args.threads)?;
     let t0 = Instant::now();
     let scene = load_scene(&scene_path)?;
     let t_load = t0.elapsed();
+    let (camera, camera_warning) =
+        convert::camera(&scene, camera_file.as_ref(), &args.lens, (width, height))?;
+    if let (Some(w), Some(file)) = (camera_warning, &args.camera_file) {
+        ember::errln!("ember: warning: {}: {w}", file.display());
+    }
     let t1 = Instant::now();
-    let job = pool.install(|| RenderJob::new(scene, kind, width, height))?;
+    let job = pool.install(|| RenderJob::with_camera(scene, kind, camera))?;
     let t_build = t1.elapsed();
     for w in job.warnings(&settings) {
         ember::errln!("ember: warning: {w}");
     }
-    let frame = job.full_frame();
-    let pb = progress_bar(frame.area(), args.quiet);
+    if cell.is_some() && settings.shading == ember::render::Shading::BvhCost {
+        ember::errln!("ember: warning: -p: the bvh-cost heat map is scaled to the cell's own pixels, not the full image's");
+    }
+    let rect = cell.unwrap_or_else(|| job.full_frame());
+    let pb = progress_bar(rect.area(), args.quiet);
     let t2 = Instant::now();
-    let output = pool.install(|| job.render_rect(&settings, frame, &|n| pb.inc(n)));
+    let mut output = pool.install(|| job.render_rect(&settings, rect, &|n| pb.inc(n)));
     let t_render = t2.elapsed();
     pb.finish_and_clear();
-    let meta = ember::image_metadata::ImageMetadata::for_render(
+    if args.full_frame {
+        output = output.into_frame(rect, width, height);
+    }
+    let meta = render_metadata(
         &scene_path,
+        &args,
         &job,
         &settings,
+        cell,
         t_render.as_secs_f64(),
     );
     pending.write_with_metadata(&output.image, &meta)?;
@@ -92,6 +124,67 @@ pub(super) fn render(mut args: RenderArgs) -> Result<()> {
     Ok(())
 }
 
+/// What the image records: the render's settings, and the camera file and cell if given.
+fn render_metadata(
+    scene: &Path,
+    args: &RenderArgs,
+    job: &RenderJob,
+    settings: &RenderSettings,
+    cell: Option<PixelRect>,
+    seconds: f64,
+) -> ImageMetadata {
+    let mut meta = ImageMetadata::for_render(scene, job, settings, seconds);
+    if let Some(file) = &args.camera_file {
+        meta.push_file("ember.camera_file", file);
+    }
+    if let (Some(c), Some(r)) = (&args.cell, cell) {
+        meta.push(
+            "ember.cell",
+            format!(
+                "X Y DX DY = {} {} {} {} (pixels {}..{} x {}..{} from the top left){}",
+                c[0],
+                c[1],
+                c[2],
+                c[3],
+                r.x0,
+                r.x1,
+                r.y0,
+                r.y1,
+                if args.full_frame { ", full frame" } else { "" }
+            ),
+        );
+    }
+    meta
+}
+
+/// `ember camera SCENE [--save FILE]`: the course's camera settings file of the scene's camera.
+pub(super) fn camera(a: CameraArgs) -> Result<()> {
+    let (w, h) = (a.resolution[0], a.resolution[1]);
+    check_resolution(w, h)?;
+    check_lens(&a.lens)?;
+    let scene = load_scene(&a.scene)?;
+    let (camera, _) = convert::camera(&scene, None, &a.lens, (w, h))?;
+    let text = CourseCameraFile::from_camera(&camera, &scene.bounds).to_text();
+    match &a.save {
+        None => ember::out!("{text}")?,
+        Some(path) => write_text_file(path, &text)?,
+    }
+    Ok(())
+}
+
+/// Writes `text` to `path` through a temporary sibling, so no partial file is ever left.
+fn write_text_file(path: &Path, text: &str) -> Result<()> {
+    let fail = |e: std::io::Error| anyhow::anyhow!("{}: cannot write: {e}", path.display());
+    let mut tmp_name = path.file_name().unwrap_or_default().to_os_string();
+    tmp_name.push(".ember-tmp");
+    let tmp = path.with_file_name(tmp_name);
+    std::fs::write(&tmp, text).map_err(fail)?;
+    std::fs::rename(&tmp, path).map_err(|e| {
+        let _ = std::fs::remove_file(&tmp);
+        fail(e)
+    })
+}
+
 /// `ember info SCENE`: what the scene holds and the backends of this build.
 pub(super) fn info(path: &Path, w: u32, h: u32) -> Result<()> {
     // An image prints the metadata it was written with.
@@ -106,6 +199,12 @@ pub(super) fn info(path: &Path, w: u32, h: u32) -> Result<()> {
     ember::outln!("{}", path.display())?;
     ember::out!("{}", ember::info::scene_info(&scene, w, h))?;
     ember::outln!("{}", accel::backends_info())?;
+    let auto = accel::choose_auto(&scene);
+    ember::outln!(
+        "--accel auto (the default) picks {}: {}",
+        auto.kind,
+        auto.reason
+    )?;
     Ok(())
 }
 
@@ -118,16 +217,10 @@ fn load_scene(path: &Path) -> Result<Scene> {
 }
 
 fn thread_pool(threads: Option<usize>) -> Result<rayon::ThreadPool> {
-    // Flush-to-zero on every tracing thread, as Embree recommends; the native BVH
-    // gives the same image either way (tested).
-    let mut b = rayon::ThreadPoolBuilder::new().start_handler(|_| accel::set_flush_denormals());
-    if let Some(t) = threads {
-        if t == 0 {
-            bail!("-t: thread count must be at least 1");
-        }
-        b = b.num_threads(t);
+    if threads == Some(0) {
+        bail!("-t: thread count must be at least 1");
     }
-    Ok(b.build()?)
+    Ok(accel::tracing_pool(threads)?)
 }
 
 fn progress_bar(total: u64, quiet: bool) -> ProgressBar {
@@ -169,15 +262,11 @@ pub(super) fn export(a: ExportArgs) -> Result<()> {
         .file_stem()
         .map_or("scene".into(), |s| s.to_string_lossy().into_owned());
     let ExportFormat::Mitsuba = a.format;
-    let settings = ember::export::MitsubaSettings {
-        spp: a.spp,
-        max_depth: a.max_depth,
-        roulette_start: match ember::integrators::Roulette::default() {
-            ember::integrators::Roulette::Throughput { start, .. }
-            | ember::integrators::Roulette::Fixed { start, .. } => Some(start),
-            ember::integrators::Roulette::Off => None,
-        },
-    };
+    let settings = ember::export::MitsubaSettings::for_ember(
+        a.spp,
+        a.max_depth,
+        &ember::integrators::Roulette::default(),
+    );
     let summary = ember::export::write_mitsuba(&scene, &camera, &settings, &a.out, &stem)?;
     for w in &summary.warnings {
         ember::errln!("ember: warning: {w}");

@@ -1,10 +1,12 @@
 //! Flags into library settings: every check and translation of a flag's value lives here.
 
-use super::args::{AccelArg, BvhArg, IntegratorArg, QualityArg, RenderArgs, ShadingArg};
+use super::args::{LensArgs, RenderArgs};
 use anyhow::{bail, Context, Result};
-use ember::accel::{AccelKind, BvhBuilder, EmbreeQuality};
+use ember::camera::course_file::CourseCameraFile;
+use ember::camera::Camera;
 use ember::integrators::{DirectStrategy, Estimator, Roulette};
-use ember::render::{Adaptive, RenderSettings, Shading};
+use ember::render::{Adaptive, PixelRect, RenderSettings};
+use ember::scene::Scene;
 use std::path::{Path, PathBuf};
 
 pub(super) fn check_resolution(w: u32, h: u32) -> Result<()> {
@@ -12,20 +14,6 @@ pub(super) fn check_resolution(w: u32, h: u32) -> Result<()> {
         bail!("resolution {w}x{h} is out of range (each side ≥ 1, at most 2^28 pixels)");
     }
     Ok(())
-}
-
-pub(super) fn accel_kind(a: AccelArg, b: BvhArg, q: QualityArg) -> AccelKind {
-    match a {
-        AccelArg::Native => AccelKind::Native(match b {
-            BvhArg::Sah => BvhBuilder::Sah,
-            BvhArg::Midpoint => BvhBuilder::Midpoint,
-        }),
-        AccelArg::Embree => AccelKind::Embree(match q {
-            QualityArg::Low => EmbreeQuality::Low,
-            QualityArg::Medium => EmbreeQuality::Medium,
-            QualityArg::High => EmbreeQuality::High,
-        }),
-    }
 }
 
 pub(super) fn parse_adaptive(a: &Option<Vec<String>>) -> Result<Option<Adaptive>> {
@@ -74,22 +62,15 @@ pub(super) fn strategy(args: &RenderArgs) -> Option<DirectStrategy> {
     if args.hemisphere {
         return Some(DirectStrategy::Hemisphere);
     }
-    match args.integrator {
-        IntegratorArg::Light => Some(DirectStrategy::Light),
-        IntegratorArg::Mis => Some(DirectStrategy::Mis),
-        IntegratorArg::Hemisphere => Some(DirectStrategy::Hemisphere),
-        IntegratorArg::Bsdf => Some(DirectStrategy::Bsdf),
-        IntegratorArg::Auto | IntegratorArg::LightTracing => None,
-    }
+    args.integrator.strategy
 }
 
 /// Which way paths are built; `None` for auto (`Estimator::auto_for` the scene).
+/// `-H` means path tracing unless an estimator was named.
 pub(super) fn estimator(args: &RenderArgs) -> Option<Estimator> {
-    match args.integrator {
-        IntegratorArg::LightTracing => Some(Estimator::LightTracing),
-        IntegratorArg::Auto if !args.hemisphere => None,
-        _ => Some(Estimator::Path),
-    }
+    args.integrator
+        .estimator
+        .or(args.hemisphere.then_some(Estimator::Path))
 }
 
 pub(super) fn settings_from(args: &RenderArgs) -> Result<RenderSettings> {
@@ -105,11 +86,7 @@ pub(super) fn settings_from(args: &RenderArgs) -> Result<RenderSettings> {
         strategy: strategy(args),
         roulette: parse_roulette(&args.rr, args.rr_start)?,
         adaptive: parse_adaptive(&args.adaptive)?,
-        shading: match args.shading {
-            ShadingArg::Radiance => Shading::Radiance,
-            ShadingArg::Normals => Shading::Normals,
-            ShadingArg::BvhCost => Shading::BvhCost,
-        },
+        shading: args.shading,
         seed: args.seed,
     })
 }
@@ -145,4 +122,71 @@ pub(super) fn adopt_scene_from_adaptive(args: &mut RenderArgs) {
 #[cfg(feature = "bench")]
 pub(super) fn threads_invalid(t: &[usize]) -> bool {
     t.is_empty() || t.contains(&0)
+}
+
+/// `-b` and `-d` on their own: a radius of at least 0, a positive distance.
+pub(super) fn check_lens(lens: &LensArgs) -> Result<()> {
+    if let Some(b) = lens.lens_radius {
+        if !(b.is_finite() && b >= 0.0) {
+            bail!("-b: the lens radius must be a finite number of at least 0, got {b}");
+        }
+    }
+    if let Some(d) = lens.focal_distance {
+        if !(d.is_finite() && d > 0.0) {
+            bail!("-d: the focal distance must be a positive finite number, got {d}");
+        }
+    }
+    Ok(())
+}
+
+/// The render's camera: the `-c` file's view if given, else the scene's (spec §4); then
+/// `-b`/`-d` replace the lens. Also returns a warning about the file's field of view.
+pub(super) fn camera(
+    scene: &Scene,
+    file: Option<&CourseCameraFile>,
+    lens: &LensArgs,
+    (width, height): (u32, u32),
+) -> Result<(Camera, Option<String>)> {
+    let (mut cam, warning) = match file {
+        Some(f) => f.camera(width, height),
+        None => (
+            Camera::new(&scene.camera, &scene.bounds, width, height),
+            None,
+        ),
+    };
+    if let Some(b) = lens.lens_radius {
+        cam.lens.radius = b;
+    }
+    if let Some(d) = lens.focal_distance {
+        cam.lens.focal_distance = d;
+    }
+    if !cam.lens.is_pinhole() && cam.lens.focal_distance <= 0.0 {
+        bail!("-b: a lens needs a positive focal distance; give one with -d");
+    }
+    Ok((cam, warning))
+}
+
+/// `-p X Y DX DY` (Y counted from the bottom, as the course's frame buffer) as the pixel
+/// rectangle of a `width × height` image (rows counted from the top), checked to lie inside.
+pub(super) fn cell_rect(cell: &[u32], width: u32, height: u32) -> Result<PixelRect> {
+    let &[x, y, dx, dy] = cell else {
+        bail!("-p takes four values: X Y DX DY");
+    };
+    if dx == 0 || dy == 0 {
+        bail!("-p {x} {y} {dx} {dy}: the cell is empty (DX and DY must be at least 1)");
+    }
+    if x as u64 + dx as u64 > width as u64 || y as u64 + dy as u64 > height as u64 {
+        bail!(
+            "-p {x} {y} {dx} {dy}: the cell (columns {x}..{}, rows {y}..{} from the bottom) \
+             is not inside the {width}x{height} image",
+            x as u64 + dx as u64,
+            y as u64 + dy as u64
+        );
+    }
+    Ok(PixelRect {
+        x0: x,
+        x1: x + dx,
+        y0: height - y - dy,
+        y1: height - y,
+    })
 }

@@ -8,6 +8,8 @@ pub mod path;
 
 pub use path::{PathIntegrator, PathSettings};
 
+use crate::names::{display_from_table, Named};
+
 /// How light arriving directly from emitters is estimated at each scattering vertex.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum DirectStrategy {
@@ -22,6 +24,29 @@ pub enum DirectStrategy {
     /// it exists to show where BSDF sampling is the better half of MIS.
     Bsdf,
 }
+
+impl Named for DirectStrategy {
+    const WHAT: &'static str = "direct-lighting estimator";
+    const TABLE: &'static [(Self, &'static str, &'static str)] = &[
+        (DirectStrategy::Light, "light", "Light sampling only"),
+        (
+            DirectStrategy::Mis,
+            "mis",
+            "Light and BSDF sampling, power heuristic",
+        ),
+        (
+            DirectStrategy::Hemisphere,
+            "hemisphere",
+            "Uniform hemisphere sampling (same as -H)",
+        ),
+        (
+            DirectStrategy::Bsdf,
+            "bsdf",
+            "BSDF sampling alone, no light sampling (cannot see point/directional lights)",
+        ),
+    ];
+}
+display_from_table!(DirectStrategy);
 
 impl DirectStrategy {
     /// The better default for `scene`, from `ember bench converge` (BENCHMARKS.md):
@@ -49,6 +74,23 @@ pub enum Estimator {
     /// Paths start on the lights and connect to the camera (`light_tracing`).
     LightTracing,
 }
+
+impl Named for Estimator {
+    const WHAT: &'static str = "estimator";
+    const TABLE: &'static [(Self, &'static str, &'static str)] = &[
+        (
+            Estimator::Path,
+            "path",
+            "Path tracing from the camera, direct-lighting strategy chosen from the scene",
+        ),
+        (
+            Estimator::LightTracing,
+            "light-tracing",
+            "Light tracing: paths start on the lights and connect to the camera (not for mirrors/glass)",
+        ),
+    ];
+}
+display_from_table!(Estimator);
 
 impl Estimator {
     /// Light tracing where `ember bench stability` (the CBempty case) shows path tracing
@@ -97,6 +139,14 @@ impl Default for Roulette {
 }
 
 impl Roulette {
+    /// The first bounce at which roulette may end a path; `None` when it is off.
+    pub fn start(&self) -> Option<u32> {
+        match *self {
+            Roulette::Off => None,
+            Roulette::Throughput { start, .. } | Roulette::Fixed { start, .. } => Some(start),
+        }
+    }
+
     /// Continuation probability after `bounces` scattering events with throughput `beta`.
     pub fn continue_prob(&self, bounces: u32, beta: crate::Color) -> f32 {
         match *self {

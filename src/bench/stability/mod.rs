@@ -13,14 +13,14 @@ pub mod scenes;
 
 use super::chart::{write_chart, ChartSpec, Series};
 use super::table::Table;
-use anyhow::{Context, Result};
+use super::{create_out_dir, write_text, Report};
+use crate::names::Named;
+use anyhow::Result;
 pub use measure::Budget;
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 
 #[derive(Clone, Debug)]
 pub struct StabilityOptions {
-    /// Where `stability.csv`, `stability.md` and the charts go (created if missing).
-    pub out_dir: PathBuf,
     /// Multiplies every case's samples per pixel (1 = the report's defaults).
     pub spp_scale: f32,
     pub seed: u64,
@@ -29,7 +29,6 @@ pub struct StabilityOptions {
 impl Default for StabilityOptions {
     fn default() -> Self {
         StabilityOptions {
-            out_dir: PathBuf::from("stability"),
             spp_scale: 1.0,
             seed: 1,
         }
@@ -61,7 +60,7 @@ pub const EMBER_DOES: [(&str, &str); 9] = [
     ("2", "Light sampling and MIS (the defaults: MIS for glossy or ambient-lit scenes, light sampling otherwise) sample the light's area: their noise does not grow as the light shrinks; -H's grows as √(2π/Ω)."),
     ("3", "MIS (power heuristic) is the default whenever the scene has glossy surfaces: never much worse than the better of light and BSDF sampling."),
     ("4", "Specular chains are followed by BSDF sampling with weight 1 at delta vertices; exact Fresnel; non-finite samples are counted and dropped (0 here)."),
-    ("5", "Ray origins are offset by the hit point's own floating-point error bound (hit points relative to a triangle's corner or a sphere's centre, so the bound is ~2 ulps), shadow rays stop a relative 1e-4 short: every epsilon scales with the scene. What a spawned ray finds is placed on the sampled line from the surface point (`Scene::on_line`), and which area light that line meets is decided analytically (`PathIntegrator::area_light_on_line`), so the offset no longer brings lights, mirrors and caustics nearer (+1.6 % at 1e4, +6 % at 1e5 before). Translations 1e4 and 1e5 agree with the original within noise; scaling stays exact."),
+    ("5", "Ray origins are offset by the hit point's own floating-point error bound (hit points relative to a triangle's corner or a sphere's centre, so the bound is ~2 ulps), shadow rays stop a relative 1e-4 short: every epsilon scales with the scene. What a spawned ray finds is placed on the sampled line from the surface point (`Scene::on_line`), and which area light that line meets is decided analytically (`PathIntegrator::area_light_on_line`), so the offset no longer brings lights, mirrors and caustics nearer (+1.6 % at 1e4, +6 % at 1e5 before). Translations 1e4 and 1e5 agree with the original within noise (image and surface means; at 1e5 a floor block at a sphere's contact still does not); scaling stays exact."),
     ("6", "Watertight triangle test (Woop et al.), f64 edge functions when f32 rounds to zero; degenerate triangles are never hit; zero-area lights are never sampled. Limitation: below ~2e-4 rad the conservative t ≤ δt rejection (pbrt-v4) drops hits through vertices/edges."),
     ("7", "The default stopping rule (`crate::adaptive`) never takes a pixel whose samples are all zero as converged unless every pixel within 5 px saw constant values in a first batch over the image; other pixels follow the course's rule up to -s. Unbiased within noise here at the same -s cap; the old 4·batch guard (`StopRule::PerPixel`) only halved the bias."),
     ("8", "Roulette divides by the continuation probability (unbiased); the default is throughput-based from bounce 3 with q ≥ 0.05."),
@@ -91,9 +90,7 @@ pub fn run_stability(opts: &StabilityOptions) -> Result<StabilityReport> {
     rows.extend(sampling::adaptive(&budget(80, 60, 512))?.rows());
     rows.extend(sampling::roulette(&budget(80, 60, 256))?.rows());
     rows.extend(light_paths::rows_if_shared(&budget(160, 120, 32))?);
-    let report = StabilityReport { rows };
-    report.write(opts)?;
-    Ok(report)
+    Ok(StabilityReport { rows })
 }
 
 impl StabilityReport {
@@ -158,7 +155,7 @@ impl StabilityReport {
     /// Relative per-pixel noise (noise / mean) of each direct-lighting strategy, x = the
     /// number of the scenario among those rows (cases 1–3, in report order).
     pub fn strategy_noise_series(&self) -> (Vec<Series>, Vec<String>) {
-        let names: Vec<&str> = lights::STRATEGIES.iter().map(|s| s.1).collect();
+        let names: Vec<&str> = lights::STRATEGIES.iter().map(|s| s.name()).collect();
         let mut scenarios: Vec<String> = Vec::new();
         let mut out: Vec<Series> = names
             .iter()
@@ -187,17 +184,8 @@ impl StabilityReport {
         (out, scenarios)
     }
 
-    /// Writes `stability.csv`, `stability.md` and `stability_noise.{png,svg}` into `opts.out_dir`.
-    pub fn write(&self, opts: &StabilityOptions) -> Result<()> {
-        let dir = &opts.out_dir;
-        std::fs::create_dir_all(dir)
-            .with_context(|| format!("{}: cannot create", dir.display()))?;
-        let csv = dir.join("stability.csv");
-        std::fs::write(&csv, self.to_csv())
-            .with_context(|| format!("{}: cannot write", csv.display()))?;
-        let md = dir.join("stability.md");
-        std::fs::write(&md, self.to_markdown())
-            .with_context(|| format!("{}: cannot write", md.display()))?;
+    /// The noise chart `<stem>.{png,svg}`.
+    fn write_chart(&self, stem: &Path) -> Result<()> {
         let (series, scenarios) = self.strategy_noise_series();
         let labels: Vec<String> = scenarios
             .iter()
@@ -218,7 +206,30 @@ impl StabilityReport {
             log_x: false,
             log_y: true,
         };
-        write_chart(&dir.join("stability_noise"), &spec, &series)
+        write_chart(stem, &spec, &series)
+    }
+}
+
+impl Report for StabilityReport {
+    /// `stability.csv`, `stability.md` and `stability_noise.{png,svg}`.
+    fn write(&self, out_dir: &Path) -> Result<Vec<PathBuf>> {
+        create_out_dir(out_dir)?;
+        let csv = out_dir.join("stability.csv");
+        write_text(&csv, &self.to_csv())?;
+        let md = out_dir.join("stability.md");
+        write_text(&md, &self.to_markdown())?;
+        let chart = out_dir.join("stability_noise");
+        self.write_chart(&chart)?;
+        Ok(vec![
+            csv,
+            md,
+            chart.with_extension("png"),
+            chart.with_extension("svg"),
+        ])
+    }
+
+    fn summary(&self) -> String {
+        self.to_markdown()
     }
 }
 
@@ -268,11 +279,8 @@ mod tests {
             vec![(1.0, 0.8)]
         );
         let dir = tempfile::tempdir().unwrap();
-        r.write(&StabilityOptions {
-            out_dir: dir.path().join("out"),
-            ..Default::default()
-        })
-        .unwrap();
+        let files = r.write(&dir.path().join("out")).unwrap();
+        assert_eq!(files.len(), 4);
         for f in [
             "stability.csv",
             "stability.md",
