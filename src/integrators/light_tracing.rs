@@ -120,10 +120,15 @@ impl<'a> LightTracer<'a> {
             return 0;
         }
         let mut ray = Ray::new(es.origin, es.dir);
+        // Where the current ray's line starts, when its origin was moved off a surface.
+        let mut from = es.on_surface;
         let mut bounces = 0u32;
         let mut nonfinite = 0;
         while let Some(hit) = self.accel.intersect(&ray) {
-            let si = self.scene.interaction(&ray, &hit);
+            let mut si = self.scene.interaction(&ray, &hit);
+            if let Some(from) = from {
+                si = self.scene.on_line(&si, from, ray.d.normalize());
+            }
             let material = &self.scene.materials[si.material as usize];
             if material.is_black() || bounces >= self.max_depth {
                 break;
@@ -164,6 +169,7 @@ impl<'a> LightTracer<'a> {
                 break;
             }
             ray = si.spawn_ray(w_next);
+            from = Some(si.p);
         }
         nonfinite
     }

@@ -93,6 +93,19 @@ impl Light {
         self.as_area()?.intersect(p, wi)
     }
 
+    /// Whether the line from surface point `p` along unit `w` meets this light (always,
+    /// for lights without a shape). A ray spawned at `p` starts off the surface, by `p`'s
+    /// rounding error (pbrt's `OffsetRayOrigin`: a few ulps of the coordinates), on a
+    /// parallel line that much closer to what it finds: an area light seen from there
+    /// covers more directions than from `p` (stability case 5). A light found by such a
+    /// ray counts only if this test, relative to the light, says `p` sees it too.
+    pub fn seen_along(&self, p: Vec3, w: Vec3) -> bool {
+        match self {
+            Light::Area(a) => a.intersect(p, w).is_some(),
+            _ => true,
+        }
+    }
+
     /// Approximate emitted power (luminance), for choosing lights in proportion to
     /// it. Infinite lights count what crosses a disk of radius `scene_radius`.
     pub fn power(&self, scene_radius: f32) -> f32 {
