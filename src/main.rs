@@ -12,6 +12,11 @@ fn main() -> ExitCode {
         Ok(()) => ExitCode::SUCCESS,
         // The reader of our output went away (`ember info x.dae | head -1`): not an error.
         Err(e) if is_broken_pipe(e.as_ref()) => ExitCode::SUCCESS,
+        // Ctrl-C: what was rendered is written; say so, and exit as an interrupted program.
+        Err(e) if e.is::<cli::Interrupted>() => {
+            ember::errln!("ember: {e}");
+            ExitCode::from(cli::EXIT_INTERRUPTED)
+        }
         Err(e) => {
             ember::errln!("ember: error: {}", error_chain_message(e.as_ref()));
             ExitCode::FAILURE

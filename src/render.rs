@@ -2,8 +2,12 @@
 //! plain or adaptive sample counts. `RenderJob` (job.rs) owns what is rendered.
 
 mod job;
+mod progressive;
+mod stop;
 
 pub use job::{average, Halves, PixelRect, RenderJob};
+pub use progressive::{pass_seed, pass_spp, render_passes, Film};
+pub use stop::{StopReason, StopToken};
 
 use crate::color::{is_finite, luminance};
 use crate::film::{heat_map, Image};
@@ -119,16 +123,36 @@ impl RenderOutput {
 
 const TILE: u32 = 16;
 
-/// The tiles covering `rect`, as their top-left pixels.
+/// The tiles covering `rect`, as their top-left pixels, in a scattered order: every
+/// stretch of the list samples the whole image, so progress (and its ETA) measured in
+/// pixels tracks the work, and a stopped render is spread over the frame, not
+/// a band of background at the top. The image does not depend on the order.
 fn tiles(rect: PixelRect) -> Vec<(u32, u32)> {
-    (rect.y0..rect.y1)
+    let rows: Vec<(u32, u32)> = (rect.y0..rect.y1)
         .step_by(TILE as usize)
         .flat_map(|y| {
             (rect.x0..rect.x1)
                 .step_by(TILE as usize)
                 .map(move |x| (x, y))
         })
-        .collect()
+        .collect();
+    let n = rows.len();
+    let stride = scatter_stride(n);
+    (0..n).map(|i| rows[i * stride % n]).collect()
+}
+
+/// A step near `n / φ` with no factor in common with `n`, so `i · step mod n` visits
+/// every index once, jumping across the image.
+fn scatter_stride(n: usize) -> usize {
+    let gcd = |mut a: usize, mut b: usize| {
+        while b != 0 {
+            (a, b) = (b, a % b);
+        }
+        a
+    };
+    (((n as f64) * 0.618_034) as usize..n.max(1))
+        .find(|&s| s > 0 && gcd(s, n) == 1)
+        .unwrap_or(1)
 }
 
 /// The pixels of the tile at `(x0, y0)` inside `rect`, row by row.
@@ -138,11 +162,13 @@ fn tile_pixels(rect: PixelRect, (x0, y0): (u32, u32)) -> impl Iterator<Item = (u
 }
 
 /// Renders pixels `rect` of `job`. `progress` is called with the number of pixels finished.
+/// Once `stop` says so, the remaining pixels are left black with 0 samples.
 fn render_rect(
     job: &RenderJob,
     settings: &RenderSettings,
     rect: PixelRect,
     progress: &(dyn Fn(u64) + Sync),
+    stop: &StopToken,
 ) -> RenderOutput {
     let tiles = tiles(rect);
     let integrator = PathIntegrator::new(
@@ -154,7 +180,10 @@ fn render_rect(
         .par_iter()
         .map(|&tile| {
             let out: Vec<PixelResult> = tile_pixels(rect, tile)
-                .map(|(x, y)| render_pixel(job, settings, &integrator, x, y))
+                .map(|(x, y)| match stop.should_stop() {
+                    true => PixelResult::NOT_RENDERED,
+                    false => render_pixel(job, settings, &integrator, x, y),
+                })
                 .collect();
             progress(out.len() as u64);
             out
@@ -167,6 +196,15 @@ struct PixelResult {
     value: Color,
     samples: u32,
     nonfinite: u32,
+}
+
+impl PixelResult {
+    /// A pixel skipped because the render was stopped.
+    const NOT_RENDERED: PixelResult = PixelResult {
+        value: Color::ZERO,
+        samples: 0,
+        nonfinite: 0,
+    };
 }
 
 fn render_pixel(
@@ -293,4 +331,25 @@ fn render_warnings(scene: &Scene, s: &RenderSettings) -> Vec<String> {
         w.push("the scene has no lights and no emissive surfaces: the image will be black".into());
     }
     w
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn scattered_tiles_cover_every_tile_once_and_jump_across_the_image() {
+        for (w, h) in [(1, 1), (16, 16), (480, 360), (100, 37)] {
+            let rect = PixelRect::full(w, h);
+            let t = tiles(rect);
+            let mut sorted = t.clone();
+            sorted.sort_unstable();
+            sorted.dedup();
+            assert_eq!(sorted.len(), t.len());
+            assert_eq!(t.len() as u32, w.div_ceil(TILE) * h.div_ceil(TILE));
+        }
+        // The first tenth of a 480x360 frame's tiles reaches its bottom half.
+        let t = tiles(PixelRect::full(480, 360));
+        assert!(t[..t.len() / 10].iter().any(|&(_, y)| y >= 180));
+    }
 }

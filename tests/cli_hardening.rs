@@ -248,3 +248,157 @@ fn a_repeated_flag_takes_its_last_value() {
     assert_eq!(meta.get("ember.spp"), Some("2"));
     assert_eq!(meta.get("ember.resolution"), Some("8x6"));
 }
+
+/// Files in `dir` other than `keep`: temporaries or partial files a render left behind.
+fn leftovers(dir: &std::path::Path, keep: &[&str]) -> Vec<String> {
+    std::fs::read_dir(dir)
+        .unwrap()
+        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+        .filter(|n| !keep.contains(&n.as_str()))
+        .collect()
+}
+
+/// Waits (up to a minute) until `ready` holds, polling.
+fn wait_for(ready: impl Fn() -> bool) {
+    let t0 = Instant::now();
+    while !ready() {
+        assert!(t0.elapsed() < Duration::from_secs(60), "timed out");
+        std::thread::sleep(Duration::from_millis(50));
+    }
+}
+
+fn send_sigint(child: &std::process::Child) {
+    let st = Command::new("kill")
+        .args(["-INT", &child.id().to_string()])
+        .status()
+        .unwrap();
+    assert!(st.success());
+}
+
+/// A render that would take many minutes, started in the background.
+fn long_render(out: &std::path::Path, extra: &[&str]) -> std::process::Child {
+    ember()
+        .args(["-t", "1", "-s", "100000", "-m", "5", "-r", "64", "48"])
+        .args(extra)
+        .arg("-f")
+        .arg(out)
+        .arg(shared("scenes/cs184/sky/CBspheres_lambertian.dae"))
+        .stdout(Stdio::null())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap()
+}
+
+#[test]
+fn sigint_writes_what_was_rendered_and_no_partial_file() {
+    for (name, extra) in [("i.png", &[][..]), ("i.exr", &["--checkpoint", "1000"][..])] {
+        let dir = tempfile::tempdir().unwrap();
+        let out = dir.path().join(name);
+        let child = long_render(&out, extra);
+        // The output's temporary is claimed just before the handler is installed;
+        // give the render a moment to start after that.
+        wait_for(|| !leftovers(dir.path(), &[]).is_empty());
+        std::thread::sleep(Duration::from_millis(700));
+        send_sigint(&child);
+        let o = child.wait_with_output().unwrap();
+        assert_no_panic(&o);
+        assert_eq!(o.status.code(), Some(130), "{}", stderr(&o));
+        let err = stderr(&o);
+        assert!(
+            err.contains("interrupted: wrote what was rendered so far"),
+            "{err}"
+        );
+        assert_eq!(leftovers(dir.path(), &[name]), Vec::<String>::new());
+        let img = ember::image_io::read_image(&out).unwrap();
+        assert_eq!((img.width, img.height), (64, 48));
+        let meta = ember::image_io::read_metadata(&out).unwrap();
+        assert_eq!(meta.get("ember.stopped"), Some("interrupted"), "{meta:?}");
+        let spp = meta.get("ember.samples_per_pixel").unwrap();
+        assert!(
+            spp.starts_with("mean ") && !spp.starts_with("mean 0.000"),
+            "{spp}"
+        );
+    }
+}
+
+#[test]
+fn checkpoints_hold_whole_images_while_rendering() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("c.exr");
+    let child = long_render(&out, &["--checkpoint", "0.2"]);
+    wait_for(|| out.exists());
+    // The checkpoint is complete the moment it appears (renamed into place).
+    let meta = ember::image_io::read_metadata(&out).unwrap();
+    assert_eq!(meta.get("ember.checkpoint"), Some("true"));
+    assert_eq!(meta.get("ember.stopped"), Some("complete"));
+    assert_eq!(ember::image_io::read_image(&out).unwrap().width, 64);
+    send_sigint(&child);
+    let o = child.wait_with_output().unwrap();
+    assert_eq!(o.status.code(), Some(130), "{}", stderr(&o));
+    let meta = ember::image_io::read_metadata(&out).unwrap();
+    assert_eq!(meta.get("ember.stopped"), Some("interrupted"));
+    assert_eq!(leftovers(dir.path(), &["c.exr"]), Vec::<String>::new());
+}
+
+#[test]
+fn time_budget_stops_and_writes() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("t.exr");
+    let o = ember()
+        .args(["-t", "1", "-m", "5", "-r", "64", "48", "--time", "1", "-f"])
+        .arg(&out)
+        .arg(shared("scenes/cs184/sky/CBspheres_lambertian.dae"))
+        .output()
+        .unwrap();
+    assert_no_panic(&o);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let meta = ember::image_io::read_metadata(&out).unwrap();
+    assert_eq!(meta.get("ember.stopped"), Some("time budget spent"));
+    // ember's own clock: the render stopped within a second of the budget.
+    let secs: f64 = meta.get("ember.render_seconds").unwrap().parse().unwrap();
+    assert!((1.0..2.0).contains(&secs), "{secs}");
+    // Every pixel has the samples of the passes completed (at least the first).
+    let spp = meta.get("ember.samples_per_pixel").unwrap();
+    assert!(!spp.contains("min 0,"), "{spp}");
+    assert_eq!(meta.get("ember.spp"), Some("no cap"));
+}
+
+#[test]
+fn a_capped_time_budget_ends_at_the_cap_like_a_pass_render() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("c.exr");
+    let o = ember()
+        .args(["-s", "6", "-r", "16", "12", "--time", "600", "-f"])
+        .arg(&out)
+        .arg(scene())
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", stderr(&o));
+    let meta = ember::image_io::read_metadata(&out).unwrap();
+    assert_eq!(meta.get("ember.stopped"), Some("complete"));
+    assert_eq!(
+        meta.get("ember.samples_per_pixel"),
+        Some("mean 6.000, min 6, max 6")
+    );
+    // Passes 1 + 1 + 2 + 2 (capped): four.
+    assert_eq!(meta.get("ember.passes"), Some("4"));
+}
+
+#[test]
+fn time_and_checkpoint_refuse_what_cannot_run_in_passes() {
+    for extra in [
+        &["-a"][..],
+        &["--shading", "bvh-cost"],
+        &["--time", "0"],
+        &["--time", "-1"],
+    ] {
+        let o = ember()
+            .args(["-r", "8", "6", "--checkpoint", "5"])
+            .args(extra)
+            .arg(scene())
+            .output()
+            .unwrap();
+        assert_no_panic(&o);
+        assert_eq!(o.status.code(), Some(1), "{extra:?}: {}", stderr(&o));
+    }
+}

@@ -3,12 +3,34 @@
 use clap::{Args, Parser, Subcommand, ValueEnum};
 use std::path::PathBuf;
 
+/// What `--help` adds after the options: stopping a render, and where ember differs
+/// from the course's binary on purpose (the README says the same).
+const AFTER_HELP: &str = "\
+Stopping a render:
+  Ctrl-C (or SIGTERM) stops within one pixel's time, writes the pixels finished so far
+  (the rest black; samples per pixel and `stopped: interrupted` in the file's metadata,
+  see `ember info IMAGE`) through a temporary file renamed into place, never a partial
+  file, and exits with status 130. A second Ctrl-C quits at once, writing nothing.
+  --time S renders passes of 1, 1, 2, 4, 8, 16, 16, ... spp until S seconds are spent
+  (or -s is reached), then writes; --checkpoint S writes the image so far every S seconds.
+
+Where ember differs from the CS184 binary on purpose:
+  - the field of view does not depend on the resolution (the course's shrinks below 800x600);
+  - vertex normals come from the file (the course recomputes them);
+  - the sky (ambient light) is seen by rays that escape, not only by light sampling;
+  - -a does not stop a pixel after one batch of identical samples (a pixel of zeros
+    beside a small light), it takes more batches first;
+  - -t defaults to all cores, and the image does not depend on it;
+  - <out>_rate.png is written only with -a.
+  The full list is in shared/docs/scene-semantics.md, section 9.";
+
 /// ember — a physically based CPU path tracer for the CS184 COLLADA scenes.
 ///
 /// Accepts the CS184 pathtracer command line verbatim, e.g.
 ///   ember -t 8 -s 64 -l 16 -m 5 -r 480 360 -f out.png scene.dae
 #[derive(Parser, Debug)]
-#[command(name = "ember", version, about, long_about = None, args_conflicts_with_subcommands = true, args_override_self = true)]
+#[command(after_help = AFTER_HELP)]
+#[command(name = "ember", version, about, long_about = None, args_conflicts_with_subcommands = true, args_override_self = true, allow_negative_numbers = true)]
 pub struct Cli {
     #[command(subcommand)]
     pub command: Option<Command>,
@@ -175,9 +197,9 @@ pub struct RenderArgs {
     #[arg(short = 't', value_name = "THREADS")]
     pub threads: Option<usize>,
 
-    /// Camera rays (samples) per pixel; with -a, the cap per pixel.
-    #[arg(short = 's', value_name = "SPP", default_value_t = 1)]
-    pub spp: u32,
+    /// Camera rays (samples) per pixel; with -a, the cap per pixel [default: 1; with --time, no cap].
+    #[arg(short = 's', value_name = "SPP")]
+    pub spp: Option<u32>,
 
     /// Light samples per area light at every shading point (delta lights take one).
     #[arg(short = 'l', value_name = "SAMPLES", default_value_t = 1)]
@@ -234,6 +256,16 @@ pub struct RenderArgs {
     /// First bounce at which Russian roulette may end a path.
     #[arg(long, default_value_t = 3, value_name = "BOUNCE")]
     pub rr_start: u32,
+
+    /// Render for at most SECONDS (after loading), in passes of 1, 1, 2, 4, 8, 16, 16, ... samples per
+    /// pixel, then write what was rendered; -s, if given, still caps the samples.
+    #[arg(long = "time", value_name = "SECONDS")]
+    pub time: Option<f64>,
+
+    /// Write the image so far every SECONDS (after the pass that ends the interval), so a long render
+    /// that is killed leaves its latest checkpoint. Renders in passes, as --time does.
+    #[arg(long, value_name = "SECONDS")]
+    pub checkpoint: Option<f64>,
 
     /// Random seed; the same seed gives the same image whatever -t is.
     #[arg(long, default_value_t = 0)]

@@ -2,15 +2,20 @@
 
 use super::args::{AccelArg, ExportArgs, ExportFormat, RenderArgs};
 use super::convert::{
-    accel_kind, adopt_scene_from_adaptive, check_resolution, output_path, settings_from,
+    accel_kind, adopt_scene_from_adaptive, check_resolution, output_path, run_plan, settings_from,
+    RunPlan,
 };
+use super::interrupt::{self, Interrupted};
 use anyhow::{bail, Result};
 use ember::accel;
-use ember::render::RenderJob;
+use ember::image_io::PendingImage;
+use ember::image_metadata::ImageMetadata;
+use ember::render::{render_passes, Film, RenderJob, RenderSettings, StopReason, StopToken};
 use ember::scene::{collada, Scene};
 use indicatif::{ProgressBar, ProgressStyle};
 use std::io::IsTerminal;
 use std::path::{Path, PathBuf};
+use std::sync::atomic::Ordering;
 use std::time::Instant;
 
 /// `ember [OPTIONS] SCENE`: one render to an image file.
@@ -25,16 +30,15 @@ pub(super) fn render(mut args: RenderArgs) -> Result<()> {
     let (width, height) = (args.resolution[0], args.resolution[1]);
     check_resolution(width, height)?;
     let settings = settings_from(&args)?;
+    let plan = run_plan(&args, &settings)?;
     let out = output_path(&args, &scene_path)?;
     // Claim the outputs before loading, so a bad path fails at once and no partial file appears.
-    let pending = ember::image_io::PendingImage::claim(&out, &[&scene_path])?;
+    let mut pending = PendingImage::claim(&out, &[&scene_path])?;
     let pending_rate = match settings.adaptive {
-        Some(_) => Some(ember::image_io::PendingImage::claim(
-            &rate_path(&out),
-            &[&scene_path],
-        )?),
+        Some(_) => Some(PendingImage::claim(&rate_path(&out), &[&scene_path])?),
         None => None,
     };
+    let interrupt = interrupt::install()?;
     let kind = accel_kind(args.accel, args.bvh, args.embree_quality);
     let pool = thread_pool(args.threads)?;
     let t0 = Instant::now();
@@ -43,39 +47,44 @@ pub(super) fn render(mut args: RenderArgs) -> Result<()> {
     let t1 = Instant::now();
     let job = pool.install(|| RenderJob::new(scene, kind, width, height))?;
     let t_build = t1.elapsed();
+    if interrupt.load(Ordering::Relaxed) {
+        return Err(Interrupted("interrupted before rendering; nothing written".into()).into());
+    }
     for w in job.warnings(&settings) {
         ember::errln!("ember: warning: {w}");
     }
-    let frame = job.full_frame();
-    let pb = progress_bar(frame.area(), args.quiet);
     let t2 = Instant::now();
-    let output = pool.install(|| job.render_rect(&settings, frame, &|n| pb.inc(n)));
+    let mut stop = StopToken::never().with_flag(interrupt);
+    if let Some(t) = plan.time {
+        stop = stop.with_deadline(t2 + t);
+    }
+    let run = RenderRun {
+        scene_path: &scene_path,
+        job: &job,
+        settings: &settings,
+        quiet: args.quiet,
+    };
+    let done = pool.install(|| run.execute(plan, &stop, &mut pending))?;
     let t_render = t2.elapsed();
-    pb.finish_and_clear();
-    let meta = ember::image_metadata::ImageMetadata::for_render(
-        &scene_path,
-        &job,
-        &settings,
-        t_render.as_secs_f64(),
-    );
-    pending.write_with_metadata(&output.image, &meta)?;
+    let meta = run.metadata(&done, t_render.as_secs_f64());
+    pending.write_with_metadata(&done.output.image, &meta)?;
     if let Some(pending_rate) = pending_rate {
         let rate = pending_rate.path().to_path_buf();
-        pending_rate.write_with_metadata(&output.rate_image(settings.spp), &meta)?;
+        pending_rate.write_with_metadata(&done.output.rate_image(settings.spp), &meta)?;
         if !args.quiet {
             ember::errln!("ember: sample rate map written to {}", rate.display());
         }
     }
-    if output.nonfinite_samples > 0 {
+    if done.output.nonfinite_samples > 0 {
         ember::errln!(
             "ember: warning: {} samples were NaN or infinite and were counted as black",
-            output.nonfinite_samples
+            done.output.nonfinite_samples
         );
     }
     if !args.quiet {
-        let samples = output.total_samples();
+        let samples = done.output.total_samples();
         ember::errln!(
-            "ember: {}: loaded in {:.1} ms, {} built in {:.1} ms, {} samples in {:.3} s ({:.2} M samples/s), wrote {}",
+            "ember: {}: loaded in {:.1} ms, {} built in {:.1} ms, {} samples in {:.3} s ({:.2} M samples/s); {}; wrote {}",
             scene_path.display(),
             t_load.as_secs_f64() * 1e3,
             job.accel.name(),
@@ -83,13 +92,142 @@ pub(super) fn render(mut args: RenderArgs) -> Result<()> {
             samples,
             t_render.as_secs_f64(),
             samples as f64 / t_render.as_secs_f64() / 1e6,
+            run.settings_summary(&done, pool.current_num_threads()),
             out.display()
         );
-        if let Some(s) = output.cost_scale {
+        if let Some(s) = done.output.cost_scale {
             ember::errln!("ember: bvh-cost scale: blue = 0, red = {s:.0} nodes + primitives tested per camera ray (99th percentile)");
         }
     }
-    Ok(())
+    match done.stopped {
+        Some(StopReason::Interrupted) => Err(Interrupted(format!(
+            "interrupted: wrote what was rendered so far ({}) to {}",
+            coverage(&done.output.samples),
+            out.display()
+        ))
+        .into()),
+        Some(StopReason::TimeUp) if !args.quiet => {
+            ember::errln!(
+                "ember: time budget spent: wrote {}",
+                coverage(&done.output.samples)
+            );
+            Ok(())
+        }
+        _ => Ok(()),
+    }
+}
+
+/// What a render produced, and why it ended early if it did.
+struct Rendered {
+    output: ember::render::RenderOutput,
+    passes: Option<u32>,
+    stopped: Option<StopReason>,
+}
+
+/// One render's fixed inputs, shared by its run, its checkpoints and its metadata.
+struct RenderRun<'a> {
+    scene_path: &'a Path,
+    job: &'a RenderJob,
+    settings: &'a RenderSettings,
+    quiet: bool,
+}
+
+impl RenderRun<'_> {
+    /// Renders in one pass, or in passes (writing checkpoints to `pending`) as `plan` says.
+    fn execute(
+        &self,
+        plan: RunPlan,
+        stop: &StopToken,
+        pending: &mut PendingImage,
+    ) -> Result<Rendered> {
+        let frame = self.job.full_frame();
+        let t0 = Instant::now();
+        if !plan.in_passes() {
+            let pb = progress_bar(frame.area(), self.quiet);
+            let output = self
+                .job
+                .render_rect_until(self.settings, frame, &|n| pb.inc(n), stop);
+            pb.finish_and_clear();
+            return Ok(Rendered {
+                output,
+                passes: None,
+                stopped: stop.reason(),
+            });
+        }
+        // A time budget shows time spent; otherwise samples traced.
+        let pb = match plan.time {
+            Some(t) => progress_bar(t.as_millis() as u64, self.quiet),
+            None => progress_bar(frame.area() * self.settings.spp as u64, self.quiet),
+        };
+        let tick = |n: u64| match plan.time {
+            Some(_) => pb.set_position(t0.elapsed().as_millis() as u64),
+            None => pb.inc(n),
+        };
+        let mut last = Instant::now();
+        let mut checkpoint = |film: &Film| -> Result<()> {
+            match plan.checkpoint {
+                Some(every) if last.elapsed() >= every => {
+                    let output = film.output();
+                    let mut meta = self.metadata_base(t0.elapsed().as_secs_f64());
+                    meta.push_samples(&output.samples, Some(film.passes), None);
+                    meta.push("ember.checkpoint", "true");
+                    pending.checkpoint(&output.image, &meta)?;
+                    last = Instant::now();
+                    Ok(())
+                }
+                _ => Ok(()),
+            }
+        };
+        let (film, stopped) =
+            render_passes(self.job, self.settings, frame, &tick, stop, &mut checkpoint)?;
+        pb.finish_and_clear();
+        Ok(Rendered {
+            output: film.output(),
+            passes: Some(film.passes),
+            stopped,
+        })
+    }
+
+    fn metadata_base(&self, seconds: f64) -> ImageMetadata {
+        ImageMetadata::for_render(self.scene_path, self.job, self.settings, seconds)
+    }
+
+    /// The metadata of the final image: settings, samples taken, and how it ended.
+    fn metadata(&self, done: &Rendered, seconds: f64) -> ImageMetadata {
+        let mut meta = self.metadata_base(seconds);
+        meta.push_samples(&done.output.samples, done.passes, done.stopped);
+        meta
+    }
+
+    /// The settings that matter, for the summary line: estimator, samples, -m, -l, seed, threads.
+    fn settings_summary(&self, done: &Rendered, threads: usize) -> String {
+        let s = self.settings;
+        let n = done.output.samples.len().max(1) as f64;
+        let mean = done.output.total_samples() as f64 / n;
+        let spp = match (s.adaptive, done.stopped, done.passes) {
+            (None, None, _) => format!("{} spp", mean.round()),
+            (Some(_), _, _) => format!("mean {mean:.1} spp (cap {}, -a)", s.spp),
+            (None, _, _) => format!("mean {mean:.1} spp"),
+        };
+        format!(
+            "{} estimator, {spp}, -m {}, -l {}, seed {}, {threads} threads",
+            format!("{:?}", s.strategy_for(&self.job.scene)).to_lowercase(),
+            s.max_depth,
+            s.light_samples,
+            s.seed
+        )
+    }
+}
+
+/// "N of M pixels, mean X spp": how much of the image a stopped render holds.
+fn coverage(samples: &[u32]) -> String {
+    let rendered = samples.iter().filter(|&&s| s > 0).count();
+    let total: u64 = samples.iter().map(|&s| s as u64).sum();
+    format!(
+        "{rendered} of {} pixels, mean {:.2} spp",
+        samples.len(),
+        total as f64 / samples.len().max(1) as f64
+    )
 }
 
 /// `ember info SCENE`: what the scene holds and the backends of this build.

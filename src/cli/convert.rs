@@ -6,6 +6,45 @@ use ember::accel::{AccelKind, BvhBuilder, EmbreeQuality};
 use ember::integrators::{DirectStrategy, Roulette};
 use ember::render::{Adaptive, RenderSettings, Shading};
 use std::path::{Path, PathBuf};
+use std::time::Duration;
+
+/// How a render runs: in one pass, or in passes under a time budget and/or with checkpoints.
+#[derive(Clone, Copy, Debug, Default)]
+pub(super) struct RunPlan {
+    pub time: Option<Duration>,
+    pub checkpoint: Option<Duration>,
+}
+
+impl RunPlan {
+    /// Whether the render is a sequence of passes ([`ember::render::render_passes`]).
+    pub fn in_passes(&self) -> bool {
+        self.time.is_some() || self.checkpoint.is_some()
+    }
+}
+
+/// `--time` and `--checkpoint`, checked against the settings they run.
+pub(super) fn run_plan(args: &RenderArgs, settings: &RenderSettings) -> Result<RunPlan> {
+    let seconds = |flag: &str, v: Option<f64>| -> Result<Option<Duration>> {
+        v.map(|s| {
+            Duration::try_from_secs_f64(s)
+                .ok()
+                .filter(|d| !d.is_zero())
+                .with_context(|| format!("{flag}: expected a positive number of seconds, got {s}"))
+        })
+        .transpose()
+    };
+    let plan = RunPlan {
+        time: seconds("--time", args.time)?,
+        checkpoint: seconds("--checkpoint", args.checkpoint)?,
+    };
+    if plan.in_passes() && settings.adaptive.is_some() {
+        bail!("--time and --checkpoint render in passes, which -a (adaptive sampling) does not: use one or the other");
+    }
+    if plan.in_passes() && settings.shading == Shading::BvhCost {
+        bail!("--time and --checkpoint render in passes, which --shading bvh-cost (one heat map) does not");
+    }
+    Ok(plan)
+}
 
 pub(super) fn check_resolution(w: u32, h: u32) -> Result<()> {
     if w == 0 || h == 0 || (w as u64) * (h as u64) > 1 << 28 {
@@ -84,11 +123,15 @@ pub(super) fn strategy(args: &RenderArgs) -> Option<DirectStrategy> {
 }
 
 pub(super) fn settings_from(args: &RenderArgs) -> Result<RenderSettings> {
-    if args.spp == 0 {
-        bail!("-s: samples per pixel must be at least 1");
-    }
+    // With --time and no -s, the clock decides how many samples a pixel gets.
+    let spp = match (args.spp, args.time) {
+        (Some(0), _) => bail!("-s: samples per pixel must be at least 1"),
+        (Some(s), _) => s,
+        (None, Some(_)) => u32::MAX,
+        (None, None) => 1,
+    };
     Ok(RenderSettings {
-        spp: args.spp,
+        spp,
         light_samples: args.light_samples.max(1),
         max_depth: args.max_depth,
         accumulate: args.accumulate == 1,

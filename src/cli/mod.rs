@@ -7,9 +7,11 @@ mod args;
 mod bench;
 mod commands;
 mod convert;
+mod interrupt;
 
 pub use args::Cli;
 use args::Command;
+pub use interrupt::{Interrupted, EXIT_INTERRUPTED};
 
 pub fn run(cli: Cli) -> anyhow::Result<()> {
     match cli.command {
