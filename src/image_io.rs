@@ -110,6 +110,11 @@ impl PendingImage {
         })
     }
 
+    /// The format the path's extension names.
+    pub fn format(&self) -> OutputFormat {
+        self.format
+    }
+
     /// The final path the image will be renamed to.
     pub fn path(&self) -> &Path {
         &self.path

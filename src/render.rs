@@ -25,7 +25,9 @@ pub enum Shading {
     Radiance,
     /// `0.5·n + 0.5` of the shading normal.
     Normals,
-    /// Heat map of BVH nodes + primitives tested per camera ray.
+    /// BVH nodes + primitives tested per camera ray: the image holds the raw counts
+    /// (mean over the pixel's rays, in every channel); [`RenderOutput::cost_heat_map`]
+    /// colours them.
     BvhCost,
 }
 
@@ -105,8 +107,6 @@ pub struct RenderOutput {
     pub samples: Vec<u32>,
     /// Samples whose radiance was NaN or infinite and were counted as black (should be 0).
     pub nonfinite_samples: u64,
-    /// For `Shading::BvhCost`: the count that maps to red.
-    pub cost_scale: Option<f32>,
 }
 
 impl RenderOutput {
@@ -118,6 +118,37 @@ impl RenderOutput {
     pub fn rate_image(&self, spp: u32) -> Image {
         let counts: Vec<f32> = self.samples.iter().map(|&s| s as f32).collect();
         heat_map(self.image.width, self.image.height, &counts, spp as f32)
+    }
+
+    /// The raw samples per pixel, in every channel (the rate map as data, for EXR).
+    pub fn sample_count_image(&self) -> Image {
+        Image {
+            pixels: self
+                .samples
+                .iter()
+                .map(|&s| Color::splat(s as f32))
+                .collect(),
+            ..self.image.clone()
+        }
+    }
+
+    /// For `Shading::BvhCost`: the heat map (blue 0, red `scale`) and the scale, which
+    /// is the 99th percentile of the pixels' counts unless given (a fixed scale lets
+    /// images of two builders compare).
+    pub fn cost_heat_map(&self, scale: Option<f32>) -> (Image, f32) {
+        let costs: Vec<f32> = self.image.pixels.iter().map(|c| c.x).collect();
+        let scale = scale.unwrap_or_else(|| percentile(&costs, 0.99).max(1.0));
+        (
+            heat_map(self.image.width, self.image.height, &costs, scale),
+            scale,
+        )
+    }
+
+    /// For `Shading::BvhCost`: the mean count per camera ray (pixels weighted by their rays).
+    pub fn mean_cost_per_ray(&self) -> f64 {
+        let rays = self.total_samples().max(1) as f64;
+        let pixels = self.image.pixels.iter().zip(&self.samples);
+        pixels.map(|(c, &n)| c.x as f64 * n as f64).sum::<f64>() / rays
     }
 }
 
@@ -189,7 +220,7 @@ fn render_rect(
             out
         })
         .collect();
-    assemble(rect, &tiles, results, settings)
+    assemble(rect, &tiles, results)
 }
 
 struct PixelResult {
@@ -265,12 +296,7 @@ fn converged(a: Adaptive, n: u32, s1: f64, s2: f64) -> bool {
 }
 
 /// The image of `rect` (its own size, row-major) from the tiles' pixels.
-fn assemble(
-    rect: PixelRect,
-    tiles: &[(u32, u32)],
-    results: Vec<Vec<PixelResult>>,
-    s: &RenderSettings,
-) -> RenderOutput {
+fn assemble(rect: PixelRect, tiles: &[(u32, u32)], results: Vec<Vec<PixelResult>>) -> RenderOutput {
     let (w, h) = (rect.width(), rect.height());
     let mut image = Image::new(w, h);
     let mut samples = vec![0u32; (w * h) as usize];
@@ -283,18 +309,10 @@ fn assemble(
             nonfinite += p.nonfinite as u64;
         }
     }
-    let mut cost_scale = None;
-    if s.shading == Shading::BvhCost {
-        let costs: Vec<f32> = image.pixels.iter().map(|c| c.x).collect();
-        let scale = percentile(&costs, 0.99).max(1.0);
-        image = heat_map(w, h, &costs, scale);
-        cost_scale = Some(scale);
-    }
     RenderOutput {
         image,
         samples,
         nonfinite_samples: nonfinite,
-        cost_scale,
     }
 }
 

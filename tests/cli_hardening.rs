@@ -402,3 +402,132 @@ fn time_and_checkpoint_refuse_what_cannot_run_in_passes() {
         assert_eq!(o.status.code(), Some(1), "{extra:?}: {}", stderr(&o));
     }
 }
+
+fn render_ok(args: &[&str], out: &std::path::Path, scene: &std::path::Path) -> Output {
+    let o = ember()
+        .args(args)
+        .arg("-f")
+        .arg(out)
+        .arg(scene)
+        .output()
+        .unwrap();
+    assert_no_panic(&o);
+    assert!(o.status.success(), "{args:?}: {}", stderr(&o));
+    o
+}
+
+#[test]
+fn bvh_cost_exr_holds_raw_counts_and_a_fixed_scale_colours_the_png() {
+    let dir = tempfile::tempdir().unwrap();
+    let bunny = shared("scenes/cs184/sky/CBbunny.dae");
+    let exr = dir.path().join("c.exr");
+    render_ok(&["--shading", "bvh-cost", "-r", "32", "24"], &exr, &bunny);
+    let img = ember::image_io::read_image(&exr).unwrap();
+    // One ray per pixel: whole numbers of nodes + primitives, grey, some large.
+    assert!(img
+        .pixels
+        .iter()
+        .all(|p| p.x == p.x.round() && p.x == p.y && p.x >= 0.0));
+    assert!(img.pixels.iter().any(|p| p.x > 4.0));
+    let meta = ember::image_io::read_metadata(&exr).unwrap();
+    let mean: f64 = meta
+        .get("ember.mean_cost_per_ray")
+        .unwrap()
+        .parse()
+        .unwrap();
+    let expect = img.pixels.iter().map(|p| p.x as f64).sum::<f64>() / img.pixels.len() as f64;
+    assert!((mean - expect).abs() < 1e-3, "{mean} vs {expect}");
+    // A fixed scale: the same heat map whatever the image's own percentile.
+    let (a, b) = (dir.path().join("a.png"), dir.path().join("b.png"));
+    let o = render_ok(
+        &[
+            "--shading",
+            "bvh-cost",
+            "--cost-scale",
+            "1000",
+            "-r",
+            "32",
+            "24",
+        ],
+        &a,
+        &bunny,
+    );
+    assert!(stderr(&o).contains("per camera ray"), "{}", stderr(&o));
+    render_ok(
+        &[
+            "--shading",
+            "bvh-cost",
+            "--cost-scale",
+            "5",
+            "-r",
+            "32",
+            "24",
+        ],
+        &b,
+        &bunny,
+    );
+    let meta = ember::image_io::read_metadata(&a).unwrap();
+    assert_eq!(meta.get("ember.cost_scale"), Some("1000"));
+    let (a, b) = (image::open(&a).unwrap(), image::open(&b).unwrap());
+    assert_ne!(a.as_bytes(), b.as_bytes());
+}
+
+#[test]
+fn adaptive_rate_map_exr_holds_raw_sample_counts() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("a.exr");
+    render_ok(
+        &["-a", "4", "0.2", "-s", "64", "-r", "16", "12"],
+        &out,
+        &scene(),
+    );
+    let rate = ember::image_io::read_image(&dir.path().join("a_rate.exr")).unwrap();
+    for p in &rate.pixels {
+        let n = p.x as u32;
+        assert!(p.x == n as f32 && n >= 4 && n <= 64 && (n % 4 == 0), "{n}");
+    }
+}
+
+#[test]
+fn options_that_do_nothing_are_refused() {
+    for args in [
+        &["--shading", "bvh-cost", "--accel", "embree"][..],
+        &["--bvh", "midpoint", "--accel", "embree"],
+        &["--embree-quality", "high"],
+        &["--cost-scale", "10"],
+        &["--shading", "bvh-cost", "--cost-scale", "0"],
+    ] {
+        let o = ember().args(args).arg(scene()).output().unwrap();
+        assert_no_panic(&o);
+        assert_eq!(o.status.code(), Some(1), "{args:?}: {}", stderr(&o));
+        assert!(stderr(&o).starts_with("ember: error: --"), "{}", stderr(&o));
+    }
+    let dir = tempfile::tempdir().unwrap();
+    let o = render_ok(
+        &["-l", "0", "-r", "8", "6"],
+        &dir.path().join("l.png"),
+        &scene(),
+    );
+    assert!(stderr(&o).contains("warning: -l 0"), "{}", stderr(&o));
+}
+
+#[test]
+fn info_lists_meshes_with_names_and_the_bvh() {
+    let o = ember()
+        .arg("info")
+        .arg(shared("scenes/cs184/sky/CBbunny.dae"))
+        .output()
+        .unwrap();
+    assert!(o.status.success());
+    let text = String::from_utf8(o.stdout).unwrap();
+    assert!(text.contains("meshes: 6"), "{text}");
+    assert!(text.contains(": 28576 triangles, material [0] "), "{text}");
+    assert!(
+        text.contains("  [1] ceiling: 2 triangles, material [1] ceiling"),
+        "{text}"
+    );
+    let bvh = text.lines().find(|l| l.starts_with("native BVH")).unwrap();
+    for word in ["nodes", "leaves", "depth", "SAH cost", "built in"] {
+        assert!(bvh.contains(word), "{bvh}");
+    }
+}

@@ -233,17 +233,22 @@ pub struct RenderArgs {
     #[arg(long, value_enum, default_value_t = AccelArg::Native)]
     pub accel: AccelArg,
 
-    /// How the native BVH is built.
-    #[arg(long, value_enum, default_value_t = BvhArg::Sah)]
-    pub bvh: BvhArg,
+    /// How the native BVH is built [default: sah] (not with --accel embree).
+    #[arg(long, value_enum)]
+    pub bvh: Option<BvhArg>,
 
-    /// Embree's build quality (with --accel embree).
-    #[arg(long, value_enum, default_value_t = QualityArg::Medium)]
-    pub embree_quality: QualityArg,
+    /// Embree's build quality [default: medium] (only with --accel embree).
+    #[arg(long, value_enum)]
+    pub embree_quality: Option<QualityArg>,
 
     /// What each pixel shows.
     #[arg(long, value_enum, default_value_t = ShadingArg::Radiance)]
     pub shading: ShadingArg,
+
+    /// With --shading bvh-cost: the count (nodes + primitives tested per camera ray) shown red in a PNG,
+    /// so images of two builders compare [default: the image's 99th percentile]. An EXR holds the raw counts.
+    #[arg(long, value_name = "COUNT")]
+    pub cost_scale: Option<f32>,
 
     /// Direct-lighting estimator. auto: MIS (light + BSDF sampling) when the scene has glossy surfaces or an ambient light, light sampling otherwise (see BENCHMARKS.md). -H forces hemisphere.
     #[arg(long, value_enum, default_value_t = IntegratorArg::Auto)]

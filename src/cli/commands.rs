@@ -1,16 +1,18 @@
 //! One short function per subcommand: convert the flags, call the library, report.
 
-use super::args::{AccelArg, ExportArgs, ExportFormat, RenderArgs};
+use super::args::{AccelArg, BvhArg, ExportArgs, ExportFormat, QualityArg, RenderArgs};
 use super::convert::{
-    accel_kind, adopt_scene_from_adaptive, check_resolution, output_path, run_plan, settings_from,
-    RunPlan,
+    accel_kind, adopt_scene_from_adaptive, check_flags, check_resolution, flag_warnings,
+    output_path, run_plan, settings_from, RunPlan,
 };
 use super::interrupt::{self, Interrupted};
 use anyhow::{bail, Result};
 use ember::accel;
-use ember::image_io::PendingImage;
+use ember::image_io::{OutputFormat, PendingImage};
 use ember::image_metadata::ImageMetadata;
-use ember::render::{render_passes, Film, RenderJob, RenderSettings, StopReason, StopToken};
+use ember::render::{
+    render_passes, Film, RenderJob, RenderSettings, Shading, StopReason, StopToken,
+};
 use ember::scene::{collada, Scene};
 use indicatif::{ProgressBar, ProgressStyle};
 use std::io::IsTerminal;
@@ -21,6 +23,7 @@ use std::time::Instant;
 /// `ember [OPTIONS] SCENE`: one render to an image file.
 pub(super) fn render(mut args: RenderArgs) -> Result<()> {
     adopt_scene_from_adaptive(&mut args);
+    check_flags(&args)?;
     if args.accel == AccelArg::Embree && !cfg!(any(feature = "embree", feature = "embree4")) {
         bail!("{}", accel::AccelError::EmbreeUnavailable);
     }
@@ -30,6 +33,9 @@ pub(super) fn render(mut args: RenderArgs) -> Result<()> {
     let (width, height) = (args.resolution[0], args.resolution[1]);
     check_resolution(width, height)?;
     let settings = settings_from(&args)?;
+    for w in flag_warnings(&args) {
+        ember::errln!("ember: warning: {w}");
+    }
     let plan = run_plan(&args, &settings)?;
     let out = output_path(&args, &scene_path)?;
     // Claim the outputs before loading, so a bad path fails at once and no partial file appears.
@@ -39,7 +45,11 @@ pub(super) fn render(mut args: RenderArgs) -> Result<()> {
         None => None,
     };
     let interrupt = interrupt::install()?;
-    let kind = accel_kind(args.accel, args.bvh, args.embree_quality);
+    let kind = accel_kind(
+        args.accel,
+        args.bvh.unwrap_or(BvhArg::Sah),
+        args.embree_quality.unwrap_or(QualityArg::Medium),
+    );
     let pool = thread_pool(args.threads)?;
     let t0 = Instant::now();
     let scene = load_scene(&scene_path)?;
@@ -66,11 +76,27 @@ pub(super) fn render(mut args: RenderArgs) -> Result<()> {
     };
     let done = pool.install(|| run.execute(plan, &stop, &mut pending))?;
     let t_render = t2.elapsed();
-    let meta = run.metadata(&done, t_render.as_secs_f64());
-    pending.write_with_metadata(&done.output.image, &meta)?;
+    let mut meta = run.metadata(&done, t_render.as_secs_f64());
+    let cost_scale = match settings.shading {
+        Shading::BvhCost => Some(write_cost_map(
+            pending,
+            &done.output,
+            args.cost_scale,
+            &mut meta,
+        )?),
+        _ => {
+            pending.write_with_metadata(&done.output.image, &meta)?;
+            None
+        }
+    };
     if let Some(pending_rate) = pending_rate {
         let rate = pending_rate.path().to_path_buf();
-        pending_rate.write_with_metadata(&done.output.rate_image(settings.spp), &meta)?;
+        // The rate map: raw samples per pixel in an EXR, the course's colours in a PNG.
+        let image = match pending_rate.format() {
+            OutputFormat::Exr => done.output.sample_count_image(),
+            OutputFormat::Png => done.output.rate_image(settings.spp),
+        };
+        pending_rate.write_with_metadata(&image, &meta)?;
         if !args.quiet {
             ember::errln!("ember: sample rate map written to {}", rate.display());
         }
@@ -95,8 +121,15 @@ pub(super) fn render(mut args: RenderArgs) -> Result<()> {
             run.settings_summary(&done, pool.current_num_threads()),
             out.display()
         );
-        if let Some(s) = done.output.cost_scale {
-            ember::errln!("ember: bvh-cost scale: blue = 0, red = {s:.0} nodes + primitives tested per camera ray (99th percentile)");
+        if let Some(scale) = cost_scale {
+            ember::errln!(
+                "ember: bvh-cost: mean {:.2} nodes + primitives tested per camera ray; PNG scale: blue = 0, red = {scale} ({})",
+                done.output.mean_cost_per_ray(),
+                match args.cost_scale {
+                    Some(_) => "--cost-scale",
+                    None => "99th percentile",
+                }
+            );
         }
     }
     match done.stopped {
@@ -115,6 +148,28 @@ pub(super) fn render(mut args: RenderArgs) -> Result<()> {
         }
         _ => Ok(()),
     }
+}
+
+/// The bvh-cost image: raw counts in an EXR, a heat map (blue 0, red `scale`) in a PNG.
+/// Returns the scale used; both it and the mean cost go into the metadata.
+fn write_cost_map(
+    pending: PendingImage,
+    output: &ember::render::RenderOutput,
+    scale: Option<f32>,
+    meta: &mut ImageMetadata,
+) -> Result<f32> {
+    let (heat, scale) = output.cost_heat_map(scale);
+    meta.push("ember.cost_scale", scale);
+    meta.push(
+        "ember.mean_cost_per_ray",
+        format!("{:.4}", output.mean_cost_per_ray()),
+    );
+    let image = match pending.format() {
+        OutputFormat::Exr => &output.image,
+        OutputFormat::Png => &heat,
+    };
+    pending.write_with_metadata(image, meta)?;
+    Ok(scale)
 }
 
 /// What a render produced, and why it ended early if it did.
@@ -243,6 +298,12 @@ pub(super) fn info(path: &Path, w: u32, h: u32) -> Result<()> {
     let scene = load_scene(path)?;
     ember::outln!("{}", path.display())?;
     ember::out!("{}", ember::info::scene_info(&scene, w, h))?;
+    let t0 = Instant::now();
+    let bvh = accel::build(&scene, accel::AccelKind::Native(accel::BvhBuilder::Sah))?;
+    let build_ms = t0.elapsed().as_secs_f64() * 1e3;
+    if let Some(stats) = bvh.bvh_stats() {
+        ember::out!("{}", ember::info::bvh_info(&bvh.name(), &stats, build_ms))?;
+    }
     ember::outln!("{}", accel::backends_info())?;
     Ok(())
 }
@@ -282,13 +343,17 @@ fn progress_bar(total: u64, quiet: bool) -> ProgressBar {
     pb
 }
 
-/// `out.png` → `out_rate.png`: the adaptive sample-rate map beside the image.
+/// `out.png` → `out_rate.png` (`out.exr` → `out_rate.exr`, raw counts): the adaptive
+/// sample-rate map beside the image.
 fn rate_path(out: &Path) -> PathBuf {
     let stem = out
         .file_stem()
         .map(|s| s.to_string_lossy().into_owned())
         .unwrap_or_default();
-    out.with_file_name(format!("{stem}_rate.png"))
+    let ext = out
+        .extension()
+        .map_or("png".into(), |e| e.to_string_lossy());
+    out.with_file_name(format!("{stem}_rate.{ext}"))
 }
 
 /// `ember export`: the scene in another renderer's format, for side-by-side measurements.

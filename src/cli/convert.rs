@@ -53,6 +53,38 @@ pub(super) fn check_resolution(w: u32, h: u32) -> Result<()> {
     Ok(())
 }
 
+/// Flags that would do nothing, or something meaningless, in the chosen configuration.
+pub(super) fn check_flags(args: &RenderArgs) -> Result<()> {
+    let embree = args.accel == AccelArg::Embree;
+    if embree && args.bvh.is_some() {
+        bail!("--bvh chooses the native BVH's builder; it does nothing with --accel embree");
+    }
+    if !embree && args.embree_quality.is_some() {
+        bail!("--embree-quality applies only with --accel embree");
+    }
+    if embree && args.shading == ShadingArg::BvhCost {
+        bail!("--shading bvh-cost counts the native BVH's node and primitive tests, which Embree does not expose; use --accel native");
+    }
+    if let Some(c) = args.cost_scale {
+        if args.shading != ShadingArg::BvhCost {
+            bail!("--cost-scale applies only with --shading bvh-cost");
+        }
+        if !(c.is_finite() && c > 0.0) {
+            bail!("--cost-scale: expected a positive count, got {c}");
+        }
+    }
+    Ok(())
+}
+
+/// Flags that ember accepts but reads differently than written.
+pub(super) fn flag_warnings(args: &RenderArgs) -> Vec<String> {
+    let mut w = Vec::new();
+    if args.light_samples == 0 {
+        w.push("-l 0 takes one light sample per area light, as -l 1 does".to_string());
+    }
+    w
+}
+
 pub(super) fn accel_kind(a: AccelArg, b: BvhArg, q: QualityArg) -> AccelKind {
     match a {
         AccelArg::Native => AccelKind::Native(match b {

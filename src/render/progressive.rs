@@ -93,7 +93,6 @@ impl Film {
             image: self.image(),
             samples: self.samples.clone(),
             nonfinite_samples: self.nonfinite,
-            cost_scale: None,
         }
     }
 }
