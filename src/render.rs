@@ -2,10 +2,12 @@
 //! plain or adaptive sample counts. `RenderJob` (job.rs) owns what is rendered.
 
 mod job;
+mod memory;
 mod progressive;
 mod stop;
 
 pub use job::{average, Halves, PixelRect, RenderJob};
+pub use memory::{available_bytes, render_bytes};
 pub use progressive::{pass_seed, pass_spp, render_passes, Film};
 pub use stop::{StopReason, StopToken};
 
@@ -153,6 +155,7 @@ impl RenderOutput {
 }
 
 const TILE: u32 = 16;
+const TILE_PIXELS: usize = (TILE * TILE) as usize;
 
 /// The tiles covering `rect`, as their top-left pixels, in a scattered order: every
 /// stretch of the list samples the whole image, so progress (and its ETA) measured in
@@ -207,22 +210,26 @@ fn render_rect(
         job.accel.as_ref(),
         settings.path_settings(&job.scene),
     );
-    let results: Vec<Vec<PixelResult>> = tiles
-        .par_iter()
-        .map(|&tile| {
-            let out: Vec<PixelResult> = tile_pixels(rect, tile)
-                .map(|(x, y)| match stop.should_stop() {
-                    true => PixelResult::NOT_RENDERED,
-                    false => render_pixel(job, settings, &integrator, x, y),
-                })
-                .collect();
-            progress(out.len() as u64);
-            out
-        })
-        .collect();
-    assemble(rect, &tiles, results)
+    // Every tile's slot is allocated up front, so memory does not grow while rendering.
+    let mut results = vec![PixelResult::NOT_RENDERED; tiles.len() * TILE_PIXELS];
+    results
+        .par_chunks_mut(TILE_PIXELS)
+        .zip(tiles.par_iter())
+        .for_each(|(slots, &tile)| {
+            let mut n = 0;
+            for (slot, (x, y)) in slots.iter_mut().zip(tile_pixels(rect, tile)) {
+                if stop.should_stop() {
+                    break;
+                }
+                *slot = render_pixel(job, settings, &integrator, x, y);
+                n += 1;
+            }
+            progress(n);
+        });
+    assemble(rect, &tiles, &results)
 }
 
+#[derive(Clone, Copy)]
 struct PixelResult {
     value: Color,
     samples: u32,
@@ -296,12 +303,12 @@ fn converged(a: Adaptive, n: u32, s1: f64, s2: f64) -> bool {
 }
 
 /// The image of `rect` (its own size, row-major) from the tiles' pixels.
-fn assemble(rect: PixelRect, tiles: &[(u32, u32)], results: Vec<Vec<PixelResult>>) -> RenderOutput {
+fn assemble(rect: PixelRect, tiles: &[(u32, u32)], results: &[PixelResult]) -> RenderOutput {
     let (w, h) = (rect.width(), rect.height());
     let mut image = Image::new(w, h);
     let mut samples = vec![0u32; (w * h) as usize];
     let mut nonfinite = 0u64;
-    for (&tile, pixels) in tiles.iter().zip(results) {
+    for (&tile, pixels) in tiles.iter().zip(results.chunks(TILE_PIXELS)) {
         for ((x, y), p) in tile_pixels(rect, tile).zip(pixels) {
             let i = ((y - rect.y0) * w + (x - rect.x0)) as usize;
             image.pixels[i] = p.value;

@@ -51,12 +51,15 @@ pub(super) fn render(mut args: RenderArgs) -> Result<()> {
         args.embree_quality.unwrap_or(QualityArg::Medium),
     );
     let pool = thread_pool(args.threads)?;
+    check_memory(width, height, plan)?;
     let t0 = Instant::now();
     let scene = load_scene(&scene_path)?;
     let t_load = t0.elapsed();
     let t1 = Instant::now();
     let job = pool.install(|| RenderJob::new(scene, kind, width, height))?;
     let t_build = t1.elapsed();
+    // Again now that the scene and its BVH hold their share.
+    check_memory(width, height, plan)?;
     if interrupt.load(Ordering::Relaxed) {
         return Err(Interrupted("interrupted before rendering; nothing written".into()).into());
     }
@@ -170,6 +173,25 @@ fn write_cost_map(
     };
     pending.write_with_metadata(image, meta)?;
     Ok(scale)
+}
+
+/// Refuses a render whose buffers (all allocated up front) would not fit in the
+/// memory left, instead of dying of an allocation failure halfway.
+fn check_memory(width: u32, height: u32, plan: RunPlan) -> Result<()> {
+    let need = ember::render::render_bytes(width, height, plan.in_passes());
+    let Some(free) = ember::render::available_bytes() else {
+        return Ok(());
+    };
+    if need > free {
+        let gib = |b: u64| b as f64 / (1u64 << 30) as f64;
+        bail!(
+            "-r {width} {height}: the render needs about {:.1} GiB for its image buffers, but only {:.1} GiB \
+             of memory is available (MemAvailable, cgroup memory.max); choose a smaller -r",
+            gib(need),
+            gib(free)
+        );
+    }
+    Ok(())
 }
 
 /// What a render produced, and why it ended early if it did.
