@@ -2,12 +2,14 @@
 
 mod cli;
 
-use clap::Parser;
 use ember::output::{error_chain_message, is_broken_pipe};
 use std::process::ExitCode;
 
 fn main() -> ExitCode {
-    let args = cli::Cli::parse();
+    let args = match cli::parse() {
+        Ok(args) => args,
+        Err(code) => return code,
+    };
     match cli::run(args) {
         Ok(()) => ExitCode::SUCCESS,
         // The reader of our output went away (`ember info x.dae | head -1`): not an error.

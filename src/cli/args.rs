@@ -41,6 +41,7 @@ pub struct Cli {
 #[derive(Subcommand, Debug)]
 pub enum Command {
     /// Print what a scene contains (geometry, lights, materials, camera, bounds) and the backends of this build.
+    #[command(allow_negative_numbers = true)]
     Info {
         /// The .dae scene file.
         scene: PathBuf,
@@ -50,6 +51,7 @@ pub enum Command {
     },
     /// Write the scene for another renderer, meaning exactly what ember renders
     /// (spec semantics): `ember export --format mitsuba SCENE.dae -r W H -s SPP -m M --out DIR`.
+    #[command(allow_negative_numbers = true)]
     Export(ExportArgs),
     /// Measure speed: `ember bench render` (samples/s of full renders).
     #[cfg(feature = "bench")]
@@ -91,6 +93,7 @@ pub enum ExportFormat {
 pub enum BenchCommand {
     /// Where methods fail: a row per case (delta lights, tiny lights, glossy vs rough, caustics, scale, grazing rays,
     /// adaptive sampling, roulette) with what each method does there. Writes stability.csv, stability.md and a chart.
+    #[command(allow_negative_numbers = true)]
     Stability {
         /// Output folder.
         #[arg(long, default_value = "bench-out/stability")]
@@ -101,17 +104,21 @@ pub enum BenchCommand {
         /// Random seed.
         #[arg(long, default_value_t = 0)]
         seed: u64,
+        /// Worker threads (default: all cores).
+        #[arg(short = 't', value_name = "THREADS")]
+        threads: Option<usize>,
     },
     /// Build time, memory and Mrays/s (camera, incoherent, shadow rays) of every backend this build has,
     /// at each thread count, with the native/Embree ratio. Default scenes: CBbunny, CBspheres_lambertian, a ~1M-triangle displaced sphere.
+    #[command(allow_negative_numbers = true)]
     Accel {
         /// Scenes to measure instead of the defaults.
         scenes: Vec<PathBuf>,
         /// Incoherent and shadow rays per measurement (camera rays are 480x360).
         #[arg(long, default_value_t = 500_000)]
         rays: usize,
-        /// Thread counts to measure.
-        #[arg(long, value_delimiter = ',', default_values_t = [1, 2])]
+        /// Thread counts to measure: `-t 1 2` or `-t 1,2` (scenes go before the options, or after `--`).
+        #[arg(short = 't', long, num_args = 1.., value_delimiter = ',', default_values_t = [1, 2])]
         threads: Vec<usize>,
         /// Each figure is the median of this many runs.
         #[arg(long, default_value_t = 5)]
@@ -132,6 +139,7 @@ pub enum BenchCommand {
     },
     /// Error against render time for each method (direct: hemisphere / light / MIS; GI: roulette, -l, adaptive, backends).
     /// Writes <out>/<scene>_m<M>.csv and error-vs-time charts (PNG and SVG), prints the time each method needs to reach an error.
+    #[command(allow_negative_numbers = true)]
     Converge {
         /// The .dae scene.
         scene: PathBuf,
@@ -165,8 +173,12 @@ pub enum BenchCommand {
         /// Random seed.
         #[arg(long, default_value_t = 0)]
         seed: u64,
+        /// Worker threads (default: all cores).
+        #[arg(short = 't', value_name = "THREADS")]
+        threads: Option<usize>,
     },
     /// Samples per second for CBspheres_lambertian and CBbunny at 480x360, 64 spp, -m 5.
+    #[command(allow_negative_numbers = true)]
     Render {
         /// Scenes to render (default: the two CS184 scenes from ../shared).
         scenes: Vec<PathBuf>,
@@ -178,7 +190,10 @@ pub enum BenchCommand {
         max_depth: u32,
         /// Repetitions per scene (the median is reported).
         #[arg(long, default_value_t = 3)]
-        repeat: u32,
+        repeats: u32,
+        /// Worker threads (default: all cores).
+        #[arg(short = 't', value_name = "THREADS")]
+        threads: Option<usize>,
         /// Backend.
         #[arg(long, value_enum, default_value_t = AccelArg::Native)]
         accel: AccelArg,

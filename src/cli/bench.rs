@@ -9,11 +9,23 @@ use std::path::PathBuf;
 
 /// `ember bench ...`: each benchmark runs, writes its report, prints its summary.
 pub(super) fn run(which: BenchCommand) -> Result<()> {
+    // `-t` of the benchmarks that run on one rayon pool (accel measures its own list).
+    let threads = match &which {
+        BenchCommand::Stability { threads, .. }
+        | BenchCommand::Converge { threads, .. }
+        | BenchCommand::Render { threads, .. } => *threads,
+        BenchCommand::Accel { .. } => None,
+    };
+    super::commands::thread_pool(threads)?.install(|| run_on_pool(which))
+}
+
+fn run_on_pool(which: BenchCommand) -> Result<()> {
     match which {
         BenchCommand::Stability {
             out,
             spp_scale,
             seed,
+            ..
         } => bench_stability(out, spp_scale, seed),
         BenchCommand::Accel {
             scaling: true,
@@ -42,6 +54,7 @@ pub(super) fn run(which: BenchCommand) -> Result<()> {
             target_rmse,
             out,
             seed,
+            ..
         } => {
             check_resolution(resolution[0], resolution[1])?;
             bench_converge(bench::converge::ConvergeOptions {
@@ -64,9 +77,10 @@ pub(super) fn run(which: BenchCommand) -> Result<()> {
             scenes,
             spp,
             max_depth,
-            repeat,
+            repeats,
             accel: a,
             out,
+            ..
         } => bench_render(bench::render::RenderBenchOptions {
             scenes: if scenes.is_empty() {
                 bench::render::RenderBenchOptions::default_scenes()
@@ -75,7 +89,7 @@ pub(super) fn run(which: BenchCommand) -> Result<()> {
             },
             spp,
             max_depth,
-            repeat: repeat.max(1),
+            repeat: repeats.max(1),
             accel: accel_kind(a, BvhArg::Sah, QualityArg::Medium),
             out_dir: out,
         }),

@@ -338,7 +338,7 @@ fn load_scene(path: &Path) -> Result<Scene> {
     Ok(scene)
 }
 
-fn thread_pool(threads: Option<usize>) -> Result<rayon::ThreadPool> {
+pub(super) fn thread_pool(threads: Option<usize>) -> Result<rayon::ThreadPool> {
     // Flush-to-zero on every tracing thread, as Embree recommends; the native BVH
     // gives the same image either way (tested).
     let mut b = rayon::ThreadPoolBuilder::new().start_handler(|_| accel::set_flush_denormals());
