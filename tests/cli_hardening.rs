@@ -195,13 +195,16 @@ fn errors_say_each_cause_once() {
     let out = dir.path().join("out.png");
     assert_said_once(&render(out.clone(), dir.path().join("missing.dae")));
     assert_said_once(&render(out, dir.path().to_path_buf()));
-    assert_said_once(
-        &ember()
-            .arg("info")
-            .arg(dir.path().join("missing.dae"))
-            .output()
-            .unwrap(),
-    );
+    let info = |p: PathBuf| ember().arg("info").arg(p).output().unwrap();
+    assert_said_once(&info(dir.path().join("missing.dae")));
+    assert_said_once(&info(dir.path().join("missing.exr")));
+    let garbage = dir.path().join("garbage.exr");
+    std::fs::write(&garbage, b"not an exr").unwrap();
+    assert_said_once(&info(garbage));
+    assert_said_once(&render(
+        dir.path().join("out.exr"),
+        dir.path().join("garbage.exr"),
+    ));
 }
 
 #[test]
@@ -230,6 +233,9 @@ fn metadata_round_trips_through_info() {
             format!("ember.scene: {}", scene().display()),
             format!("ember.scene.fnv1a64: {hash:016x}"),
             format!("ember.version: {}", env!("CARGO_PKG_VERSION")),
+            "ember.stopped: complete".into(),
+            "ember.samples_per_pixel: mean 3.000, min 3, max 3".into(),
+            "ember.pixels_rendered: 48 of 48".into(),
         ] {
             assert!(
                 text.lines().any(|l| l == line),
@@ -241,6 +247,19 @@ fn metadata_round_trips_through_info() {
             .find(|l| l.starts_with("ember.command_line: "))
             .unwrap();
         assert!(cmd.contains("-s 3 -l 2 -m 4"), "{cmd}");
+        // Build, machine and the estimator auto chose: present and not empty.
+        for key in [
+            "ember.git_hash: ",
+            "ember.cpu: ",
+            "ember.estimator: ",
+            "ember.backend: ",
+        ] {
+            let line = text.lines().find(|l| l.starts_with(key));
+            assert!(
+                line.is_some_and(|l| l.len() > key.len()),
+                "{name}: no {key} in\n{text}"
+            );
+        }
         assert_eq!(ember::image_io::read_image(&out).unwrap().width, 8);
     }
 }
@@ -728,4 +747,27 @@ fn course_flags_ember_lacks_are_named_and_negative_numbers_get_a_value_message()
         .output()
         .unwrap();
     assert!(!stderr(&o).contains("-- -"), "{}", stderr(&o));
+}
+
+#[test]
+fn renders_in_passes_are_deterministic_whatever_the_threads() {
+    let dir = tempfile::tempdir().unwrap();
+    let spheres = shared("scenes/cs184/sky/CBspheres_lambertian.dae");
+    let render = |name: &str, args: &[&str]| {
+        let out = dir.path().join(name);
+        render_ok(
+            &[&["-r", "24", "18", "-m", "3"], args].concat(),
+            &out,
+            &spheres,
+        );
+        ember::image_io::read_image(&out).unwrap()
+    };
+    let a = render("a.exr", &["-t", "1", "-s", "6", "--checkpoint", "1000"]);
+    let b = render("b.exr", &["-t", "2", "-s", "6", "--checkpoint", "1000"]);
+    assert_eq!(a, b);
+    // One pass is the plain render of the same seed.
+    let one = render("one.exr", &["-s", "1", "--checkpoint", "1000"]);
+    let plain = render("plain.exr", &["-s", "1"]);
+    assert_eq!(one, plain);
+    assert_ne!(a, plain);
 }
