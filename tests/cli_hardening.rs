@@ -771,3 +771,23 @@ fn renders_in_passes_are_deterministic_whatever_the_threads() {
     assert_eq!(one, plain);
     assert_ne!(a, plain);
 }
+
+#[cfg(feature = "bench")]
+#[test]
+fn bench_accel_threads_take_a_list_not_a_scene() {
+    // `--threads 1 0`: both are thread counts (0 is refused), none is a scene path.
+    for args in [&["--threads", "1", "0"][..], &["-t", "1,0"]] {
+        let o = ember()
+            .args(["bench", "accel"])
+            .args(args)
+            .output()
+            .unwrap();
+        assert_no_panic(&o);
+        assert_eq!(o.status.code(), Some(1), "{args:?}: {}", stderr(&o));
+        assert!(
+            stderr(&o).contains("--threads: each count"),
+            "{}",
+            stderr(&o)
+        );
+    }
+}
