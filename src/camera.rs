@@ -82,6 +82,53 @@ impl Camera {
     }
 }
 
+/// The pixel that sees a scene point, for estimators that connect to the camera.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct CameraConnection {
+    pub x: u32,
+    pub y: u32,
+    /// Unit direction from the point toward the eye.
+    pub to_eye: Vec3,
+    pub dist: f32,
+    /// `We·cos θ / d² = 1/(A·cos³θ·d²)` (pbrt-v4 `PerspectiveCamera::SampleWi` for a
+    /// pinhole), `A = 4·tan_half_x·tan_half_y` the image plane's area at distance 1;
+    /// with `N` paths per pixel, a pixel is the sum of its `β·f·|cos|·importance` over `N`.
+    pub importance: f32,
+}
+
+impl Camera {
+    /// Projects `p` onto the image: `None` behind the eye or outside the frame.
+    pub fn connect(&self, p: Vec3) -> Option<CameraConnection> {
+        let d = p - self.eye;
+        let dist = d.length();
+        if !(dist > 0.0 && dist.is_finite()) {
+            return None;
+        }
+        let w = d / dist;
+        let cos = w.dot(self.forward);
+        if cos <= 0.0 {
+            return None;
+        }
+        let q = w / cos;
+        let u = 0.5 * (q.dot(self.right) / self.tan_half_x + 1.0);
+        let v = 0.5 * (1.0 - q.dot(self.up) / self.tan_half_y);
+        if !((0.0..1.0).contains(&u) && (0.0..1.0).contains(&v)) {
+            return None;
+        }
+        let x = ((u * self.width as f32) as u32).min(self.width - 1);
+        let y = ((v * self.height as f32) as u32).min(self.height - 1);
+        let area = 4.0 * self.tan_half_x * self.tan_half_y;
+        let importance = 1.0 / (area * cos * cos * cos * dist * dist);
+        importance.is_finite().then_some(CameraConnection {
+            x,
+            y,
+            to_eye: -w,
+            dist,
+            importance,
+        })
+    }
+}
+
 /// The smallest field of view with aspect `a` containing the file's (spec §4).
 pub fn output_fov(tx0: Option<f32>, ty0: Option<f32>, a: f32) -> (f32, f32) {
     match (tx0, ty0) {
@@ -122,5 +169,19 @@ mod tests {
         assert!((r.d - desc.forward).length() < 1e-6);
         // Row 0 is the top: its rays point up.
         assert!(cam.generate_ray(0, 0, Vec2::splat(0.5)).d.dot(desc.up) > 0.0);
+    }
+
+    #[test]
+    fn connect_inverts_generate_ray() {
+        let desc = CameraDesc::default();
+        let b = Aabb::new(Vec3::splat(-1.0), Vec3::splat(1.0));
+        let cam = Camera::new(&desc, &b, 16, 12);
+        for (i, j) in [(0, 0), (15, 11), (7, 3)] {
+            let r = cam.generate_ray(i, j, Vec2::new(0.25, 0.75));
+            let c = cam.connect(r.o + 3.0 * r.d).unwrap();
+            assert_eq!((c.x, c.y), (i, j));
+            assert!((c.dist - 3.0).abs() < 1e-4 && (c.to_eye + r.d).length() < 1e-5);
+        }
+        assert!(cam.connect(cam.eye - desc.forward).is_none());
     }
 }

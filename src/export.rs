@@ -11,6 +11,7 @@
 use crate::camera::Camera;
 use crate::film::Image;
 use crate::image_io::{write_image, ImageIoError};
+use crate::integrators::Roulette;
 use crate::lights::Light;
 use crate::materials::Material;
 use crate::scene::{Scene, NO_LIGHT};
@@ -30,6 +31,22 @@ pub struct MitsubaSettings {
     /// The bounce from which ember's default roulette runs; Mitsuba's `rr_depth`.
     /// `None` turns roulette off (Mitsuba: `rr_depth` past `max_depth`).
     pub roulette_start: Option<u32>,
+}
+
+impl MitsubaSettings {
+    /// The settings that make Mitsuba render what ember renders with `-s spp -m max_depth`
+    /// and roulette policy `roulette`.
+    pub fn for_ember(spp: u32, max_depth: u32, roulette: &Roulette) -> Self {
+        let roulette_start = match *roulette {
+            Roulette::Throughput { start, .. } | Roulette::Fixed { start, .. } => Some(start),
+            Roulette::Off => None,
+        };
+        MitsubaSettings {
+            spp,
+            max_depth,
+            roulette_start,
+        }
+    }
 }
 
 /// What an export wrote, and what Mitsuba cannot express exactly.

@@ -2,7 +2,9 @@
 //! headers as string attributes and into PNG files as text chunks, read back by
 //! `ember info IMAGE`. Shard headers and merges reuse the same list.
 
+use crate::integrators::Estimator;
 use crate::render::{RenderJob, RenderSettings, StopReason};
+use crate::scene::Scene;
 use std::path::Path;
 
 /// Ordered key/value strings describing how an image was made.
@@ -45,13 +47,10 @@ impl ImageMetadata {
         m.push("ember.light_samples", s.light_samples);
         m.push("ember.max_depth", s.max_depth);
         m.push("ember.accumulate", s.accumulate);
-        m.push(
-            "ember.estimator",
-            format!("{:?}", s.strategy_for(&job.scene)),
-        );
+        m.push("ember.estimator", estimator_label(s, &job.scene));
         m.push("ember.roulette", format!("{:?}", s.roulette));
         m.push("ember.adaptive", format!("{:?}", s.adaptive));
-        m.push("ember.shading", format!("{:?}", s.shading));
+        m.push("ember.shading", s.shading);
         m.push("ember.seed", s.seed);
         m.push("ember.backend", job.accel.name());
         m.push("ember.render_seconds", format!("{render_seconds:.3}"));
@@ -113,6 +112,15 @@ impl ImageMetadata {
             .iter()
             .map(|(k, v)| format!("{k}: {v}\n"))
             .collect()
+    }
+}
+
+/// What `--integrator` (perhaps auto) chose for `scene`: light tracing, or path
+/// tracing with its direct-lighting strategy.
+pub fn estimator_label(s: &RenderSettings, scene: &Scene) -> String {
+    match s.estimator_for(scene) {
+        Estimator::LightTracing => Estimator::LightTracing.to_string(),
+        e => format!("{e} ({})", s.strategy_for(scene)),
     }
 }
 

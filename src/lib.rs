@@ -4,6 +4,7 @@
 //! Scene semantics follow `shared/docs/scene-semantics.md`.
 
 pub mod accel;
+pub mod adaptive;
 #[cfg(feature = "bench")]
 pub mod bench;
 pub mod camera;
@@ -17,6 +18,7 @@ pub mod info;
 pub mod integrators;
 pub mod lights;
 pub mod materials;
+pub mod names;
 pub mod output;
 pub mod render;
 pub mod sampling;

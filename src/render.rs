@@ -13,7 +13,10 @@ pub use stop::{StopReason, StopToken};
 
 use crate::color::{is_finite, luminance};
 use crate::film::{heat_map, Image};
-use crate::integrators::{debug, DirectStrategy, PathIntegrator, PathSettings, Roulette};
+use crate::integrators::{
+    debug, light_tracing, DirectStrategy, Estimator, PathIntegrator, PathSettings, Roulette,
+};
+use crate::names::{display_from_table, Named};
 use crate::sampling::Sampler;
 use crate::scene::Scene;
 use crate::Color;
@@ -33,14 +36,44 @@ pub enum Shading {
     BvhCost,
 }
 
+impl Named for Shading {
+    const WHAT: &'static str = "shading";
+    const TABLE: &'static [(Self, &'static str, &'static str)] = &[
+        (Shading::Radiance, "radiance", "The physically based image"),
+        (
+            Shading::Normals,
+            "normals",
+            "0.5·n + 0.5 of the shading normal (course parts 1-2)",
+        ),
+        (
+            Shading::BvhCost,
+            "bvh-cost",
+            "Heat map of BVH nodes + primitives tested per camera ray",
+        ),
+    ];
+}
+display_from_table!(Shading);
+
 /// Adaptive sampling (spec §7): stop a pixel once `1.96·σ/√n ≤ tol·μ`.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Adaptive {
     pub batch: u32,
     pub tol: f32,
-    /// A pixel whose samples so far are all equal (σ = 0) keeps sampling until it
-    /// has this many: one batch of zeros says little about a small light.
+    /// A pixel whose samples so far are all equal (σ = 0) keeps sampling until it has
+    /// this many (`StopRule::Neighbourhood`: non-zero constants only).
     pub min_samples_if_constant: u32,
+    pub rule: StopRule,
+}
+
+/// When a pixel whose samples are all equal may stop.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum StopRule {
+    /// The course's rule on the pixel's own samples, after `min_samples_if_constant`.
+    /// Biased where light is rare (stability case 7); kept for comparison.
+    PerPixel,
+    /// `crate::adaptive` (default): a pixel of zeros only when its whole neighbourhood
+    /// looked constant too; a constant non-zero pixel after `min_samples_if_constant`.
+    Neighbourhood,
 }
 
 impl Adaptive {
@@ -49,6 +82,7 @@ impl Adaptive {
             batch: batch.max(1),
             tol,
             min_samples_if_constant: 4 * batch.max(1),
+            rule: StopRule::Neighbourhood,
         }
     }
 }
@@ -60,8 +94,11 @@ pub struct RenderSettings {
     pub light_samples: u32,
     pub max_depth: u32,
     pub accumulate: bool,
-    /// Direct-lighting estimator; `None` chooses one for the scene (`DirectStrategy::auto_for`)
-    /// where the integrator is built.
+    /// Camera paths (with `strategy`) or light tracing; `None` chooses for the scene
+    /// (`Estimator::auto_for`).
+    pub estimator: Option<Estimator>,
+    /// Direct-lighting estimator of camera paths; `None` chooses one for the scene
+    /// (`DirectStrategy::auto_for`) where the integrator is built.
     pub strategy: Option<DirectStrategy>,
     pub roulette: Roulette,
     pub adaptive: Option<Adaptive>,
@@ -70,7 +107,12 @@ pub struct RenderSettings {
 }
 
 impl RenderSettings {
-    /// The estimator these settings use for `scene`.
+    /// Which way these settings build paths in `scene`.
+    pub fn estimator_for(&self, scene: &Scene) -> Estimator {
+        self.estimator.unwrap_or_else(|| Estimator::auto_for(scene))
+    }
+
+    /// The direct-lighting estimator these settings use for `scene`.
     pub fn strategy_for(&self, scene: &Scene) -> DirectStrategy {
         self.strategy
             .unwrap_or_else(|| DirectStrategy::auto_for(scene))
@@ -94,6 +136,7 @@ impl Default for RenderSettings {
             light_samples: 1,
             max_depth: 1,
             accumulate: true,
+            estimator: Some(Estimator::Path),
             strategy: Some(DirectStrategy::Light),
             roulette: Roulette::default(),
             adaptive: None,
@@ -204,6 +247,17 @@ fn render_rect(
     progress: &(dyn Fn(u64) + Sync),
     stop: &StopToken,
 ) -> RenderOutput {
+    if settings.shading == Shading::Radiance {
+        if settings.estimator_for(&job.scene) == Estimator::LightTracing {
+            return light_tracing::render(job, settings, rect, progress, stop);
+        }
+        if let Some(a) = settings
+            .adaptive
+            .filter(|a| a.rule == StopRule::Neighbourhood)
+        {
+            return crate::adaptive::render(job, settings, a, rect, progress, stop);
+        }
+    }
     let tiles = tiles(rect);
     let integrator = PathIntegrator::new(
         &job.scene,
@@ -253,12 +307,13 @@ fn render_pixel(
     y: u32,
 ) -> PixelResult {
     let (camera, scene, accel) = (&job.camera, &job.scene, job.accel.as_ref());
-    let mut sampler = Sampler::new(s.seed, (y as u64) * (camera.width as u64) + x as u64, 0);
+    let pixel = (y as u64) * (camera.width as u64) + x as u64;
     let (mut sum, mut s1, mut s2) = (Color::ZERO, 0f64, 0f64);
     let (mut n, mut nonfinite) = (0u32, 0u32);
     let batch = s.adaptive.map_or(s.spp.max(1), |a| a.batch);
     while n < s.spp.max(1) {
         for _ in 0..batch.min(s.spp.max(1) - n) {
+            let mut sampler = Sampler::for_sample(s.seed, pixel, n as u64);
             let ray = camera.generate_ray(x, y, sampler.next_2d());
             let mut v = match s.shading {
                 Shading::Radiance => integrator.li(ray, &mut sampler),
@@ -334,8 +389,14 @@ fn percentile(v: &[f32], q: f32) -> f32 {
 
 /// Cases where the chosen estimator cannot converge to the right image, said out loud.
 fn render_warnings(scene: &Scene, s: &RenderSettings) -> Vec<String> {
-    let mut w = Vec::new();
+    let light_tracing = s.estimator_for(scene) == Estimator::LightTracing;
+    let mut w = if light_tracing {
+        light_tracing::warnings(scene, s)
+    } else {
+        Vec::new()
+    };
     let blind = match s.strategy_for(scene) {
+        _ if light_tracing => None,
         DirectStrategy::Hemisphere => Some("hemisphere sampling (-H)"),
         DirectStrategy::Bsdf => Some("BSDF sampling alone"),
         DirectStrategy::Light | DirectStrategy::Mis => None,

@@ -5,13 +5,26 @@ use rand_core::{RngCore, SeedableRng};
 use rand_pcg::Pcg32;
 use std::f32::consts::{FRAC_1_PI, PI};
 
-/// Per-pixel random stream. Seeded from (render seed, pixel, pass) only, so an image
-/// is the same whatever the thread count or tile order.
+/// A random stream. Seeded from (render seed, pixel, pass) or (render seed, pixel,
+/// sample index) only, so an image is the same whatever the thread count or tile order.
 pub struct Sampler {
     rng: Pcg32,
 }
 
 impl Sampler {
+    /// The stream of sample `sample` of pixel `pixel` (row-major index in the full image).
+    /// Counter-based: the PCG32 state and stream are a SplitMix64 hash of
+    /// (seed, pixel, sample), so sample `S` is the same whether a render takes samples
+    /// `0..N` or only `S..S+M` (`--spp-offset`), and shards of samples merge into the
+    /// render of all of them.
+    pub fn for_sample(seed: u64, pixel: u64, sample: u64) -> Self {
+        let key = splitmix64(splitmix64(splitmix64(seed) ^ pixel) ^ sample);
+        let stream = splitmix64(key ^ 0xD1B5_4A32_D192_ED03);
+        Sampler {
+            rng: Pcg32::new(key, stream),
+        }
+    }
+
     pub fn new(seed: u64, pixel: u64, pass: u64) -> Self {
         let state = splitmix64(seed ^ splitmix64(pixel.wrapping_add(0x9E37_79B9_7F4A_7C15)));
         let stream = splitmix64(pass ^ 0xD1B5_4A32_D192_ED03).wrapping_add(pixel);

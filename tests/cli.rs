@@ -146,3 +146,42 @@ fn embree_request_without_feature_says_how_to_get_it() {
     assert!(!st.status.success());
     assert!(String::from_utf8_lossy(&st.stderr).contains("rebuild with --features embree"));
 }
+
+#[test]
+fn light_tracing_from_the_command_line_and_its_warning_on_glass() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("lt.exr");
+    let run = |scene: &str| {
+        ember()
+            .args([
+                "--integrator",
+                "light-tracing",
+                "-s",
+                "2",
+                "-m",
+                "3",
+                "-r",
+                "32",
+                "24",
+                "-q",
+                "-f",
+            ])
+            .arg(&out)
+            .arg(shared(scene))
+            .output()
+            .unwrap()
+    };
+    let st = run("scenes/cs184/sky/CBempty.dae");
+    assert!(
+        st.status.success(),
+        "{}",
+        String::from_utf8_lossy(&st.stderr)
+    );
+    assert!(String::from_utf8_lossy(&st.stderr).is_empty());
+    let img = ember::image_io::read_image(&out).unwrap();
+    assert!(img.all_finite() && img.mean_luminance() > 0.0);
+    // Mirrors and glass cannot be connected to a pinhole: ember says so.
+    let st = run("scenes/cs184/sky/CBspheres.dae");
+    assert!(st.status.success());
+    assert!(String::from_utf8_lossy(&st.stderr).contains("mirror or glass"));
+}

@@ -308,12 +308,16 @@ fn send_sigint(child: &std::process::Child) {
 
 /// A render that would take many minutes, started in the background.
 fn long_render(out: &std::path::Path, extra: &[&str]) -> std::process::Child {
+    long_render_of("CBspheres_lambertian.dae", out, extra)
+}
+
+fn long_render_of(scene: &str, out: &std::path::Path, extra: &[&str]) -> std::process::Child {
     ember()
         .args(["-t", "1", "-s", "100000", "-m", "5", "-r", "64", "48"])
         .args(extra)
         .arg("-f")
         .arg(out)
-        .arg(shared("scenes/cs184/sky/CBspheres_lambertian.dae"))
+        .arg(shared("scenes/cs184/sky").join(scene))
         .stdout(Stdio::null())
         .stderr(Stdio::piped())
         .spawn()
@@ -322,10 +326,17 @@ fn long_render(out: &std::path::Path, extra: &[&str]) -> std::process::Child {
 
 #[test]
 fn sigint_writes_what_was_rendered_and_no_partial_file() {
-    for (name, extra) in [("i.png", &[][..]), ("i.exr", &["--checkpoint", "1000"][..])] {
+    // Plain, in passes, adaptive, and light tracing (auto's choice for CBempty).
+    let lambertian = "CBspheres_lambertian.dae";
+    for (scene, name, extra) in [
+        (lambertian, "i.png", &[][..]),
+        (lambertian, "i.exr", &["--checkpoint", "1000"][..]),
+        (lambertian, "a.exr", &["-a", "64", "0.00001"][..]),
+        ("CBempty.dae", "l.exr", &[][..]),
+    ] {
         let dir = tempfile::tempdir().unwrap();
         let out = dir.path().join(name);
-        let child = long_render(&out, extra);
+        let child = long_render_of(scene, &out, extra);
         // The output's temporary is claimed just before the handler is installed;
         // give the render a moment to start after that.
         wait_for(|| !leftovers(dir.path(), &[]).is_empty());
@@ -339,7 +350,8 @@ fn sigint_writes_what_was_rendered_and_no_partial_file() {
             err.contains("interrupted: wrote what was rendered so far"),
             "{err}"
         );
-        assert_eq!(leftovers(dir.path(), &[name]), Vec::<String>::new());
+        let rate = name.replace('.', "_rate.");
+        assert_eq!(leftovers(dir.path(), &[name, &rate]), Vec::<String>::new());
         let img = ember::image_io::read_image(&out).unwrap();
         assert_eq!((img.width, img.height), (64, 48));
         let meta = ember::image_io::read_metadata(&out).unwrap();

@@ -39,25 +39,25 @@ const CASES: &[Case] = &[
         scene: "scenes/cs184/sky/CBspheres_lambertian.dae",
         max_depth: 1,
         strategy: DirectStrategy::Light,
-        expected: 0x59fc_ea9b_7a8e_7487,
+        expected: 0xb3de_556d_abc6_487b,
     },
     Case {
         scene: "scenes/cs184/sky/CBspheres_lambertian.dae",
         max_depth: 5,
         strategy: DirectStrategy::Mis,
-        expected: 0x3574_5f23_5995_10e4,
+        expected: 0x90aa_96fd_41f1_cd27,
     },
     Case {
         scene: "scenes/cs184/sky/CBspheres.dae",
         max_depth: 5,
         strategy: DirectStrategy::Light,
-        expected: 0xaf02_96d4_629a_81cc,
+        expected: 0x4269_1c2e_2c8c_ff72,
     },
     Case {
         scene: "scenes/cs184/sky/CBbunny_microfacet_cu.dae",
         max_depth: 5,
         strategy: DirectStrategy::Mis,
-        expected: 0x3631_4f11_bbf2_7bcf,
+        expected: 0xead6_21b0_a9f4_0436,
     },
 ];
 

@@ -8,7 +8,7 @@ use common::{load, render_halves, shared};
 use ember::accel::{AccelKind, BvhBuilder};
 use ember::film::Image;
 use ember::image_io::read_image;
-use ember::integrators::{DirectStrategy, Roulette};
+use ember::integrators::{DirectStrategy, Estimator, Roulette};
 use ember::render::RenderSettings;
 
 struct Reference {
@@ -118,9 +118,21 @@ impl Masked for common::HalfRenders {
 
 /// Renders `scene` at 160×120 with max depth `m` and checks it against `file`.
 fn check(scene_rel: &str, file: &str, m: u32, spp: u32, mean_of: MeanOf) {
+    check_with(scene_rel, file, m, spp, mean_of, Estimator::Path);
+}
+
+fn check_with(
+    scene_rel: &str,
+    file: &str,
+    m: u32,
+    spp: u32,
+    mean_of: MeanOf,
+    estimator: Estimator,
+) {
     let r = reference(file);
     let scene = load(scene_rel);
     let settings = RenderSettings {
+        estimator: Some(estimator),
         spp,
         max_depth: m,
         strategy: Some(if m > 1 {
@@ -268,6 +280,93 @@ fn cbspheres_glass_mirror_m8() {
         8,
         128,
         MeanOf::All,
+    );
+}
+
+/// Light tracing (`--integrator light-tracing`) against the same references. It cannot
+/// show specular surfaces to a pinhole camera, so CBspheres (mirror, glass) is not here.
+#[test]
+fn light_tracing_cbspheres_lambertian_m1_and_m5() {
+    for (m, file) in [
+        (1, "CBspheres_lambertian_m1.exr"),
+        (5, "CBspheres_lambertian_m5.exr"),
+    ] {
+        check_with(
+            "scenes/cs184/sky/CBspheres_lambertian.dae",
+            file,
+            m,
+            64,
+            MeanOf::All,
+            Estimator::LightTracing,
+        );
+    }
+}
+
+#[test]
+fn light_tracing_cbbunny_m5() {
+    check_with(
+        "scenes/cs184/sky/CBbunny.dae",
+        "CBbunny_m5.exr",
+        5,
+        64,
+        MeanOf::All,
+        Estimator::LightTracing,
+    );
+}
+
+/// Light tracing estimates CBempty's hot spot as well as the rest: no clamping or mask.
+#[test]
+fn light_tracing_cbempty_m1_and_m5_unmasked() {
+    for (m, file) in [(1, "CBempty_m1.exr"), (5, "CBempty_m5.exr")] {
+        check_with(
+            "scenes/cs184/sky/CBempty.dae",
+            file,
+            m,
+            32,
+            MeanOf::All,
+            Estimator::LightTracing,
+        );
+    }
+}
+
+/// The per-pixel test: 16 renders at 32 spp with independent seeds, a Welch t per
+/// pixel and channel against the reference and its noise (Šidák, 1 % family-wise); at
+/// least 99.75 % of pixels pass with the estimator `--integrator auto` picks for CBempty.
+/// The Welch test is case 9's (`ember::bench`, feature `bench`).
+#[cfg(feature = "bench")]
+#[test]
+fn cbempty_m5_per_pixel_with_the_default_estimator() {
+    use ember::bench::stability::light_paths::{reference as noisy_reference, welch_pixel_test};
+    let scene = load("scenes/cs184/sky/CBempty.dae");
+    let estimator = Estimator::auto_for(&scene);
+    assert_eq!(estimator, Estimator::LightTracing);
+    let (reference, noise) = noisy_reference(&shared(""), "CBempty_m5.exr").unwrap();
+    let renders: Vec<Image> = (0..16)
+        .map(|k| {
+            let s = RenderSettings {
+                spp: 32,
+                max_depth: 5,
+                estimator: None,
+                strategy: None,
+                seed: 500 + k,
+                ..Default::default()
+            };
+            let out = common::render_scene(&scene, (160, 120), &s);
+            assert_eq!(out.nonfinite_samples, 0);
+            out.image
+        })
+        .collect();
+    let t = welch_pixel_test(&renders, &reference, noise);
+    eprintln!(
+        "CBempty_m5 per pixel: {:.3}% pass ({} high, {} low)",
+        100.0 * t.pass_rate,
+        t.fail_high,
+        t.fail_low
+    );
+    assert!(
+        t.pass_rate >= 0.9975,
+        "{:.3}% of pixels pass",
+        100.0 * t.pass_rate
     );
 }
 

@@ -8,7 +8,8 @@
 //! than 1e-5 per comparison for near-Gaussian means; the seeds are fixed.
 
 use ember::bench::stability::measure::z_score;
-use ember::bench::stability::{glass, lights, robust, sampling, Budget};
+use ember::bench::stability::{glass, light_paths, lights, robust, sampling, Budget};
+use ember::integrators::DirectStrategy;
 
 const SEED: u64 = 20240611;
 const Z_MAX: f64 = 4.5;
@@ -27,8 +28,8 @@ fn case1_point_light_is_invisible_to_hemisphere_and_bsdf_sampling() {
     let c = lights::point_light(&budget(48, 36, 16)).unwrap();
     for r in &c.runs {
         assert_eq!(r.nonfinite, 0, "{}", r.name);
-        match r.name {
-            "hemisphere" | "BSDF" => {
+        match r.strategy {
+            DirectStrategy::Hemisphere | DirectStrategy::Bsdf => {
                 // Nothing in the scene emits toward a ray: the image is exactly black, and ember says why.
                 assert_eq!(r.max_pixel, 0.0, "{}: a delta light cannot be hit", r.name);
                 assert!(
@@ -58,7 +59,7 @@ fn case1_point_light_is_invisible_to_hemisphere_and_bsdf_sampling() {
 #[test]
 fn case2_small_light_hemisphere_noise_explodes_but_means_agree() {
     let c = lights::small_light(&budget(40, 30, 256), 1.0).unwrap();
-    let light = c.run("light");
+    let light = c.run(DirectStrategy::Light);
     for r in &c.runs {
         assert_eq!(r.nonfinite, 0, "{}", r.name);
         assert!(
@@ -82,13 +83,13 @@ fn case2_small_light_hemisphere_noise_explodes_but_means_agree() {
     // Hemisphere noise / light noise ≥ √(2π/Ω − 1) (see `predicted_min_ratio`); half of
     // it leaves room for the noise of the noise estimate (≈ 1/√hits ≈ 10% here).
     let bound = 0.5 * c.predicted_min_ratio();
-    let ratio = c.run("hemisphere").noise / light.noise;
+    let ratio = c.run(DirectStrategy::Hemisphere).noise / light.noise;
     assert!(
         ratio >= bound,
         "noise ratio hemisphere/light {ratio:.1} < {bound:.1}"
     );
     assert!(
-        c.run("MIS").noise <= 1.1 * light.noise,
+        c.run(DirectStrategy::Mis).noise <= 1.1 * light.noise,
         "MIS is not as good as light sampling on a small light"
     );
 }
@@ -96,11 +97,19 @@ fn case2_small_light_hemisphere_noise_explodes_but_means_agree() {
 #[test]
 fn case3_mis_is_never_much_worse_than_the_better_strategy() {
     for (scene, noisy, good) in [
-        (lights::GLOSSY_SCENES[0], "light", "BSDF"),
-        (lights::GLOSSY_SCENES[1], "BSDF", "light"),
+        (
+            lights::GLOSSY_SCENES[0],
+            DirectStrategy::Light,
+            DirectStrategy::Bsdf,
+        ),
+        (
+            lights::GLOSSY_SCENES[1],
+            DirectStrategy::Bsdf,
+            DirectStrategy::Light,
+        ),
     ] {
         let c = lights::glossy(&budget(40, 30, 128), scene).unwrap();
-        let mis = c.run("MIS");
+        let mis = c.run(DirectStrategy::Mis);
         for r in &c.runs {
             assert_eq!(r.nonfinite, 0, "{scene} {}", r.name);
             let z = z_score((r.mean, r.se), (mis.mean, mis.se));
@@ -289,4 +298,77 @@ fn case8_russian_roulette_with_low_probability_stays_unbiased() {
         q05.noise,
         off.noise
     );
+}
+
+#[test]
+fn case9_cbempty_point_light_needs_light_tracing() {
+    let shared = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../shared");
+    let c = light_paths::cbempty(&budget(160, 120, 32), &shared).unwrap();
+    for r in &c.runs {
+        eprintln!(
+            "{}: {:.3}% pass ({} high, {} low), mean {} ± {} vs {}, {:.1} s",
+            r.name,
+            100.0 * r.pass_rate,
+            r.fail_high,
+            r.fail_low,
+            r.mean,
+            r.se,
+            r.reference_mean,
+            r.seconds
+        );
+        assert_eq!(r.nonfinite, 0, "{}", r.name);
+    }
+    let lt = c.run("light tracing");
+    assert!(
+        lt.pass_rate >= 0.9975,
+        "light tracing: {:.3}%",
+        100.0 * lt.pass_rate
+    );
+    // The image mean agrees with the reference (4.5 s.e. of the 16 renders' mean, plus
+    // 0.5% for the reference's own pixel noise and edge differences).
+    assert!(
+        (lt.mean - lt.reference_mean).abs() <= Z_MAX * lt.se + 0.005 * lt.reference_mean,
+        "light tracing mean {} ± {} vs {}",
+        lt.mean,
+        lt.se,
+        lt.reference_mean
+    );
+    // Path tracing is the failure this case documents: most pixels miss the ceiling spot.
+    let pt = c.run("path tracing (MIS)");
+    assert!(
+        pt.pass_rate < 0.97,
+        "path tracing: {:.3}%",
+        100.0 * pt.pass_rate
+    );
+}
+
+#[test]
+fn case7_default_rule_is_unbiased_within_the_same_cap() {
+    // 160×120 at a cap of 512 so that the lit pixels' mean has a standard error of ~0.4%.
+    let c = sampling::adaptive(&budget(160, 120, 512)).unwrap();
+    let (rm, rse) = c.reference;
+    let (n, g) = (&c.neighbourhood, &c.guarded);
+    // The default rule's own noise: lit pixels that did not stop are fixed-spp estimates.
+    let lit = c.lit_pixels.len() as f64;
+    eprintln!(
+        "reference {rm} ± {rse} over {lit} px; default {} ({:.1} spp); guard {} ({:.1} spp); none {} ({:.1} spp)",
+        n.mean, n.mean_samples, g.mean, g.mean_samples, c.unguarded.mean, c.unguarded.mean_samples
+    );
+    eprintln!(
+        "default rule: {} lit pixels stopped at 0 after the pilot batch; bias {:+.3}% ± {:.3}%",
+        n.stopped_at_zero_after_one_batch,
+        100.0 * (n.mean / rm - 1.0),
+        100.0 * (rse.powi(2) + n.se.powi(2)).sqrt() / rm
+    );
+    assert!(n.output.samples.iter().all(|&s| s <= 512));
+    let se = (rse.powi(2) + n.se.powi(2)).sqrt();
+    let bias = n.mean / rm - 1.0;
+    assert!(
+        bias.abs() < 0.01 && (n.mean - rm).abs() <= Z_MAX * se,
+        "default rule bias {:+.2}% (s.e. {:.2}%)",
+        100.0 * bias,
+        100.0 * se / rm
+    );
+    // The old rule's bias is far outside that (the failure this case documents).
+    assert!(g.mean < rm - Z_MAX * se, "guard {} vs {rm}", g.mean);
 }

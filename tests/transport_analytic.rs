@@ -4,7 +4,7 @@
 use ember::accel::{self, AccelKind, BvhBuilder};
 use ember::camera::Camera;
 use ember::geometry::{Aabb, Ray};
-use ember::integrators::{DirectStrategy, PathIntegrator, PathSettings, Roulette};
+use ember::integrators::{DirectStrategy, Estimator, PathIntegrator, PathSettings, Roulette};
 use ember::lights::{AreaLight, Light};
 use ember::materials::Material;
 use ember::render::{RenderJob, RenderSettings};
@@ -353,6 +353,15 @@ fn tilted_shading_normals_do_not_leak_light() {
                 ..Default::default()
             };
             let out = job.render(&s);
+            let lt = RenderSettings {
+                estimator: Some(Estimator::LightTracing),
+                ..s.clone()
+            };
+            let out_lt = job.render(&lt);
+            assert!(
+                out_lt.image.pixels.iter().all(|p| *p == Color::ZERO),
+                "light tracing -m {m}: light leaked through the floor"
+            );
             let max = out
                 .image
                 .pixels
@@ -365,4 +374,111 @@ fn tilted_shading_normals_do_not_leak_light() {
             );
         }
     }
+}
+
+/// A closed Lambertian sphere (radius 1, albedo `a`) with a point light of intensity 1
+/// at its centre, seen from inside: direct irradiance is 1/r² everywhere, and a sphere
+/// of uniform radiance L gives every wall point irradiance πL, so the `k`-bounce
+/// radiance is `aᵏ/π` at every wall point.
+fn point_furnace(a: f32) -> (Scene, Camera) {
+    let (mut scene, cam) = furnace(a, 0.0);
+    scene.surface_emission.clear();
+    scene.lights = vec![Light::Point {
+        position: Vec3::ZERO,
+        intensity: Color::ONE,
+    }];
+    (scene, cam)
+}
+
+#[test]
+fn light_tracing_furnace_with_a_point_light_at_the_centre() {
+    for (a, m, acc) in [
+        (0.5, 1, true),
+        (0.8, 5, true),
+        (0.8, 3, false),
+        (0.9, 12, true),
+    ] {
+        let (scene, cam) = point_furnace(a);
+        let job = RenderJob::with_camera(scene, AccelKind::Native(BvhBuilder::Sah), cam).unwrap();
+        let want: f64 = (1..=m)
+            .filter(|&k| acc || k == m)
+            .map(|k| (a as f64).powi(k as i32) / std::f64::consts::PI)
+            .sum();
+        for estimator in [Estimator::Path, Estimator::LightTracing] {
+            let s = RenderSettings {
+                spp: 256,
+                max_depth: m,
+                accumulate: acc,
+                estimator: Some(estimator),
+                strategy: Some(DirectStrategy::Light),
+                roulette: Roulette::Off,
+                seed: 3,
+                ..Default::default()
+            };
+            let out = job.render(&s);
+            assert_eq!(out.nonfinite_samples, 0);
+            let vals: Vec<f64> = out.image.pixels.iter().map(|p| p.y as f64).collect();
+            let n = vals.len() as f64;
+            let mean = vals.iter().sum::<f64>() / n;
+            let se = (vals.iter().map(|v| (v - mean).powi(2)).sum::<f64>() / (n - 1.0) / n).sqrt();
+            // Path tracing is exact here (delta light, cosine-sampled Lambertian weight a).
+            assert!(
+                (mean - want).abs() <= 4.5 * se + 1e-4 * want,
+                "{estimator:?} a={a} m={m} acc={acc}: {mean} ± {se} vs {want}"
+            );
+        }
+    }
+}
+
+#[test]
+fn light_tracing_matches_the_area_light_closed_form() {
+    let (albedo, le) = (0.8f32, 4.0f32);
+    let (scene, quad) = lit_floor(albedo, le);
+    let accel = accel::build(&scene, AccelKind::Native(BvhBuilder::Sah)).unwrap();
+    let (w, h) = (24u32, 24u32);
+    let mut cam = Camera::new(&scene.camera, &scene.bounds, w, h);
+    cam.eye = Vec3::new(0.3, 3.0, 0.1);
+    cam.forward = Vec3::NEG_Y;
+    cam.up = Vec3::Z;
+    cam.right = cam.forward.cross(cam.up);
+    // The closed form at 4×4 points per pixel; points where the eye sees the light's
+    // black back instead of the floor count as 0.
+    let mut want = vec![0f64; (w * h) as usize];
+    for y in 0..h {
+        for x in 0..w {
+            let mut s = 0.0;
+            for k in 0..16 {
+                let xi =
+                    ember::Vec2::new((k % 4) as f32 / 4.0 + 0.125, (k / 4) as f32 / 4.0 + 0.125);
+                let r = cam.generate_ray(x, y, xi);
+                let hit = accel.intersect(&r).map(|hh| scene.interaction(&r, &hh));
+                if let Some(si) = hit.filter(|si| si.material == 0) {
+                    let e = polygon_irradiance(si.p, Vec3::Y, &quad, le);
+                    s += (albedo / std::f32::consts::PI * e) as f64;
+                }
+            }
+            want[(y * w + x) as usize] = s / 16.0;
+        }
+    }
+    let s = RenderSettings {
+        spp: 512,
+        max_depth: 1,
+        estimator: Some(Estimator::LightTracing),
+        roulette: Roulette::Off,
+        seed: 5,
+        ..Default::default()
+    };
+    let job = RenderJob::with_camera(scene, AccelKind::Native(BvhBuilder::Sah), cam).unwrap();
+    let out = job.render(&s);
+    assert_eq!(out.nonfinite_samples, 0);
+    let got: Vec<f64> = out.image.pixels.iter().map(|p| p.y as f64).collect();
+    let n = got.len() as f64;
+    let (mg, mw) = (got.iter().sum::<f64>() / n, want.iter().sum::<f64>() / n);
+    let d: Vec<f64> = got.iter().zip(&want).map(|(g, w)| g - w).collect();
+    let md = d.iter().sum::<f64>() / n;
+    let se = (d.iter().map(|v| (v - md).powi(2)).sum::<f64>() / (n - 1.0) / n).sqrt();
+    assert!(
+        (mg - mw).abs() <= 4.5 * se + 2e-3 * mw,
+        "light tracing {mg} vs closed form {mw} (se {se})"
+    );
 }

@@ -5,7 +5,7 @@ mod common;
 
 use common::{load, render_halves, render_scene, shared};
 use ember::accel::{AccelKind, BvhBuilder};
-use ember::integrators::DirectStrategy;
+use ember::integrators::{DirectStrategy, Estimator};
 use ember::render::{Adaptive, RenderSettings, Shading};
 use std::path::Path;
 
@@ -113,6 +113,14 @@ fn renders_are_identical_for_one_and_two_threads() {
             shading: Shading::Normals,
             ..Default::default()
         },
+        // Light tracing splats across pixels from parallel chunks: still identical.
+        RenderSettings {
+            spp: 8,
+            max_depth: 5,
+            estimator: Some(Estimator::LightTracing),
+            seed: 11,
+            ..Default::default()
+        },
     ] {
         assert_eq!(render_threads(1, &s, &scene), render_threads(2, &s, &scene));
     }
@@ -170,4 +178,45 @@ fn flush_to_zero_does_not_change_native_images() {
     let a = plain.install(|| render_scene(&scene, (40, 30), &s).image);
     let b = ftz.install(|| render_scene(&scene, (40, 30), &s).image);
     assert_eq!(a, b);
+}
+
+/// Light tracing splats anywhere and the adaptive rule looks at neighbours: a rectangle
+/// of pixels (`render_rect`, as shards use) must still be exactly the crop of the image.
+#[test]
+fn a_pixel_rectangle_is_the_crop_of_the_full_image() {
+    use ember::render::PixelRect;
+    let scene = load("scenes/cs184/sky/CBspheres_lambertian.dae");
+    let job = common::job(&scene, 40, 30, AccelKind::Native(BvhBuilder::Sah));
+    let rect = PixelRect {
+        x0: 7,
+        y0: 3,
+        x1: 29,
+        y1: 17,
+    };
+    for s in [
+        RenderSettings {
+            spp: 4,
+            max_depth: 3,
+            estimator: Some(Estimator::LightTracing),
+            seed: 4,
+            ..Default::default()
+        },
+        RenderSettings {
+            spp: 32,
+            max_depth: 2,
+            adaptive: Some(Adaptive::new(4, 0.05)),
+            seed: 6,
+            ..Default::default()
+        },
+    ] {
+        let full = job.render(&s);
+        let part = job.render_rect(&s, rect, &|_| {});
+        for y in rect.y0..rect.y1 {
+            for x in rect.x0..rect.x1 {
+                let i = ((y - rect.y0) * rect.width() + (x - rect.x0)) as usize;
+                assert_eq!(part.image.pixels[i], full.image.get(x, y), "{x},{y}");
+                assert_eq!(part.samples[i], full.samples[(y * 40 + x) as usize]);
+            }
+        }
+    }
 }

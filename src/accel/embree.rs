@@ -383,11 +383,7 @@ impl Accel for EmbreeAccel {
     }
 
     fn name(&self) -> String {
-        let q = match self.mode.quality {
-            EmbreeQuality::Low => "low",
-            EmbreeQuality::Medium => "medium",
-            EmbreeQuality::High => "high",
-        };
+        let q = self.mode.quality;
         let fast = if self.mode.robust { "" } else { ", fast" };
         format!("{} ({q} quality{fast})", self.device.info())
     }

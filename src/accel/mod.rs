@@ -11,6 +11,7 @@ pub use brute::BruteForce;
 pub use bvh::{Bvh, BvhStats};
 
 use crate::geometry::Ray;
+use crate::names::{display_from_table, Named};
 use crate::scene::{PrimHit, Scene};
 
 /// Work done by one traversal, for the BVH-cost heat map.
@@ -55,6 +56,50 @@ pub enum BvhBuilder {
     Sah,
 }
 
+impl Named for BvhBuilder {
+    const WHAT: &'static str = "BVH builder";
+    const TABLE: &'static [(Self, &'static str, &'static str)] = &[
+        (BvhBuilder::Sah, "sah", "Binned surface-area heuristic"),
+        (
+            BvhBuilder::Midpoint,
+            "midpoint",
+            "The course's split at the centroid midpoint of the longest axis",
+        ),
+    ];
+}
+display_from_table!(BvhBuilder);
+
+/// Which intersection backend, without its build setting (`--accel`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
+pub enum Backend {
+    #[default]
+    Native,
+    Embree,
+}
+
+impl Named for Backend {
+    const WHAT: &'static str = "backend";
+    const TABLE: &'static [(Self, &'static str, &'static str)] = &[
+        (Backend::Native, "native", "ember's own BVH"),
+        (
+            Backend::Embree,
+            "embree",
+            "Intel Embree (builds with --features embree only)",
+        ),
+    ];
+}
+display_from_table!(Backend);
+
+impl Backend {
+    /// Whether this build can construct the backend.
+    pub fn available(self) -> bool {
+        match self {
+            Backend::Native => true,
+            Backend::Embree => cfg!(any(feature = "embree", feature = "embree4")),
+        }
+    }
+}
+
 /// Which backend, and its build setting.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum AccelKind {
@@ -62,6 +107,24 @@ pub enum AccelKind {
     Embree(EmbreeQuality),
 }
 
+impl AccelKind {
+    /// `backend` with its own setting: the BVH builder or Embree's quality (the other is unused).
+    pub fn new(backend: Backend, builder: BvhBuilder, quality: EmbreeQuality) -> AccelKind {
+        match backend {
+            Backend::Native => AccelKind::Native(builder),
+            Backend::Embree => AccelKind::Embree(quality),
+        }
+    }
+
+    pub fn backend(self) -> Backend {
+        match self {
+            AccelKind::Native(_) => Backend::Native,
+            AccelKind::Embree(_) => Backend::Embree,
+        }
+    }
+}
+
+/// Embree's build quality (`RTC_BUILD_QUALITY_*`).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
 pub enum EmbreeQuality {
     Low,
@@ -69,6 +132,16 @@ pub enum EmbreeQuality {
     Medium,
     High,
 }
+
+impl Named for EmbreeQuality {
+    const WHAT: &'static str = "Embree build quality";
+    const TABLE: &'static [(Self, &'static str, &'static str)] = &[
+        (EmbreeQuality::Low, "low", ""),
+        (EmbreeQuality::Medium, "medium", ""),
+        (EmbreeQuality::High, "high", ""),
+    ];
+}
+display_from_table!(EmbreeQuality);
 
 #[derive(Debug, thiserror::Error)]
 pub enum AccelError {

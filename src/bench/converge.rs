@@ -8,11 +8,13 @@
 //! two halves so that its own noise variance can be subtracted from every MSE.
 
 use super::chart::{write_chart, ChartSpec, Series};
+use super::mitsuba::MitsubaRunner;
 use super::table::Table;
 use crate::accel::{AccelKind, BvhBuilder, EmbreeQuality};
+use crate::camera::Camera;
 use crate::film::Image;
 use crate::image_io::{read_image, write_image};
-use crate::integrators::{DirectStrategy, Roulette};
+use crate::integrators::{DirectStrategy, Estimator, Roulette};
 use crate::render::{average, Adaptive, RenderJob, RenderSettings};
 use crate::scene::{collada, Scene};
 use anyhow::{bail, Context, Result};
@@ -41,6 +43,16 @@ pub struct ConvergeOptions {
     pub seed: u64,
     /// Add the Embree backend as a method when this build has it.
     pub compare_backends: bool,
+    /// Mitsuba 3 as a peer method, one curve per variant.
+    pub mitsuba: Option<MitsubaPeer>,
+}
+
+/// Where Mitsuba 3 is and which of its variants to run.
+#[derive(Clone, Debug)]
+pub struct MitsubaPeer {
+    /// A Python interpreter that imports `mitsuba` (`scripts/mitsuba-env` prints one).
+    pub python: PathBuf,
+    pub variants: Vec<String>,
 }
 
 /// One way of rendering the image.
@@ -72,7 +84,7 @@ pub struct ConvergeReport {
 /// The methods compared for depth `m`: the direct-lighting estimators at `m = 1`,
 /// MIS with and without roulette and at several `-l` beyond; adaptive sampling and
 /// (optionally) Embree with the scene's default (`DirectStrategy::auto_for`).
-pub fn methods(base: &RenderSettings, compare_backends: bool) -> Vec<Method> {
+pub fn methods(base: &RenderSettings, scene: &Scene, compare_backends: bool) -> Vec<Method> {
     let native = AccelKind::Native(BvhBuilder::Sah);
     let m = |name: &str, s: RenderSettings| Method {
         name: name.to_string(),
@@ -143,6 +155,16 @@ pub fn methods(base: &RenderSettings, compare_backends: bool) -> Vec<Method> {
             },
         ));
     }
+    // Light tracing cannot show specular surfaces to the camera: only where it can converge.
+    if !scene.materials.iter().any(|mat| mat.is_delta()) {
+        v.push(m(
+            "light tracing",
+            RenderSettings {
+                estimator: Some(Estimator::LightTracing),
+                ..base.clone()
+            },
+        ));
+    }
     v.push(m(
         "adaptive (-a 16 0.05)",
         RenderSettings {
@@ -180,9 +202,17 @@ pub fn run(opts: &ConvergeOptions, log: &mut dyn FnMut(&str)) -> Result<Converge
     };
     let reference = reference(opts, &scene, &base, log)?;
     let mut points = Vec::new();
-    for method in methods(&base, opts.compare_backends) {
+    for method in methods(&base, &scene, opts.compare_backends) {
         log(&format!("method: {}", method.name));
         points.extend(run_method(&scene, &method, opts, &reference)?);
+    }
+    if let Some(peer) = &opts.mitsuba {
+        for variant in &peer.variants {
+            let dir = opts.out_dir.join("mitsuba");
+            let runner = MitsubaRunner::new(&peer.python, variant, &dir)?;
+            log(&format!("method: Mitsuba 3 {variant}"));
+            points.extend(run_mitsuba(&scene, &runner, opts, &reference)?);
+        }
     }
     let target = opts.target_rmse.unwrap_or_else(|| default_target(&points));
     let time_to_target = time_to_reach(&points, target);
@@ -222,6 +252,37 @@ fn run_method(
             rel_mse,
         });
         if seconds > opts.max_seconds_per_point {
+            break;
+        }
+        spp *= 2;
+    }
+    Ok(out)
+}
+
+/// The same doubling sequence as [`run_method`], rendered by Mitsuba: each point
+/// is the render-only time of a warm call in its own process.
+fn run_mitsuba(
+    scene: &Scene,
+    runner: &MitsubaRunner,
+    opts: &ConvergeOptions,
+    r: &Reference,
+) -> Result<Vec<Point>> {
+    let camera = Camera::new(&scene.camera, &scene.bounds, opts.width, opts.height);
+    let mut out = Vec::new();
+    let mut spp = 1;
+    while spp <= opts.max_spp {
+        let seed = opts.seed.wrapping_add(1000 + spp as u64);
+        let m = runner.render(scene, &camera, opts.max_depth, spp, seed)?;
+        let (rmse, rel_mse) = errors(&m.image, r);
+        out.push(Point {
+            method: format!("Mitsuba 3 {}", runner.variant()),
+            spp,
+            samples: u64::from(spp) * u64::from(opts.width) * u64::from(opts.height),
+            seconds: m.seconds,
+            rmse,
+            rel_mse,
+        });
+        if m.seconds > opts.max_seconds_per_point {
             break;
         }
         spp *= 2;

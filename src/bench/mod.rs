@@ -8,6 +8,7 @@ pub mod embree_modes;
 pub mod fit;
 pub mod measure;
 pub mod meshes;
+pub mod mitsuba;
 pub mod render;
 pub mod scaling;
 pub mod stability;

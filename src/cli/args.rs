@@ -1,6 +1,11 @@
 //! The flags: clap definitions only. `convert` turns them into library settings.
 
+use clap::builder::{PossibleValue, PossibleValuesParser, TypedValueParser};
 use clap::{Args, Parser, Subcommand, ValueEnum};
+use ember::accel::{Backend, BvhBuilder, EmbreeQuality};
+use ember::integrators::{DirectStrategy, Estimator};
+use ember::names::Named;
+use ember::render::Shading;
 use std::path::PathBuf;
 
 /// What `--help` adds after the options: stopping a render, and where ember differs
@@ -124,8 +129,8 @@ pub enum BenchCommand {
         #[arg(long, default_value_t = 5)]
         repeats: usize,
         /// Embree's build quality.
-        #[arg(long, value_enum, default_value_t = QualityArg::Medium)]
-        quality: QualityArg,
+        #[arg(long, value_parser = named::<EmbreeQuality>(), default_value_t = EmbreeQuality::default())]
+        quality: EmbreeQuality,
         /// Triangle count of the generated displaced sphere (0 leaves it out).
         #[arg(long, default_value_t = 1_000_000)]
         mesh_triangles: usize,
@@ -173,6 +178,12 @@ pub enum BenchCommand {
         /// Random seed.
         #[arg(long, default_value_t = 0)]
         seed: u64,
+        /// Also run Mitsuba 3 as a method, through this Python (one that imports `mitsuba`; scripts/mitsuba-env creates one and prints its path). Each point is the warm, render-only time of its own process.
+        #[arg(long, value_name = "PYTHON")]
+        mitsuba: Option<PathBuf>,
+        /// Mitsuba variants to run with --mitsuba, comma-separated.
+        #[arg(long, value_delimiter = ',', default_value = "llvm_ad_rgb")]
+        mitsuba_variants: Vec<String>,
         /// Worker threads (default: all cores).
         #[arg(short = 't', value_name = "THREADS")]
         threads: Option<usize>,
@@ -195,8 +206,8 @@ pub enum BenchCommand {
         #[arg(short = 't', value_name = "THREADS")]
         threads: Option<usize>,
         /// Backend.
-        #[arg(long, value_enum, default_value_t = AccelArg::Native)]
-        accel: AccelArg,
+        #[arg(long, value_parser = named::<Backend>(), default_value_t = Backend::Native)]
+        accel: Backend,
         /// Output folder (render.csv, render.md).
         #[arg(long, default_value = "bench-out/render")]
         out: PathBuf,
@@ -228,7 +239,7 @@ pub struct RenderArgs {
     #[arg(short = 'o', value_name = "0|1", default_value_t = 1, value_parser = clap::value_parser!(u8).range(0..=1))]
     pub accumulate: u8,
 
-    /// Adaptive sampling: after every BATCH samples stop a pixel once 1.96·σ/√n ≤ TOL·μ. `-a` alone means 32 0.05.
+    /// Adaptive sampling: after every BATCH samples stop a pixel once 1.96·σ/√n ≤ TOL·μ (or at -s). A pixel whose samples are all zero stops only if every pixel within 5 px saw constant values in its first batch, so light found rarely is not missed (README). `-a` alone means 32 0.05.
     #[arg(short = 'a', num_args = 0..=2, action = clap::ArgAction::Set, value_names = ["BATCH", "TOL"])]
     pub adaptive: Option<Vec<String>>,
 
@@ -245,29 +256,29 @@ pub struct RenderArgs {
     pub resolution: Vec<u32>,
 
     /// Intersection backend.
-    #[arg(long, value_enum, default_value_t = AccelArg::Native)]
-    pub accel: AccelArg,
+    #[arg(long, value_parser = named::<Backend>(), default_value_t = Backend::Native)]
+    pub accel: Backend,
 
     /// How the native BVH is built [default: sah] (not with --accel embree).
-    #[arg(long, value_enum)]
-    pub bvh: Option<BvhArg>,
+    #[arg(long, value_parser = named::<BvhBuilder>())]
+    pub bvh: Option<BvhBuilder>,
 
     /// Embree's build quality [default: medium] (only with --accel embree).
-    #[arg(long, value_enum)]
-    pub embree_quality: Option<QualityArg>,
+    #[arg(long, value_parser = named::<EmbreeQuality>())]
+    pub embree_quality: Option<EmbreeQuality>,
 
     /// What each pixel shows.
-    #[arg(long, value_enum, default_value_t = ShadingArg::Radiance)]
-    pub shading: ShadingArg,
+    #[arg(long, value_parser = named::<Shading>(), default_value_t = Shading::Radiance)]
+    pub shading: Shading,
 
     /// With --shading bvh-cost: the count (nodes + primitives tested per camera ray) shown red in a PNG,
     /// so images of two builders compare [default: the image's 99th percentile]. An EXR holds the raw counts.
     #[arg(long, value_name = "COUNT")]
     pub cost_scale: Option<f32>,
 
-    /// Direct-lighting estimator. auto: MIS (light + BSDF sampling) when the scene has glossy surfaces or an ambient light, light sampling otherwise (see BENCHMARKS.md). -H forces hemisphere.
-    #[arg(long, value_enum, default_value_t = IntegratorArg::Auto)]
-    pub integrator: IntegratorArg,
+    /// Estimator. auto: light tracing when every light is a point light and nothing is specular or self-emitting (CBempty: see BENCHMARKS.md, stability case 9); otherwise path tracing with MIS (light + BSDF sampling) when the scene has glossy surfaces or an ambient light, light sampling otherwise. A direct-lighting strategy name means path tracing with it. -H forces hemisphere.
+    #[arg(long, value_parser = integrator(), default_value = AUTO)]
+    pub integrator: IntegratorChoice,
 
     /// Russian roulette: off, throughput (continue with probability max(throughput), at least 0.05), or a fixed probability like 0.5.
     #[arg(long, default_value = "throughput", value_name = "off|throughput|PROB")]
@@ -296,48 +307,55 @@ pub struct RenderArgs {
     pub quiet: bool,
 }
 
-#[derive(Clone, Copy, Debug, ValueEnum, PartialEq, Eq)]
-pub enum AccelArg {
-    /// ember's own BVH.
-    Native,
-    /// Intel Embree (builds with --features embree only).
-    Embree,
+/// A flag parsed straight into a library enum through its name table; `--help`
+/// lists every name with its description.
+fn named<T: Named + Send + Sync>() -> impl TypedValueParser<Value = T> {
+    PossibleValuesParser::new(T::TABLE.iter().map(|&(_, name, help)| possible(name, help)))
+        .try_map(|s| T::from_name(&s))
 }
 
-#[derive(Clone, Copy, Debug, ValueEnum)]
-pub enum BvhArg {
-    /// Binned surface-area heuristic.
-    Sah,
-    /// The course's split at the centroid midpoint of the longest axis.
-    Midpoint,
+fn possible(name: &'static str, help: &'static str) -> PossibleValue {
+    let v = PossibleValue::new(name);
+    if help.is_empty() {
+        v
+    } else {
+        v.help(help)
+    }
 }
 
-#[derive(Clone, Copy, Debug, ValueEnum)]
-pub enum QualityArg {
-    Low,
-    Medium,
-    High,
+/// `--integrator`'s word for "let the scene choose" (`DirectStrategy::auto_for`).
+const AUTO: &str = "auto";
+
+/// What `--integrator` names: an estimator and, for path tracing, its direct-lighting
+/// strategy; a `None` is chosen from the scene.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct IntegratorChoice {
+    pub estimator: Option<Estimator>,
+    pub strategy: Option<DirectStrategy>,
 }
 
-#[derive(Clone, Copy, Debug, ValueEnum, PartialEq, Eq)]
-pub enum ShadingArg {
-    /// The physically based image.
-    Radiance,
-    /// 0.5·n + 0.5 of the shading normal (course parts 1-2).
-    Normals,
-    /// Heat map of BVH nodes + primitives tested per camera ray.
-    BvhCost,
-}
-
-#[derive(Clone, Copy, Debug, ValueEnum, PartialEq, Eq)]
-pub enum IntegratorArg {
-    Auto,
-    /// Light sampling only.
-    Light,
-    /// Light and BSDF sampling, power heuristic.
-    Mis,
-    /// Uniform hemisphere sampling (same as -H).
-    Hemisphere,
-    /// BSDF sampling alone, no light sampling (cannot see point/directional lights).
-    Bsdf,
+/// `--integrator`: `auto`, an estimator (`path`, `light-tracing`), or a path-tracing
+/// strategy, each from the library's name tables.
+fn integrator() -> impl TypedValueParser<Value = IntegratorChoice> {
+    let auto = PossibleValue::new(AUTO).help("Chosen from the scene (see above)");
+    let estimators = Estimator::TABLE.iter().map(|&(_, n, h)| possible(n, h));
+    let strategies = DirectStrategy::TABLE
+        .iter()
+        .map(|&(_, n, h)| possible(n, h));
+    let values = std::iter::once(auto).chain(estimators).chain(strategies);
+    PossibleValuesParser::new(values).try_map(|s| {
+        if s == AUTO {
+            return Ok(IntegratorChoice::default());
+        }
+        if let Ok(e) = Estimator::from_name(&s) {
+            return Ok(IntegratorChoice {
+                estimator: Some(e),
+                strategy: None,
+            });
+        }
+        DirectStrategy::from_name(&s).map(|d| IntegratorChoice {
+            estimator: Some(Estimator::Path),
+            strategy: Some(d),
+        })
+    })
 }

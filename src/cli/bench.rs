@@ -1,9 +1,9 @@
 //! `ember bench ...`: each benchmark runs, writes its report, prints its summary.
 
-use super::args::{AccelArg, BenchCommand, BvhArg, QualityArg};
-use super::convert::{accel_kind, check_resolution, threads_invalid};
+use super::args::BenchCommand;
+use super::convert::{check_resolution, threads_invalid};
 use anyhow::{bail, Context, Result};
-use ember::accel::AccelKind;
+use ember::accel::{AccelKind, BvhBuilder, EmbreeQuality};
 use ember::bench;
 use std::path::PathBuf;
 
@@ -54,6 +54,8 @@ fn run_on_pool(which: BenchCommand) -> Result<()> {
             target_rmse,
             out,
             seed,
+            mitsuba,
+            mitsuba_variants,
             ..
         } => {
             check_resolution(resolution[0], resolution[1])?;
@@ -71,6 +73,10 @@ fn run_on_pool(which: BenchCommand) -> Result<()> {
                 target_rmse,
                 seed,
                 compare_backends: true,
+                mitsuba: mitsuba.map(|python| bench::converge::MitsubaPeer {
+                    python,
+                    variants: mitsuba_variants,
+                }),
             })
         }
         BenchCommand::Render {
@@ -90,7 +96,7 @@ fn run_on_pool(which: BenchCommand) -> Result<()> {
             spp,
             max_depth,
             repeat: repeats.max(1),
-            accel: accel_kind(a, BvhArg::Sah, QualityArg::Medium),
+            accel: AccelKind::new(a, BvhBuilder::default(), EmbreeQuality::default()),
             out_dir: out,
         }),
     }
@@ -133,7 +139,7 @@ fn bench_accel(
     rays: usize,
     threads: Vec<usize>,
     repeats: usize,
-    quality: QualityArg,
+    quality: EmbreeQuality,
     mesh_triangles: usize,
 ) -> Result<()> {
     use bench::accel::{run, AccelBenchOptions, BenchScene};
@@ -155,9 +161,7 @@ fn bench_accel(
         opts.scenes
             .push(BenchScene::DisplacedSphere(mesh_triangles));
     }
-    if let AccelKind::Embree(q) = accel_kind(AccelArg::Embree, BvhArg::Sah, quality) {
-        opts.embree_quality = q;
-    }
+    opts.embree_quality = quality;
     let report = run(&opts, |line| ember::errln!("ember: {line}"))?;
     ember::outln!("{}", report.to_markdown())?;
     Ok(())

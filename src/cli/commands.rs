@@ -1,9 +1,9 @@
 //! One short function per subcommand: convert the flags, call the library, report.
 
-use super::args::{AccelArg, BvhArg, ExportArgs, ExportFormat, QualityArg, RenderArgs};
+use super::args::{ExportArgs, ExportFormat, RenderArgs};
 use super::convert::{
-    accel_kind, adopt_scene_from_adaptive, check_flags, check_resolution, flag_warnings,
-    output_path, run_plan, settings_from, RunPlan,
+    adopt_scene_from_adaptive, check_flags, check_resolution, flag_warnings, output_path, run_plan,
+    settings_from, RunPlan,
 };
 use super::interrupt::{self, Interrupted};
 use anyhow::{bail, Result};
@@ -24,7 +24,7 @@ use std::time::Instant;
 pub(super) fn render(mut args: RenderArgs) -> Result<()> {
     adopt_scene_from_adaptive(&mut args);
     check_flags(&args)?;
-    if args.accel == AccelArg::Embree && !cfg!(any(feature = "embree", feature = "embree4")) {
+    if !args.accel.available() {
         bail!("{}", accel::AccelError::EmbreeUnavailable);
     }
     let Some(scene_path) = args.scene.clone() else {
@@ -45,10 +45,10 @@ pub(super) fn render(mut args: RenderArgs) -> Result<()> {
         None => None,
     };
     let interrupt = interrupt::install()?;
-    let kind = accel_kind(
+    let kind = accel::AccelKind::new(
         args.accel,
-        args.bvh.unwrap_or(BvhArg::Sah),
-        args.embree_quality.unwrap_or(QualityArg::Medium),
+        args.bvh.unwrap_or_default(),
+        args.embree_quality.unwrap_or_default(),
     );
     let pool = thread_pool(args.threads)?;
     check_memory(width, height, plan)?;
@@ -288,7 +288,7 @@ impl RenderRun<'_> {
         };
         format!(
             "{} estimator, {spp}, -m {}, -l {}, seed {}, {threads} threads",
-            format!("{:?}", s.strategy_for(&self.job.scene)).to_lowercase(),
+            ember::image_metadata::estimator_label(s, &self.job.scene),
             s.max_depth,
             s.light_samples,
             s.seed
@@ -394,15 +394,11 @@ pub(super) fn export(a: ExportArgs) -> Result<()> {
         .file_stem()
         .map_or("scene".into(), |s| s.to_string_lossy().into_owned());
     let ExportFormat::Mitsuba = a.format;
-    let settings = ember::export::MitsubaSettings {
-        spp: a.spp,
-        max_depth: a.max_depth,
-        roulette_start: match ember::integrators::Roulette::default() {
-            ember::integrators::Roulette::Throughput { start, .. }
-            | ember::integrators::Roulette::Fixed { start, .. } => Some(start),
-            ember::integrators::Roulette::Off => None,
-        },
-    };
+    let settings = ember::export::MitsubaSettings::for_ember(
+        a.spp,
+        a.max_depth,
+        &ember::integrators::Roulette::default(),
+    );
     let summary = ember::export::write_mitsuba(&scene, &camera, &settings, &a.out, &stem)?;
     for w in &summary.warnings {
         ember::errln!("ember: warning: {w}");

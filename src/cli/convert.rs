@@ -1,9 +1,9 @@
 //! Flags into library settings: every check and translation of a flag's value lives here.
 
-use super::args::{AccelArg, BvhArg, IntegratorArg, QualityArg, RenderArgs, ShadingArg};
+use super::args::RenderArgs;
 use anyhow::{bail, Context, Result};
-use ember::accel::{AccelKind, BvhBuilder, EmbreeQuality};
-use ember::integrators::{DirectStrategy, Roulette};
+use ember::accel::Backend;
+use ember::integrators::{DirectStrategy, Estimator, Roulette};
 use ember::render::{Adaptive, RenderSettings, Shading};
 use std::path::{Path, PathBuf};
 use std::time::Duration;
@@ -55,18 +55,18 @@ pub(super) fn check_resolution(w: u32, h: u32) -> Result<()> {
 
 /// Flags that would do nothing, or something meaningless, in the chosen configuration.
 pub(super) fn check_flags(args: &RenderArgs) -> Result<()> {
-    let embree = args.accel == AccelArg::Embree;
+    let embree = args.accel == Backend::Embree;
     if embree && args.bvh.is_some() {
         bail!("--bvh chooses the native BVH's builder; it does nothing with --accel embree");
     }
     if !embree && args.embree_quality.is_some() {
         bail!("--embree-quality applies only with --accel embree");
     }
-    if embree && args.shading == ShadingArg::BvhCost {
+    if embree && args.shading == Shading::BvhCost {
         bail!("--shading bvh-cost counts the native BVH's node and primitive tests, which Embree does not expose; use --accel native");
     }
     if let Some(c) = args.cost_scale {
-        if args.shading != ShadingArg::BvhCost {
+        if args.shading != Shading::BvhCost {
             bail!("--cost-scale applies only with --shading bvh-cost");
         }
         if !(c.is_finite() && c > 0.0) {
@@ -83,20 +83,6 @@ pub(super) fn flag_warnings(args: &RenderArgs) -> Vec<String> {
         w.push("-l 0 takes one light sample per area light, as -l 1 does".to_string());
     }
     w
-}
-
-pub(super) fn accel_kind(a: AccelArg, b: BvhArg, q: QualityArg) -> AccelKind {
-    match a {
-        AccelArg::Native => AccelKind::Native(match b {
-            BvhArg::Sah => BvhBuilder::Sah,
-            BvhArg::Midpoint => BvhBuilder::Midpoint,
-        }),
-        AccelArg::Embree => AccelKind::Embree(match q {
-            QualityArg::Low => EmbreeQuality::Low,
-            QualityArg::Medium => EmbreeQuality::Medium,
-            QualityArg::High => EmbreeQuality::High,
-        }),
-    }
 }
 
 pub(super) fn parse_adaptive(a: &Option<Vec<String>>) -> Result<Option<Adaptive>> {
@@ -145,13 +131,15 @@ pub(super) fn strategy(args: &RenderArgs) -> Option<DirectStrategy> {
     if args.hemisphere {
         return Some(DirectStrategy::Hemisphere);
     }
-    match args.integrator {
-        IntegratorArg::Light => Some(DirectStrategy::Light),
-        IntegratorArg::Mis => Some(DirectStrategy::Mis),
-        IntegratorArg::Hemisphere => Some(DirectStrategy::Hemisphere),
-        IntegratorArg::Bsdf => Some(DirectStrategy::Bsdf),
-        IntegratorArg::Auto => None,
-    }
+    args.integrator.strategy
+}
+
+/// Which way paths are built; `None` for auto (`Estimator::auto_for` the scene).
+/// `-H` means path tracing unless an estimator was named.
+pub(super) fn estimator(args: &RenderArgs) -> Option<Estimator> {
+    args.integrator
+        .estimator
+        .or(args.hemisphere.then_some(Estimator::Path))
 }
 
 pub(super) fn settings_from(args: &RenderArgs) -> Result<RenderSettings> {
@@ -167,14 +155,11 @@ pub(super) fn settings_from(args: &RenderArgs) -> Result<RenderSettings> {
         light_samples: args.light_samples.max(1),
         max_depth: args.max_depth,
         accumulate: args.accumulate == 1,
+        estimator: estimator(args),
         strategy: strategy(args),
         roulette: parse_roulette(&args.rr, args.rr_start)?,
         adaptive: parse_adaptive(&args.adaptive)?,
-        shading: match args.shading {
-            ShadingArg::Radiance => Shading::Radiance,
-            ShadingArg::Normals => Shading::Normals,
-            ShadingArg::BvhCost => Shading::BvhCost,
-        },
+        shading: args.shading,
         seed: args.seed,
     })
 }

@@ -3,9 +3,12 @@
 //! direct-lighting strategy chosen by the user; debug views live in `debug`.
 
 pub mod debug;
+pub mod light_tracing;
 pub mod path;
 
 pub use path::{PathIntegrator, PathSettings};
+
+use crate::names::{display_from_table, Named};
 
 /// How light arriving directly from emitters is estimated at each scattering vertex.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -22,6 +25,29 @@ pub enum DirectStrategy {
     Bsdf,
 }
 
+impl Named for DirectStrategy {
+    const WHAT: &'static str = "direct-lighting estimator";
+    const TABLE: &'static [(Self, &'static str, &'static str)] = &[
+        (DirectStrategy::Light, "light", "Light sampling only"),
+        (
+            DirectStrategy::Mis,
+            "mis",
+            "Light and BSDF sampling, power heuristic",
+        ),
+        (
+            DirectStrategy::Hemisphere,
+            "hemisphere",
+            "Uniform hemisphere sampling (same as -H)",
+        ),
+        (
+            DirectStrategy::Bsdf,
+            "bsdf",
+            "BSDF sampling alone, no light sampling (cannot see point/directional lights)",
+        ),
+    ];
+}
+display_from_table!(DirectStrategy);
+
 impl DirectStrategy {
     /// The better default for `scene`, from `ember bench converge` (BENCHMARKS.md):
     /// light sampling is 5–50 % more efficient on purely diffuse scenes (MIS pays for
@@ -35,6 +61,54 @@ impl DirectStrategy {
             DirectStrategy::Mis
         } else {
             DirectStrategy::Light
+        }
+    }
+}
+
+/// Which way paths are built.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
+pub enum Estimator {
+    /// Paths start at the camera (`PathIntegrator`, with its `DirectStrategy`).
+    #[default]
+    Path,
+    /// Paths start on the lights and connect to the camera (`light_tracing`).
+    LightTracing,
+}
+
+impl Named for Estimator {
+    const WHAT: &'static str = "estimator";
+    const TABLE: &'static [(Self, &'static str, &'static str)] = &[
+        (
+            Estimator::Path,
+            "path",
+            "Path tracing from the camera, direct-lighting strategy chosen from the scene",
+        ),
+        (
+            Estimator::LightTracing,
+            "light-tracing",
+            "Light tracing: paths start on the lights and connect to the camera (not for mirrors/glass)",
+        ),
+    ];
+}
+display_from_table!(Estimator);
+
+impl Estimator {
+    /// Light tracing where `ember bench stability` (the CBempty case) shows path tracing
+    /// failing: every light is a point light, so the light reaches most of the scene
+    /// indirectly, through the few surfaces near it, which camera paths find by chance
+    /// and light paths find at once. Only when nothing specular or self-emitting is
+    /// present, which light tracing cannot show (see `light_tracing`).
+    pub fn auto_for(scene: &crate::scene::Scene) -> Estimator {
+        let point_lights_only = !scene.lights.is_empty()
+            && scene
+                .lights
+                .iter()
+                .all(|l| matches!(l, crate::lights::Light::Point { .. }));
+        let specular = scene.materials.iter().any(|m| m.is_delta());
+        if point_lights_only && !specular && !scene.has_unsampled_emitters() {
+            Estimator::LightTracing
+        } else {
+            Estimator::Path
         }
     }
 }

@@ -3,10 +3,13 @@
 //! owns its surface: `Scene::add_area_light` emits its triangles from `quad`, and a
 //! ray hitting them reads the radiance here (`emitted`).
 
+use super::emit::EmissionSample;
 use super::LightSample;
-use crate::sampling::uniform_parallelogram;
+use crate::geometry::{offset_ray_origin, Frame};
+use crate::sampling::{cosine_hemisphere, uniform_parallelogram};
 use crate::Color;
 use glam::{Vec2, Vec3};
+use std::f32::consts::PI;
 
 /// The parallelogram `centre + s·ex + t·ey`, `s,t ∈ [−½,½]`, emitting `radiance` toward unit `normal`
 /// (±`ex × ey`).
@@ -67,6 +70,23 @@ impl AreaLight {
             pdf,
             delta: false,
         })
+    }
+
+    /// Emitted light leaving the surface (`Light::sample_le`): a point uniform by area
+    /// (`pdf_pos = 1/area`), a direction by the cosine (`pdf_dir = cos/π`), so
+    /// `β = L·cos/(pdf_pos·pdf_dir) = L·π·area`.
+    pub fn sample_le(&self, u_pos: Vec2, u_dir: Vec2) -> EmissionSample {
+        let p = uniform_parallelogram(u_pos, self.centre, self.ex, self.ey);
+        let dir = Frame::from_normal(self.normal)
+            .to_world(cosine_hemisphere(u_dir))
+            .normalize();
+        let p_error =
+            (self.centre.abs() + 0.5 * (self.ex.abs() + self.ey.abs())) * (4.0 * f32::EPSILON);
+        EmissionSample {
+            origin: offset_ray_origin(p, p_error, self.normal, dir),
+            dir,
+            beta: self.radiance * (PI * self.area()),
+        }
     }
 
     /// The density of `sample_li`: found by intersecting the ray `(p, wi)`.

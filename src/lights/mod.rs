@@ -4,6 +4,7 @@
 pub mod ambient;
 pub mod area;
 pub mod directional;
+pub mod emit;
 pub mod point;
 
 use crate::color::luminance;

@@ -9,17 +9,18 @@ use crate::color::luminance;
 use crate::integrators::{DirectStrategy, Roulette};
 use crate::lights::{AreaLight, Light};
 use crate::materials::Material;
+use crate::names::Named;
 use crate::render::{RenderJob, RenderSettings};
 use crate::scene::Scene;
 use anyhow::{bail, Result};
 use std::f64::consts::PI;
 
-/// The four direct-lighting strategies with their report names.
-pub const STRATEGIES: [(DirectStrategy, &str); 4] = [
-    (DirectStrategy::Hemisphere, "hemisphere"),
-    (DirectStrategy::Bsdf, "BSDF"),
-    (DirectStrategy::Light, "light"),
-    (DirectStrategy::Mis, "MIS"),
+/// The four direct-lighting strategies, in report order (named by their `Display`).
+pub const STRATEGIES: [DirectStrategy; 4] = [
+    DirectStrategy::Hemisphere,
+    DirectStrategy::Bsdf,
+    DirectStrategy::Light,
+    DirectStrategy::Mis,
 ];
 
 fn direct(strategy: DirectStrategy) -> RenderSettings {
@@ -46,12 +47,7 @@ pub struct StrategyRun {
 }
 
 impl StrategyRun {
-    fn from_halves(
-        strategy: DirectStrategy,
-        name: &'static str,
-        h: &Halves,
-        warnings: Vec<String>,
-    ) -> StrategyRun {
+    fn from_halves(strategy: DirectStrategy, h: &Halves, warnings: Vec<String>) -> StrategyRun {
         let (mean, se) = h.mean_and_se(None);
         let avg = h.average();
         let max_pixel = avg
@@ -61,7 +57,7 @@ impl StrategyRun {
             .fold(0.0, f64::max);
         StrategyRun {
             strategy,
-            name,
+            name: strategy.name(),
             mean,
             se,
             noise: h.noise_per_pixel(),
@@ -85,22 +81,20 @@ impl StrategyRun {
     }
 }
 
-/// The run of strategy `name` (every case runs a fixed list, so it is there).
-fn find_run<'a>(runs: &'a [StrategyRun], name: &str) -> &'a StrategyRun {
-    runs.iter().find(|r| r.name == name).expect("strategy run")
+/// The run of `strategy` (every case runs a fixed list, so it is there).
+fn find_run(runs: &[StrategyRun], strategy: DirectStrategy) -> &StrategyRun {
+    runs.iter()
+        .find(|r| r.strategy == strategy)
+        .expect("strategy run")
 }
 
-fn run_all(
-    setup: &RenderJob,
-    b: &Budget,
-    strategies: &[(DirectStrategy, &'static str)],
-) -> Vec<StrategyRun> {
+fn run_all(setup: &RenderJob, b: &Budget, strategies: &[DirectStrategy]) -> Vec<StrategyRun> {
     strategies
         .iter()
-        .map(|&(s, name)| {
+        .map(|&s| {
             let settings = b.settings(direct(s));
             let warnings = setup.warnings(&settings);
-            StrategyRun::from_halves(s, name, &setup.halves(&settings), warnings)
+            StrategyRun::from_halves(s, &setup.halves(&settings), warnings)
         })
         .collect()
 }
@@ -204,13 +198,13 @@ impl SmallLightCase {
         (2.0 * PI / self.max_solid_angle - 1.0).sqrt()
     }
 
-    pub fn run(&self, name: &str) -> &StrategyRun {
-        find_run(&self.runs, name)
+    pub fn run(&self, strategy: DirectStrategy) -> &StrategyRun {
+        find_run(&self.runs, strategy)
     }
 
     pub fn rows(&self) -> Vec<Row> {
         let case = format!("2 small light {:.3}", 0.1 * self.size);
-        let light = self.run("light").clone();
+        let light = self.run(DirectStrategy::Light).clone();
         self.runs
             .iter()
             .map(|r| {
@@ -279,8 +273,8 @@ pub fn glossy(b: &Budget, scene: &'static str) -> Result<GlossyCase> {
 }
 
 impl GlossyCase {
-    pub fn run(&self, name: &str) -> &StrategyRun {
-        find_run(&self.runs, name)
+    pub fn run(&self, strategy: DirectStrategy) -> &StrategyRun {
+        find_run(&self.runs, strategy)
     }
 
     pub fn rows(&self) -> Vec<Row> {
@@ -292,10 +286,10 @@ impl GlossyCase {
         let best = self
             .runs
             .iter()
-            .filter(|r| r.name != "MIS")
+            .filter(|r| r.strategy != DirectStrategy::Mis)
             .map(|r| r.noise)
             .fold(f64::INFINITY, f64::min);
-        let mis = self.run("MIS").clone();
+        let mis = self.run(DirectStrategy::Mis).clone();
         self.runs
             .iter()
             .map(|r| {

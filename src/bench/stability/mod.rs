@@ -4,6 +4,7 @@
 //! tests (tests/stability.rs) assert on the same functions at small budgets.
 
 pub mod glass;
+pub mod light_paths;
 pub mod lights;
 pub mod measure;
 pub mod robust;
@@ -12,6 +13,7 @@ pub mod scenes;
 
 use super::chart::{write_chart, ChartSpec, Series};
 use super::table::Table;
+use crate::names::Named;
 use anyhow::{Context, Result};
 pub use measure::Budget;
 use std::path::PathBuf;
@@ -55,15 +57,16 @@ pub struct StabilityReport {
 }
 
 /// What ember does about each case, for the report.
-pub const EMBER_DOES: [(&str, &str); 8] = [
+pub const EMBER_DOES: [(&str, &str); 9] = [
     ("1", "Hemisphere and BSDF-only sampling cannot see delta lights; `RenderJob::warnings` says so (the CLI prints it). The default strategies sample lights."),
     ("2", "Light sampling and MIS (the defaults: MIS for glossy or ambient-lit scenes, light sampling otherwise) sample the light's area: their noise does not grow as the light shrinks; -H's grows as √(2π/Ω)."),
     ("3", "MIS (power heuristic) is the default whenever the scene has glossy surfaces: never much worse than the better of light and BSDF sampling."),
     ("4", "Specular chains are followed by BSDF sampling with weight 1 at delta vertices; exact Fresnel; non-finite samples are counted and dropped (0 here)."),
     ("5", "Ray origins are offset by the hit point's own floating-point error bound, shadow rays stop a relative 1e-4 short: every epsilon scales with the scene."),
     ("6", "Watertight triangle test (Woop et al.), f64 edge functions when f32 rounds to zero; degenerate triangles are never hit; zero-area lights are never sampled. Limitation: below ~2e-4 rad the conservative t ≤ δt rejection (pbrt-v4) drops hits through vertices/edges."),
-    ("7", "Adaptive::min_samples_if_constant (4·batch by default) keeps a pixel whose samples are all equal sampling beyond the first batch. It only postpones the decision: pixels whose rare light is still unseen after 4 batches stop at 0, so the image stays biased (about half the unguarded bias here)."),
+    ("7", "The default stopping rule (`crate::adaptive`) never takes a pixel whose samples are all zero as converged unless every pixel within 5 px saw constant values in a first batch over the image; other pixels follow the course's rule up to -s. Unbiased within noise here at the same -s cap; the old 4·batch guard (`StopRule::PerPixel`) only halved the bias."),
     ("8", "Roulette divides by the continuation probability (unbiased); the default is throughput-based from bounce 3 with q ≥ 0.05."),
+    ("9", "Light tracing (`--integrator light-tracing`): paths start on the lights and connect to the camera; `--integrator auto` picks it when every light is a point light and nothing is specular or self-emitting. The path tracer stays the default elsewhere."),
 ];
 
 pub fn run_stability(opts: &StabilityOptions) -> Result<StabilityReport> {
@@ -88,6 +91,7 @@ pub fn run_stability(opts: &StabilityOptions) -> Result<StabilityReport> {
     rows.extend(robust::grid(&budget(320, 240, 4))?.rows());
     rows.extend(sampling::adaptive(&budget(80, 60, 512))?.rows());
     rows.extend(sampling::roulette(&budget(80, 60, 256))?.rows());
+    rows.extend(light_paths::rows_if_shared(&budget(160, 120, 32))?);
     let report = StabilityReport { rows };
     report.write(opts)?;
     Ok(report)
@@ -155,7 +159,7 @@ impl StabilityReport {
     /// Relative per-pixel noise (noise / mean) of each direct-lighting strategy, x = the
     /// number of the scenario among those rows (cases 1–3, in report order).
     pub fn strategy_noise_series(&self) -> (Vec<Series>, Vec<String>) {
-        let names: Vec<&str> = lights::STRATEGIES.iter().map(|s| s.1).collect();
+        let names: Vec<&str> = lights::STRATEGIES.iter().map(|s| s.name()).collect();
         let mut scenarios: Vec<String> = Vec::new();
         let mut out: Vec<Series> = names
             .iter()

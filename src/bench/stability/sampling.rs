@@ -7,17 +7,22 @@ use super::measure::{lum, Budget, Halves};
 use super::scenes::embedded;
 use super::Row;
 use crate::integrators::{DirectStrategy, Roulette};
-use crate::render::{Adaptive, RenderOutput, RenderSettings};
+use crate::render::{Adaptive, RenderOutput, RenderSettings, StopRule};
 use anyhow::Result;
 
 /// Adaptive batch size and tolerance of case 7.
 pub const BATCH: u32 = 8;
 const TOL: f32 = 0.05;
+/// The fixed-spp reference of case 7 takes this many times the adaptive cap.
+pub const REFERENCE_FACTOR: u32 = 8;
 
 pub struct AdaptiveRun {
     pub name: &'static str,
     pub min_samples_if_constant: u32,
     pub mean: f64,
+    /// Standard error of `mean` if the pixels were unbiased: the reference's per-pixel
+    /// variance scaled to each pixel's sample count.
+    pub se: f64,
     pub mean_samples: f64,
     /// Pixels (with a lit reference) that stopped after one batch at exactly 0.
     pub stopped_at_zero_after_one_batch: usize,
@@ -30,6 +35,8 @@ pub struct AdaptiveCase {
     pub lit_pixels: Vec<usize>,
     pub guarded: AdaptiveRun,
     pub unguarded: AdaptiveRun,
+    /// The default rule (`crate::adaptive`: constant pixels stop only in quiet neighbourhoods).
+    pub neighbourhood: AdaptiveRun,
 }
 
 /// A floor under a 0.4 × 0.4 light seen by BSDF sampling alone: a single sample finds
@@ -44,14 +51,19 @@ pub fn adaptive(b: &Budget) -> Result<AdaptiveCase> {
         roulette: Roulette::Off,
         ..Default::default()
     };
-    let reference: Halves = setup.halves(&b.settings(base.clone()));
+    // 8× the adaptive cap, so that a bias of 1% is measurable.
+    let reference: Halves = setup.halves(&RenderSettings {
+        spp: REFERENCE_FACTOR * b.spp,
+        ..b.settings(base.clone())
+    });
     let avg = reference.average();
     let lit_pixels: Vec<usize> = (0..avg.pixels.len())
         .filter(|&i| lum(&avg, i) > 0.0)
         .collect();
-    let run = |name: &'static str, guard: u32| {
+    let run = |name: &'static str, guard: u32, rule: StopRule| {
         let adaptive = Adaptive {
             min_samples_if_constant: guard,
+            rule,
             ..Adaptive::new(BATCH, TOL)
         };
         let output = setup.render(&b.settings(RenderSettings {
@@ -69,6 +81,15 @@ pub fn adaptive(b: &Budget) -> Result<AdaptiveCase> {
             .map(|&i| output.samples[i] as f64)
             .sum::<f64>()
             / n;
+        let ref_spp = (REFERENCE_FACTOR * b.spp) as f64;
+        let var: f64 = lit_pixels
+            .iter()
+            .map(|&i| {
+                let d = lum(&reference.a.image, i) - lum(&reference.b.image, i);
+                0.25 * d * d * ref_spp / output.samples[i].max(1) as f64
+            })
+            .sum();
+        let se = var.sqrt() / n;
         let stopped_at_zero_after_one_batch = lit_pixels
             .iter()
             .filter(|&&i| output.samples[i] == BATCH && lum(&output.image, i) == 0.0)
@@ -77,6 +98,7 @@ pub fn adaptive(b: &Budget) -> Result<AdaptiveCase> {
             name,
             min_samples_if_constant: guard,
             mean,
+            se,
             mean_samples,
             stopped_at_zero_after_one_batch,
             output,
@@ -84,8 +106,13 @@ pub fn adaptive(b: &Budget) -> Result<AdaptiveCase> {
     };
     Ok(AdaptiveCase {
         reference: reference.mean_and_se(Some(&lit_pixels)),
-        guarded: run("adaptive, guard 4·batch", 4 * BATCH),
-        unguarded: run("adaptive, no guard", 0),
+        guarded: run("adaptive, guard 4·batch", 4 * BATCH, StopRule::PerPixel),
+        unguarded: run("adaptive, no guard", 0, StopRule::PerPixel),
+        neighbourhood: run(
+            "adaptive, quiet-neighbourhood rule (default)",
+            0,
+            StopRule::Neighbourhood,
+        ),
         lit_pixels,
     })
 }
@@ -104,7 +131,7 @@ impl AdaptiveCase {
             nonfinite: 0,
             note: format!("{} lit pixels", self.lit_pixels.len()),
         }];
-        for r in [&self.guarded, &self.unguarded] {
+        for r in [&self.neighbourhood, &self.guarded, &self.unguarded] {
             rows.push(Row {
                 case: case.into(),
                 method: r.name.into(),
