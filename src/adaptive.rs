@@ -157,7 +157,12 @@ pub fn render(
         })
         .collect();
     let quiet = quiet_neighbourhoods(&pilot, hw, halo.height(), r);
-    let rows: Vec<Vec<PixelStats>> = (rect.y0..rect.y1)
+    // Rows in a scattered order, so that the progress bar's ETA is not fooled by
+    // empty background at the top; put back in order below.
+    let order: Vec<u32> = crate::render::scattered(rect.height() as usize)
+        .map(|i| rect.y0 + i as u32)
+        .collect();
+    let mut rows: Vec<(u32, Vec<PixelStats>)> = order
         .into_par_iter()
         .map(|y| {
             let row: Vec<PixelStats> = (rect.x0..rect.x1)
@@ -175,10 +180,11 @@ pub fn render(
                 })
                 .collect();
             progress(rect.width() as u64);
-            row
+            (y, row)
         })
         .collect();
-    let stats: Vec<PixelStats> = rows.into_iter().flatten().collect();
+    rows.sort_unstable_by_key(|&(y, _)| y);
+    let stats: Vec<PixelStats> = rows.into_iter().flat_map(|(_, row)| row).collect();
     let mut image = Image::new(rect.width(), rect.height());
     for (px, p) in image.pixels.iter_mut().zip(&stats) {
         *px = p.mean();

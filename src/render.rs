@@ -213,9 +213,14 @@ fn tiles(rect: PixelRect) -> Vec<(u32, u32)> {
                 .map(move |x| (x, y))
         })
         .collect();
-    let n = rows.len();
+    scattered(rows.len()).map(|i| rows[i]).collect()
+}
+
+/// `0..n` in a scattered order (every index once): work scheduled in this order
+/// samples the whole image early, so progress measured in pixels tracks the work.
+pub(crate) fn scattered(n: usize) -> impl Iterator<Item = usize> {
     let stride = scatter_stride(n);
-    (0..n).map(|i| rows[i * stride % n]).collect()
+    (0..n).map(move |i| i * stride % n)
 }
 
 /// A step near `n / φ` with no factor in common with `n`, so `i · step mod n` visits
