@@ -73,37 +73,15 @@ pub(super) fn render(mut args: RenderArgs) -> Result<()> {
     }
     let run = RenderRun {
         scene_path: &scene_path,
+        out: &out,
         job: &job,
         settings: &settings,
+        cost_scale: args.cost_scale,
         quiet: args.quiet,
     };
     let done = pool.install(|| run.execute(plan, &stop, &mut pending))?;
     let t_render = t2.elapsed();
-    let mut meta = run.metadata(&done, t_render.as_secs_f64());
-    let cost_scale = match settings.shading {
-        Shading::BvhCost => Some(write_cost_map(
-            pending,
-            &done.output,
-            args.cost_scale,
-            &mut meta,
-        )?),
-        _ => {
-            pending.write_with_metadata(&done.output.image, &meta)?;
-            None
-        }
-    };
-    if let Some(pending_rate) = pending_rate {
-        let rate = pending_rate.path().to_path_buf();
-        // The rate map: raw samples per pixel in an EXR, the course's colours in a PNG.
-        let image = match pending_rate.format() {
-            OutputFormat::Exr => done.output.sample_count_image(),
-            OutputFormat::Png => done.output.rate_image(settings.spp),
-        };
-        pending_rate.write_with_metadata(&image, &meta)?;
-        if !args.quiet {
-            ember::errln!("ember: sample rate map written to {}", rate.display());
-        }
-    }
+    let cost_scale = run.write(&done, pending, pending_rate, t_render.as_secs_f64())?;
     if done.output.nonfinite_samples > 0 {
         ember::errln!(
             "ember: warning: {} samples were NaN or infinite and were counted as black",
@@ -124,33 +102,8 @@ pub(super) fn render(mut args: RenderArgs) -> Result<()> {
             run.settings_summary(&done, pool.current_num_threads()),
             out.display()
         );
-        if let Some(scale) = cost_scale {
-            ember::errln!(
-                "ember: bvh-cost: mean {:.2} nodes + primitives tested per camera ray; PNG scale: blue = 0, red = {scale} ({})",
-                done.output.mean_cost_per_ray(),
-                match args.cost_scale {
-                    Some(_) => "--cost-scale",
-                    None => "99th percentile",
-                }
-            );
-        }
     }
-    match done.stopped {
-        Some(StopReason::Interrupted) => Err(Interrupted(format!(
-            "interrupted: wrote what was rendered so far ({}) to {}",
-            coverage(&done.output.samples),
-            out.display()
-        ))
-        .into()),
-        Some(StopReason::TimeUp) if !args.quiet => {
-            ember::errln!(
-                "ember: time budget spent: wrote {}",
-                coverage(&done.output.samples)
-            );
-            Ok(())
-        }
-        _ => Ok(()),
-    }
+    run.outcome(&done, cost_scale)
 }
 
 /// The bvh-cost image: raw counts in an EXR, a heat map (blue 0, red `scale`) in a PNG.
@@ -204,12 +157,83 @@ struct Rendered {
 /// One render's fixed inputs, shared by its run, its checkpoints and its metadata.
 struct RenderRun<'a> {
     scene_path: &'a Path,
+    out: &'a Path,
     job: &'a RenderJob,
     settings: &'a RenderSettings,
+    /// `--cost-scale`.
+    cost_scale: Option<f32>,
     quiet: bool,
 }
 
 impl RenderRun<'_> {
+    /// Writes the image (and the rate map with -a) with their metadata; returns the
+    /// bvh-cost scale used, if the image is a cost map.
+    fn write(
+        &self,
+        done: &Rendered,
+        pending: PendingImage,
+        pending_rate: Option<PendingImage>,
+        seconds: f64,
+    ) -> Result<Option<f32>> {
+        let mut meta = self.metadata(done, seconds);
+        let cost_scale = match self.settings.shading {
+            Shading::BvhCost => Some(write_cost_map(
+                pending,
+                &done.output,
+                self.cost_scale,
+                &mut meta,
+            )?),
+            _ => {
+                pending.write_with_metadata(&done.output.image, &meta)?;
+                None
+            }
+        };
+        if let Some(pending_rate) = pending_rate {
+            let rate = pending_rate.path().to_path_buf();
+            // The rate map: raw samples per pixel in an EXR, the course's colours in a PNG.
+            let image = match pending_rate.format() {
+                OutputFormat::Exr => done.output.sample_count_image(),
+                OutputFormat::Png => done.output.rate_image(self.settings.spp),
+            };
+            pending_rate.write_with_metadata(&image, &meta)?;
+            if !self.quiet {
+                ember::errln!("ember: sample rate map written to {}", rate.display());
+            }
+        }
+        Ok(cost_scale)
+    }
+
+    /// The last words: the cost map's scale, and how a stopped render ended (an
+    /// interrupt is an `Interrupted` error, for exit status 130).
+    fn outcome(&self, done: &Rendered, cost_scale: Option<f32>) -> Result<()> {
+        if let (Some(scale), false) = (cost_scale, self.quiet) {
+            ember::errln!(
+                "ember: bvh-cost: mean {:.2} nodes + primitives tested per camera ray; PNG scale: blue = 0, red = {scale} ({})",
+                done.output.mean_cost_per_ray(),
+                match self.cost_scale {
+                    Some(_) => "--cost-scale",
+                    None => "99th percentile",
+                }
+            );
+        }
+        match done.stopped {
+            Some(StopReason::Interrupted) => Err(Interrupted(format!(
+                "interrupted: wrote what was rendered so far ({}) to {}",
+                coverage(&done.output.samples),
+                self.out.display()
+            ))
+            .into()),
+            Some(StopReason::TimeUp) if !self.quiet => {
+                ember::errln!(
+                    "ember: time budget spent: wrote {}",
+                    coverage(&done.output.samples)
+                );
+                Ok(())
+            }
+            _ => Ok(()),
+        }
+    }
+
     /// Renders in one pass, or in passes (writing checkpoints to `pending`) as `plan` says.
     fn execute(
         &self,
