@@ -329,9 +329,13 @@ fn sigint_writes_what_was_rendered_and_no_partial_file() {
     // Plain, in passes, adaptive, and light tracing (auto's choice for CBempty).
     let lambertian = "CBspheres_lambertian.dae";
     for (scene, name, extra) in [
-        (lambertian, "i.png", &[][..]),
+        (lambertian, "i.png", &["-s", "4000"][..]),
         (lambertian, "i.exr", &["--checkpoint", "1000"][..]),
-        (lambertian, "a.exr", &["-a", "64", "0.00001"][..]),
+        (
+            lambertian,
+            "a.exr",
+            &["-s", "4000", "-a", "64", "0.00001"][..],
+        ),
         ("CBempty.dae", "l.exr", &[][..]),
     ] {
         let dir = tempfile::tempdir().unwrap();
@@ -340,7 +344,7 @@ fn sigint_writes_what_was_rendered_and_no_partial_file() {
         // The output's temporary is claimed just before the handler is installed;
         // give the render a moment to start after that.
         wait_for(|| !leftovers(dir.path(), &[]).is_empty());
-        std::thread::sleep(Duration::from_millis(700));
+        std::thread::sleep(Duration::from_millis(1500));
         send_sigint(&child);
         let o = child.wait_with_output().unwrap();
         assert_no_panic(&o);
