@@ -45,10 +45,11 @@ pub struct Cli {
 
 #[derive(Subcommand, Debug)]
 pub enum Command {
-    /// Print what a scene contains (geometry, lights, materials, camera, bounds) and the backends of this build.
+    /// Print what a scene contains (meshes with their object and material names, lights, materials, camera, bounds),
+    /// the native BVH's shape and build time, and the backends of this build; for a .png/.exr ember wrote, how it was made.
     #[command(allow_negative_numbers = true)]
     Info {
-        /// The .dae scene file.
+        /// The .dae scene file, or an image ember wrote.
         scene: PathBuf,
         /// Resolution at which to report the camera's field of view.
         #[arg(short = 'r', num_args = 2, action = clap::ArgAction::Set, value_names = ["WIDTH", "HEIGHT"], default_values_t = [480, 360])]
