@@ -130,8 +130,7 @@ pub fn render(
         job.accel.as_ref(),
         settings.path_settings(&job.scene),
     );
-    let sample =
-        |x: u32, y: u32, s: &mut Sampler| integrator.li(camera.generate_ray(x, y, s.next_2d()), s);
+    let sample = |x: u32, y: u32, s: &mut Sampler| integrator.li(camera.sample_ray(x, y, s), s);
     let stream = |x: u32, y: u32| y as u64 * w as u64 + x as u64;
     let r = QUIET_RADIUS;
     let halo = PixelRect {

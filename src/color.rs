@@ -15,3 +15,33 @@ pub fn luminance(c: Color) -> f32 {
 pub fn is_finite(c: Color) -> bool {
     c.x.is_finite() && c.y.is_finite() && c.z.is_finite()
 }
+
+/// A vector with trailing zeros trimmed, for people: `(0, 0.75, 4.802344)`.
+pub fn compact(x: glam::Vec3) -> String {
+    let f = |c: f32| {
+        let s = format!("{c:.6}");
+        let s = s.trim_end_matches('0').trim_end_matches('.');
+        // Tiny negatives such as −1e-8 would print as "-0".
+        if s == "-0" {
+            "0".to_string()
+        } else {
+            s.to_string()
+        }
+    };
+    format!("({}, {}, {})", f(x.x), f(x.y), f(x.z))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use glam::Vec3;
+
+    #[test]
+    fn vectors_print_compactly() {
+        assert_eq!(
+            compact(Vec3::new(-0.0, 0.75, 4.8023443)),
+            "(0, 0.75, 4.802344)"
+        );
+        assert_eq!(compact(Vec3::new(10.0, -1.5, 100.0)), "(10, -1.5, 100)");
+    }
+}

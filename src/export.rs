@@ -37,14 +37,10 @@ impl MitsubaSettings {
     /// The settings that make Mitsuba render what ember renders with `-s spp -m max_depth`
     /// and roulette policy `roulette`.
     pub fn for_ember(spp: u32, max_depth: u32, roulette: &Roulette) -> Self {
-        let roulette_start = match *roulette {
-            Roulette::Throughput { start, .. } | Roulette::Fixed { start, .. } => Some(start),
-            Roulette::Off => None,
-        };
         MitsubaSettings {
             spp,
             max_depth,
-            roulette_start,
+            roulette_start: roulette.start(),
         }
     }
 }
@@ -243,12 +239,13 @@ fn bsdf_xml(m: &Material, warnings: &mut Vec<String>) -> String {
              <rgb name=\"specular_reflectance\" value=\"{}\"/></bsdf>\n",
             rgb(reflectance)
         )),
-        Material::Microfacet { alpha, eta, k } => two_sided(format!(
+        Material::Microfacet(c) => two_sided(format!(
             "  <bsdf type=\"roughconductor\"><string name=\"distribution\" value=\"beckmann\"/>\
-             <float name=\"alpha\" value=\"{alpha}\"/><rgb name=\"eta\" value=\"{}\"/>\
+             <float name=\"alpha\" value=\"{}\"/><rgb name=\"eta\" value=\"{}\"/>\
              <rgb name=\"k\" value=\"{}\"/></bsdf>\n",
-            rgb(eta),
-            rgb(k)
+            c.alpha,
+            rgb(c.eta()),
+            rgb(c.k())
         )),
         Material::Glass {
             ior,

@@ -52,6 +52,16 @@ impl ImageMetadata {
         m.push("ember.adaptive", format!("{:?}", s.adaptive));
         m.push("ember.shading", s.shading);
         m.push("ember.seed", s.seed);
+        let lens = job.camera.lens;
+        if !lens.is_pinhole() {
+            m.push(
+                "ember.lens",
+                format!(
+                    "radius {} focal distance {}",
+                    lens.radius, lens.focal_distance
+                ),
+            );
+        }
         m.push("ember.backend", job.accel.name());
         m.push("ember.render_seconds", format!("{render_seconds:.3}"));
         m

@@ -2,10 +2,9 @@
 //! can check counts, lights, materials and the derived camera at a glance.
 
 use crate::camera::Camera;
+use crate::color::compact as v;
 use crate::lights::Light;
-use crate::materials::Material;
 use crate::scene::{Scene, NO_LIGHT};
-use glam::Vec3;
 use std::fmt::Write;
 
 /// Human-readable summary of `scene` as rendered at `width × height`.
@@ -38,8 +37,8 @@ fn write_info(out: &mut String, scene: &Scene, width: u32, height: u32) -> std::
     writeln!(out, "materials: {}", scene.materials.len())?;
     for (i, m) in scene.materials.iter().enumerate() {
         match scene.material_names.get(i) {
-            Some(name) => writeln!(out, "  [{i}] {name}: {}", describe_material(m))?,
-            None => writeln!(out, "  [{i}] {}", describe_material(m))?,
+            Some(name) => writeln!(out, "  [{i}] {name}: {}", m.describe())?,
+            None => writeln!(out, "  [{i}] {}", m.describe())?,
         }
     }
     write_camera(out, scene, width, height)?;
@@ -138,55 +137,5 @@ fn describe_light(l: &Light) -> String {
         Light::Ambient { radiance } => {
             format!("ambient (upper hemisphere): radiance {}", v(radiance))
         }
-    }
-}
-
-fn describe_material(m: &Material) -> String {
-    match *m {
-        Material::Lambertian { albedo } => format!("lambertian: albedo {}", v(albedo)),
-        Material::Mirror { reflectance } => format!("mirror: reflectance {}", v(reflectance)),
-        Material::Glass {
-            ior,
-            reflectance,
-            transmittance,
-        } => format!(
-            "glass: ior {ior}, reflectance {}, transmittance {}",
-            v(reflectance),
-            v(transmittance)
-        ),
-        Material::Refraction { ior, transmittance } => {
-            format!("refraction: ior {ior}, transmittance {}", v(transmittance))
-        }
-        Material::Microfacet { alpha, eta, k } => {
-            format!("microfacet: alpha {alpha}, eta {}, k {}", v(eta), v(k))
-        }
-        Material::Emission { radiance } => format!("emission: radiance {}", v(radiance)),
-        Material::Black => "black (an area light's surface)".into(),
-    }
-}
-
-/// A vector with trailing zeros trimmed: `(0, 0.75, 4.802344)`.
-fn v(x: Vec3) -> String {
-    let f = |c: f32| {
-        let s = format!("{c:.6}");
-        let s = s.trim_end_matches('0').trim_end_matches('.');
-        // Tiny negatives such as −1e-8 would print as "-0".
-        if s == "-0" {
-            "0".to_string()
-        } else {
-            s.to_string()
-        }
-    };
-    format!("({}, {}, {})", f(x.x), f(x.y), f(x.z))
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn vectors_print_compactly() {
-        assert_eq!(v(Vec3::new(-0.0, 0.75, 4.8023443)), "(0, 0.75, 4.802344)");
-        assert_eq!(v(Vec3::new(10.0, -1.5, 100.0)), "(10, -1.5, 100)");
     }
 }

@@ -159,6 +159,25 @@ impl RenderOutput {
         self.samples.iter().map(|&s| s as u64).sum()
     }
 
+    /// This render of pixels `rect` placed in a black `width × height` frame (no samples
+    /// outside `rect`), as a full-size image of one cell.
+    pub fn into_frame(self, rect: PixelRect, width: u32, height: u32) -> RenderOutput {
+        let mut image = Image::new(width, height);
+        let mut samples = vec![0u32; (width * height) as usize];
+        for y in rect.y0..rect.y1 {
+            let src = ((y - rect.y0) * rect.width()) as usize;
+            let dst = (y * width + rect.x0) as usize;
+            let n = rect.width() as usize;
+            image.pixels[dst..dst + n].copy_from_slice(&self.image.pixels[src..src + n]);
+            samples[dst..dst + n].copy_from_slice(&self.samples[src..src + n]);
+        }
+        RenderOutput {
+            image,
+            samples,
+            ..self
+        }
+    }
+
     /// The course's sample-rate image: blue few samples, red many (relative to spp).
     pub fn rate_image(&self, spp: u32) -> Image {
         let counts: Vec<f32> = self.samples.iter().map(|&s| s as f32).collect();
@@ -319,7 +338,7 @@ fn render_pixel(
     while n < s.spp.max(1) {
         for _ in 0..batch.min(s.spp.max(1) - n) {
             let mut sampler = Sampler::for_sample(s.seed, pixel, n as u64);
-            let ray = camera.generate_ray(x, y, sampler.next_2d());
+            let ray = camera.sample_ray(x, y, &mut sampler);
             let mut v = match s.shading {
                 Shading::Radiance => integrator.li(ray, &mut sampler),
                 Shading::Normals => debug::normal_color(scene, accel, &ray),

@@ -5,7 +5,7 @@ mod common;
 
 use common::{chi2_p_value, integrate_bins, mean_and_stderr, sidak_significance};
 use ember::materials::microfacet::beckmann_lambda;
-use ember::materials::{fresnel, specular, Material};
+use ember::materials::{fresnel, specular, Conductor, Material};
 use ember::sampling::{uniform_sphere, Sampler};
 use ember::{Color, Vec2, Vec3};
 
@@ -24,16 +24,12 @@ fn gold() -> (Color, Color) {
 
 fn microfacet(alpha: f32) -> Material {
     let (eta, k) = gold();
-    Material::Microfacet { alpha, eta, k }
+    Material::Microfacet(Conductor::new(alpha, eta, k))
 }
 
 /// A perfect reflector: index 0 + 1i gives F = 1 at every angle.
 fn white_microfacet(alpha: f32) -> Material {
-    Material::Microfacet {
-        alpha,
-        eta: Color::ZERO,
-        k: Color::ONE,
-    }
+    Material::Microfacet(Conductor::new(alpha, Color::ZERO, Color::ONE))
 }
 
 /// `wo` at polar angle `theta_deg` on the front (or back) face, at an azimuth

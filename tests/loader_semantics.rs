@@ -6,7 +6,7 @@ mod common;
 
 use common::{geometry_instance, parse_ok, quad_instance, scene_doc};
 use ember::lights::{AreaLight, Light};
-use ember::materials::Material;
+use ember::materials::{Conductor, Material};
 use ember::scene::Scene;
 use ember::Vec3;
 
@@ -302,11 +302,11 @@ fn material_kind_selection() {
                 ior: 1.2,
                 transmittance: Vec3::ONE
             },
-            Material::Microfacet {
-                alpha: 0.1,
-                eta: Vec3::new(1.0, 2.0, 3.0),
-                k: Vec3::new(4.0, 5.0, 6.0)
-            },
+            Material::Microfacet(Conductor::new(
+                0.1,
+                Vec3::new(1.0, 2.0, 3.0),
+                Vec3::new(4.0, 5.0, 6.0)
+            )),
             Material::Emission {
                 radiance: Vec3::new(7.0, 8.0, 9.0)
             },

@@ -290,14 +290,21 @@ fn case8_russian_roulette_with_low_probability_stays_unbiased() {
             off.se
         );
     }
-    // Killing 95% of paths after the first bounce and weighting survivors ×20 must cost variance.
-    let q05 = c.runs.iter().find(|r| r.name.contains("0.05")).unwrap();
-    assert!(
-        q05.noise > 2.0 * off.noise,
-        "q = 0.05 noise {} vs {}",
-        q05.noise,
-        off.noise
-    );
+    // Killing 95% of paths after the first bounce and weighting survivors ×20 must cost
+    // variance. Only the direction is asserted, with a margin: the per-pixel noise of
+    // 1200 pixels is known to a few percent when variances are equal, so a roulette
+    // that did nothing fails `> 1.25×`; the size of the increase is not asserted, since
+    // its estimate is dominated by rare paths that survive two or three ×20 roulettes
+    // (the noise of one seed measured ×14 that of no roulette, another ×1.75).
+    for r in c.runs.iter().filter(|r| r.name.starts_with("fixed")) {
+        assert!(
+            r.noise > 1.25 * off.noise,
+            "{}: noise {} vs no roulette {}",
+            r.name,
+            r.noise,
+            off.noise
+        );
+    }
 }
 
 #[test]

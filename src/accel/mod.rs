@@ -214,7 +214,8 @@ fn choose_auto_for(prims: usize, embree_available: bool) -> AutoChoice {
 
 /// The backends this build can use, for `ember info`.
 pub fn backends_info() -> String {
-    let native = "native BVH (midpoint, binned SAH)";
+    let builders: Vec<&str> = BvhBuilder::TABLE.iter().map(|r| r.1).collect();
+    let native = format!("native BVH (--bvh {})", builders.join(", "));
     #[cfg(any(feature = "embree", feature = "embree4"))]
     let embree = match embree::info() {
         Ok(info) => info.to_string(),

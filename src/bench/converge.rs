@@ -10,6 +10,7 @@
 use super::chart::{write_chart, ChartSpec, Series};
 use super::mitsuba::MitsubaRunner;
 use super::table::Table;
+use super::{create_out_dir, write_text, Report};
 use crate::accel::{AccelKind, BvhBuilder, EmbreeQuality};
 use crate::camera::Camera;
 use crate::film::Image;
@@ -74,6 +75,11 @@ pub struct Point {
 }
 
 pub struct ConvergeReport {
+    /// The scene's file stem, which names the report's files.
+    pub scene: String,
+    pub max_depth: u32,
+    pub width: u32,
+    pub height: u32,
     pub points: Vec<Point>,
     pub target_rmse: f64,
     /// (method, seconds to reach the target RMSE, if it did).
@@ -217,6 +223,10 @@ pub fn run(opts: &ConvergeOptions, log: &mut dyn FnMut(&str)) -> Result<Converge
     let target = opts.target_rmse.unwrap_or_else(|| default_target(&points));
     let time_to_target = time_to_reach(&points, target);
     Ok(ConvergeReport {
+        scene: scene_stem(&opts.scene),
+        max_depth: opts.max_depth,
+        width: opts.width,
+        height: opts.height,
         points,
         target_rmse: target,
         time_to_target,
@@ -350,11 +360,7 @@ fn own_reference(
     base: &RenderSettings,
     log: &mut dyn FnMut(&str),
 ) -> Result<Reference> {
-    let stem = opts
-        .scene
-        .file_stem()
-        .map(|s| s.to_string_lossy().into_owned())
-        .unwrap_or_default();
+    let stem = scene_stem(&opts.scene);
     let cache = opts.out_dir.join("cache");
     std::fs::create_dir_all(&cache)
         .with_context(|| format!("{}: cannot create", cache.display()))?;
@@ -453,14 +459,21 @@ pub fn time_to_reach(points: &[Point], target: f64) -> Vec<(String, Option<f64>)
         .collect()
 }
 
+/// `path`'s file name without its extension ("" when it has none).
+fn scene_stem(path: &Path) -> String {
+    path.file_stem()
+        .map(|s| s.to_string_lossy().into_owned())
+        .unwrap_or_default()
+}
+
 impl ConvergeReport {
-    pub fn to_csv(&self, scene: &str) -> String {
+    pub fn to_csv(&self) -> String {
         let mut t = Table::new([
             "scene", "method", "spp", "samples", "seconds", "rmse", "relmse",
         ]);
         for p in &self.points {
             t.push(vec![
-                scene.to_string(),
+                self.scene.clone(),
                 p.method.clone(),
                 p.spp.to_string(),
                 p.samples.to_string(),
@@ -509,32 +522,47 @@ impl ConvergeReport {
         }
         out
     }
+}
 
-    /// Writes `<stem>.csv`, and error-vs-time charts `<stem>_rmse.{png,svg}` and `<stem>_relmse.{png,svg}`.
-    pub fn write(&self, stem: &Path, scene: &str, title: &str) -> Result<()> {
-        let csv = stem.with_extension("csv");
-        std::fs::write(&csv, self.to_csv(scene))
-            .with_context(|| format!("{}: cannot write", csv.display()))?;
-        let name = |suffix: &str| {
-            stem.with_file_name(format!(
-                "{}_{suffix}",
-                stem.file_name().unwrap_or_default().to_string_lossy()
-            ))
-        };
+impl Report for ConvergeReport {
+    /// `<scene>_m<M>.csv`, and error-vs-time charts `<scene>_m<M>_rmse.{png,svg}` and
+    /// `<scene>_m<M>_relmse.{png,svg}`.
+    fn write(&self, out_dir: &Path) -> Result<Vec<PathBuf>> {
+        create_out_dir(out_dir)?;
+        let stem = format!("{}_m{}", self.scene, self.max_depth);
+        let csv = out_dir.join(format!("{stem}.csv"));
+        write_text(&csv, &self.to_csv())?;
+        let title = format!(
+            "{}, -m {}, {}x{}: error vs time",
+            self.scene, self.max_depth, self.width, self.height
+        );
+        let (rmse, relmse) = (
+            out_dir.join(format!("{stem}_rmse")),
+            out_dir.join(format!("{stem}_relmse")),
+        );
         let spec = ChartSpec {
-            title,
+            title: &title,
             x_label: "render time (s, 2 threads)",
             y_label: "RMSE vs reference",
             log_x: true,
             log_y: true,
         };
-        write_chart(&name("rmse"), &spec, &self.series(|p| p.rmse))?;
+        write_chart(&rmse, &spec, &self.series(|p| p.rmse))?;
         let spec = ChartSpec {
             y_label: "relMSE vs reference",
             ..spec
         };
-        write_chart(&name("relmse"), &spec, &self.series(|p| p.rel_mse))?;
-        Ok(())
+        write_chart(&relmse, &spec, &self.series(|p| p.rel_mse))?;
+        let mut files = vec![csv];
+        for chart in [rmse, relmse] {
+            files.extend(["png", "svg"].map(|ext| chart.with_extension(ext)));
+        }
+        Ok(files)
+    }
+
+    /// Where the reference came from, and the time each method needs to reach the target RMSE.
+    fn summary(&self) -> String {
+        format!("{}\n{}", self.reference_note, self.efficiency_table())
     }
 }
 

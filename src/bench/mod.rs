@@ -1,5 +1,7 @@
 //! Benchmarks behind `ember bench`: speed against accuracy, and acceleration-structure
-//! cost. Library functions return data, so the CLI only parses options and prints.
+//! cost. Every benchmark has the same shape: its `run` returns a report, and the
+//! report ([`Report`]) writes its files and gives the summary the command prints,
+//! so the CLI only parses options and calls those three.
 
 pub mod accel;
 pub mod chart;
@@ -13,6 +15,27 @@ pub mod render;
 pub mod scaling;
 pub mod stability;
 pub mod table;
+
+use anyhow::{Context, Result};
+use std::path::{Path, PathBuf};
+
+/// What a benchmark's result offers the command line once `run` has returned it.
+pub trait Report {
+    /// Writes the report's files into `out_dir` (created if missing); returns their paths.
+    fn write(&self, out_dir: &Path) -> Result<Vec<PathBuf>>;
+    /// The text the command prints on stdout.
+    fn summary(&self) -> String;
+}
+
+/// Creates `dir` (and its parents) for a report's files.
+pub fn create_out_dir(dir: &Path) -> Result<()> {
+    std::fs::create_dir_all(dir).with_context(|| format!("{}: cannot create", dir.display()))
+}
+
+/// Writes `text` to `path`, naming the file on failure.
+pub fn write_text(path: &Path, text: &str) -> Result<()> {
+    std::fs::write(path, text).with_context(|| format!("{}: cannot write", path.display()))
+}
 
 /// Median of `samples` (mean of the middle two for an even count); 0 when empty.
 pub fn median(samples: &mut [f64]) -> f64 {

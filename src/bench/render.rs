@@ -2,10 +2,11 @@
 //! timed apart), the median of several repetitions per scene.
 
 use super::table::Table;
+use super::{create_out_dir, Report};
 use crate::accel::{AccelKind, BvhBuilder};
 use crate::render::{RenderJob, RenderSettings};
 use crate::scene::collada;
-use anyhow::{Context, Result};
+use anyhow::Result;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
@@ -17,7 +18,6 @@ pub struct RenderBenchOptions {
     /// Repetitions per scene; the median render is reported.
     pub repeat: u32,
     pub accel: AccelKind,
-    pub out_dir: PathBuf,
 }
 
 impl RenderBenchOptions {
@@ -39,7 +39,6 @@ impl Default for RenderBenchOptions {
             max_depth: 5,
             repeat: 3,
             accel: AccelKind::Native(BvhBuilder::Sah),
-            out_dir: PathBuf::from("bench-out/render"),
         }
     }
 }
@@ -136,15 +135,18 @@ impl RenderBenchReport {
         }
         t
     }
+}
 
-    pub fn to_markdown(&self) -> String {
-        self.table().to_markdown()
+impl Report for RenderBenchReport {
+    /// `<out_dir>/render.csv` and `render.md`.
+    fn write(&self, out_dir: &Path) -> Result<Vec<PathBuf>> {
+        create_out_dir(out_dir)?;
+        let stem = out_dir.join("render");
+        self.table().write(&stem)?;
+        Ok(vec![stem.with_extension("csv"), stem.with_extension("md")])
     }
 
-    /// Writes `<out_dir>/render.csv` and `render.md`.
-    pub fn write(&self, out_dir: &Path) -> Result<()> {
-        std::fs::create_dir_all(out_dir)
-            .with_context(|| format!("{}: cannot create", out_dir.display()))?;
-        self.table().write(&out_dir.join("render"))
+    fn summary(&self) -> String {
+        self.table().to_markdown()
     }
 }

@@ -2,10 +2,10 @@
 
 use super::args::BenchCommand;
 use super::convert::{check_resolution, threads_invalid};
-use anyhow::{bail, Context, Result};
+use anyhow::{bail, Result};
 use ember::accel::{AccelKind, BvhBuilder, EmbreeQuality};
-use ember::bench;
-use std::path::PathBuf;
+use ember::bench::{self, Report};
+use std::path::{Path, PathBuf};
 
 /// `ember bench ...`: each benchmark runs, writes its report, prints its summary.
 pub(super) fn run(which: BenchCommand) -> Result<()> {
@@ -87,18 +87,20 @@ fn run_on_pool(which: BenchCommand) -> Result<()> {
             accel: a,
             out,
             ..
-        } => bench_render(bench::render::RenderBenchOptions {
-            scenes: if scenes.is_empty() {
-                bench::render::RenderBenchOptions::default_scenes()
-            } else {
-                scenes
+        } => bench_render(
+            bench::render::RenderBenchOptions {
+                scenes: if scenes.is_empty() {
+                    bench::render::RenderBenchOptions::default_scenes()
+                } else {
+                    scenes
+                },
+                spp,
+                max_depth,
+                repeat: repeats.max(1),
+                accel: AccelKind::new(a, BvhBuilder::default(), EmbreeQuality::default()),
             },
-            spp,
-            max_depth,
-            repeat: repeats.max(1),
-            accel: AccelKind::new(a, BvhBuilder::default(), EmbreeQuality::default()),
-            out_dir: out,
-        }),
+            out,
+        ),
     }
 }
 
@@ -106,19 +108,8 @@ fn bench_stability(out: PathBuf, spp_scale: f32, seed: u64) -> Result<()> {
     if !(spp_scale.is_finite() && spp_scale > 0.0) {
         bail!("--spp-scale must be a positive number");
     }
-    let opts = bench::stability::StabilityOptions {
-        out_dir: out.clone(),
-        spp_scale,
-        seed,
-    };
-    // run_stability writes its report.
-    let report = bench::stability::run_stability(&opts)?;
-    ember::outln!("{}", report.to_markdown())?;
-    ember::outln!(
-        "wrote {}/stability.csv, stability.md and stability_noise.png/.svg",
-        out.display()
-    )?;
-    Ok(())
+    let opts = bench::stability::StabilityOptions { spp_scale, seed };
+    finish(&bench::stability::run_stability(&opts)?, &out)
 }
 
 fn bench_scaling(out: PathBuf, repeats: usize) -> Result<()> {
@@ -168,35 +159,19 @@ fn bench_accel(
 }
 
 fn bench_converge(opts: bench::converge::ConvergeOptions) -> Result<()> {
-    let out = &opts.out_dir;
-    std::fs::create_dir_all(out).with_context(|| format!("{}: cannot create", out.display()))?;
     let report = bench::converge::run(&opts, &mut |m| ember::errln!("ember: {m}"))?;
-    let stem_name = opts
-        .scene
-        .file_stem()
-        .map(|s| s.to_string_lossy().into_owned())
-        .unwrap_or_default();
-    let stem = out.join(format!("{stem_name}_m{}", opts.max_depth));
-    let title = format!(
-        "{stem_name}, -m {}, {}x{}: error vs time",
-        opts.max_depth, opts.width, opts.height
-    );
-    report.write(&stem, &stem_name, &title)?;
-    ember::outln!("{}", report.reference_note)?;
-    ember::outln!("{}", report.efficiency_table())?;
-    ember::outln!(
-        "wrote {}.csv and {}_rmse.png/.svg, {}_relmse.png/.svg",
-        stem.display(),
-        stem.display(),
-        stem.display()
-    )?;
-    Ok(())
+    finish(&report, &opts.out_dir)
 }
 
-fn bench_render(opts: bench::render::RenderBenchOptions) -> Result<()> {
-    let report = bench::render::run(&opts)?;
-    report.write(&opts.out_dir)?;
-    ember::out!("{}", report.to_markdown())?;
-    ember::outln!("wrote {}/render.csv and render.md", opts.out_dir.display())?;
+fn bench_render(opts: bench::render::RenderBenchOptions, out: PathBuf) -> Result<()> {
+    finish(&bench::render::run(&opts)?, &out)
+}
+
+/// The end of every benchmark: write its report into `out`, print its summary and the files.
+fn finish(report: &impl Report, out: &Path) -> Result<()> {
+    let files = report.write(out)?;
+    ember::outln!("{}", report.summary().trim_end())?;
+    let files: Vec<String> = files.iter().map(|f| f.display().to_string()).collect();
+    ember::outln!("wrote {}", files.join(", "))?;
     Ok(())
 }

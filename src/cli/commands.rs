@@ -1,17 +1,19 @@
 //! One short function per subcommand: convert the flags, call the library, report.
 
-use super::args::{ExportArgs, ExportFormat, RenderArgs};
+use super::args::{CameraArgs, ExportArgs, ExportFormat, RenderArgs};
 use super::convert::{
-    adopt_scene_from_adaptive, check_flags, check_resolution, flag_warnings, output_path, run_plan,
-    settings_from, RunPlan,
+    self, adopt_scene_from_adaptive, cell_rect, check_flags, check_lens, check_resolution,
+    flag_warnings, output_path, run_plan, settings_from, RunPlan,
 };
 use super::interrupt::{self, Interrupted};
 use anyhow::{bail, Result};
 use ember::accel;
+use ember::camera::course_file::CourseCameraFile;
 use ember::image_io::{OutputFormat, PendingImage};
 use ember::image_metadata::ImageMetadata;
 use ember::render::{
-    render_passes, Film, RenderJob, RenderSettings, Shading, StopReason, StopToken,
+    render_passes, Film, PixelRect, RenderJob, RenderOutput, RenderSettings, Shading, StopReason,
+    StopToken,
 };
 use ember::scene::{collada, Scene};
 use indicatif::{ProgressBar, ProgressStyle};
@@ -37,6 +39,13 @@ pub(super) fn render(mut args: RenderArgs) -> Result<()> {
         ember::errln!("ember: warning: {w}");
     }
     let plan = run_plan(&args, &settings)?;
+    check_lens(&args.lens)?;
+    let camera_file = (args.camera_file.as_deref())
+        .map(CourseCameraFile::read)
+        .transpose()?;
+    let cell = (args.cell.as_deref())
+        .map(|c| cell_rect(c, width, height))
+        .transpose()?;
     let out = output_path(&args, &scene_path)?;
     // Claim the outputs before loading, so a bad path fails at once and no partial file appears.
     let mut pending = PendingImage::claim(&out, &[&scene_path])?;
@@ -51,20 +60,33 @@ pub(super) fn render(mut args: RenderArgs) -> Result<()> {
         args.embree_quality.unwrap_or_default(),
     );
     let pool = thread_pool(args.threads)?;
-    check_memory(width, height, plan)?;
+    // The buffers are the cell's, unless the cell is written in a full frame.
+    let (mw, mh) = match (cell, args.full_frame) {
+        (Some(r), false) => (r.width(), r.height()),
+        _ => (width, height),
+    };
+    check_memory(mw, mh, plan)?;
     let t0 = Instant::now();
     let scene = load_scene(&scene_path)?;
     let t_load = t0.elapsed();
+    let (camera, camera_warning) =
+        convert::camera(&scene, camera_file.as_ref(), &args.lens, (width, height))?;
+    if let (Some(w), Some(file)) = (camera_warning, &args.camera_file) {
+        ember::errln!("ember: warning: {}: {w}", file.display());
+    }
     let t1 = Instant::now();
-    let job = pool.install(|| RenderJob::new(scene, kind, width, height))?;
+    let job = pool.install(|| RenderJob::with_camera(scene, kind, camera))?;
     let t_build = t1.elapsed();
     // Again now that the scene and its BVH hold their share.
-    check_memory(width, height, plan)?;
+    check_memory(mw, mh, plan)?;
     if interrupt.load(Ordering::Relaxed) {
         return Err(Interrupted("interrupted before rendering; nothing written".into()).into());
     }
     for w in job.warnings(&settings) {
         ember::errln!("ember: warning: {w}");
+    }
+    if cell.is_some() && settings.shading == Shading::BvhCost && args.cost_scale.is_none() {
+        ember::errln!("ember: warning: -p: the bvh-cost heat map is scaled to the cell's own pixels, not the full image's; --cost-scale fixes the scale");
     }
     let t2 = Instant::now();
     let mut stop = StopToken::never().with_flag(interrupt);
@@ -74,10 +96,10 @@ pub(super) fn render(mut args: RenderArgs) -> Result<()> {
     let run = RenderRun {
         scene_path: &scene_path,
         out: &out,
+        args: &args,
         job: &job,
         settings: &settings,
-        cost_scale: args.cost_scale,
-        quiet: args.quiet,
+        cell,
     };
     let done = pool.install(|| run.execute(plan, &stop, &mut pending))?;
     let t_render = t2.elapsed();
@@ -110,7 +132,7 @@ pub(super) fn render(mut args: RenderArgs) -> Result<()> {
 /// Returns the scale used; both it and the mean cost go into the metadata.
 fn write_cost_map(
     pending: PendingImage,
-    output: &ember::render::RenderOutput,
+    output: &RenderOutput,
     scale: Option<f32>,
     meta: &mut ImageMetadata,
 ) -> Result<f32> {
@@ -149,7 +171,7 @@ fn check_memory(width: u32, height: u32, plan: RunPlan) -> Result<()> {
 
 /// What a render produced, and why it ended early if it did.
 struct Rendered {
-    output: ember::render::RenderOutput,
+    output: RenderOutput,
     passes: Option<u32>,
     stopped: Option<StopReason>,
 }
@@ -158,11 +180,11 @@ struct Rendered {
 struct RenderRun<'a> {
     scene_path: &'a Path,
     out: &'a Path,
+    args: &'a RenderArgs,
     job: &'a RenderJob,
     settings: &'a RenderSettings,
-    /// `--cost-scale`.
-    cost_scale: Option<f32>,
-    quiet: bool,
+    /// `-p`: the cell rendered instead of the whole image.
+    cell: Option<PixelRect>,
 }
 
 impl RenderRun<'_> {
@@ -180,7 +202,7 @@ impl RenderRun<'_> {
             Shading::BvhCost => Some(write_cost_map(
                 pending,
                 &done.output,
-                self.cost_scale,
+                self.args.cost_scale,
                 &mut meta,
             )?),
             _ => {
@@ -196,7 +218,7 @@ impl RenderRun<'_> {
                 OutputFormat::Png => done.output.rate_image(self.settings.spp),
             };
             pending_rate.write_with_metadata(&image, &meta)?;
-            if !self.quiet {
+            if !self.args.quiet {
                 ember::errln!("ember: sample rate map written to {}", rate.display());
             }
         }
@@ -206,11 +228,11 @@ impl RenderRun<'_> {
     /// The last words: the cost map's scale, and how a stopped render ended (an
     /// interrupt is an `Interrupted` error, for exit status 130).
     fn outcome(&self, done: &Rendered, cost_scale: Option<f32>) -> Result<()> {
-        if let (Some(scale), false) = (cost_scale, self.quiet) {
+        if let (Some(scale), false) = (cost_scale, self.args.quiet) {
             ember::errln!(
                 "ember: bvh-cost: mean {:.2} nodes + primitives tested per camera ray; PNG scale: blue = 0, red = {scale} ({})",
                 done.output.mean_cost_per_ray(),
-                match self.cost_scale {
+                match self.args.cost_scale {
                     Some(_) => "--cost-scale",
                     None => "99th percentile",
                 }
@@ -223,7 +245,7 @@ impl RenderRun<'_> {
                 self.out.display()
             ))
             .into()),
-            Some(StopReason::TimeUp) if !self.quiet => {
+            Some(StopReason::TimeUp) if !self.args.quiet => {
                 ember::errln!(
                     "ember: time budget spent: wrote {}",
                     coverage(&done.output.samples)
@@ -241,24 +263,24 @@ impl RenderRun<'_> {
         stop: &StopToken,
         pending: &mut PendingImage,
     ) -> Result<Rendered> {
-        let frame = self.job.full_frame();
+        let frame = self.cell.unwrap_or_else(|| self.job.full_frame());
         let t0 = Instant::now();
         if !plan.in_passes() {
-            let pb = progress_bar(frame.area(), self.quiet);
+            let pb = progress_bar(frame.area(), self.args.quiet);
             let output = self
                 .job
                 .render_rect_until(self.settings, frame, &|n| pb.inc(n), stop);
             pb.finish_and_clear();
             return Ok(Rendered {
-                output,
+                output: self.framed(output),
                 passes: None,
                 stopped: stop.reason(),
             });
         }
         // A time budget shows time spent; otherwise samples traced.
         let pb = match plan.time {
-            Some(t) => progress_bar(t.as_millis() as u64, self.quiet),
-            None => progress_bar(frame.area() * self.settings.spp as u64, self.quiet),
+            Some(t) => progress_bar(t.as_millis() as u64, self.args.quiet),
+            None => progress_bar(frame.area() * self.settings.spp as u64, self.args.quiet),
         };
         let tick = |n: u64| match plan.time {
             Some(_) => pb.set_position(t0.elapsed().as_millis() as u64),
@@ -268,7 +290,7 @@ impl RenderRun<'_> {
         let mut checkpoint = |film: &Film| -> Result<()> {
             match plan.checkpoint {
                 Some(every) if last.elapsed() >= every => {
-                    let output = film.output();
+                    let output = self.framed(film.output());
                     let mut meta = self.metadata_base(t0.elapsed().as_secs_f64());
                     meta.push_samples(&output.samples, Some(film.passes), None);
                     meta.push("ember.checkpoint", "true");
@@ -283,14 +305,31 @@ impl RenderRun<'_> {
             render_passes(self.job, self.settings, frame, &tick, stop, &mut checkpoint)?;
         pb.finish_and_clear();
         Ok(Rendered {
-            output: film.output(),
+            output: self.framed(film.output()),
             passes: Some(film.passes),
             stopped,
         })
     }
 
+    /// With `-p … --full-frame`, the cell placed in the black full-size image.
+    fn framed(&self, output: RenderOutput) -> RenderOutput {
+        match (self.cell, self.args.full_frame) {
+            (Some(rect), true) => {
+                output.into_frame(rect, self.job.camera.width, self.job.camera.height)
+            }
+            _ => output,
+        }
+    }
+
     fn metadata_base(&self, seconds: f64) -> ImageMetadata {
-        ImageMetadata::for_render(self.scene_path, self.job, self.settings, seconds)
+        render_metadata(
+            self.scene_path,
+            self.args,
+            self.job,
+            self.settings,
+            self.cell,
+            seconds,
+        )
     }
 
     /// The metadata of the final image: settings, samples taken, and how it ended.
@@ -329,6 +368,67 @@ fn coverage(samples: &[u32]) -> String {
         samples.len(),
         total as f64 / samples.len().max(1) as f64
     )
+}
+
+/// What the image records: the render's settings, and the camera file and cell if given.
+fn render_metadata(
+    scene: &Path,
+    args: &RenderArgs,
+    job: &RenderJob,
+    settings: &RenderSettings,
+    cell: Option<PixelRect>,
+    seconds: f64,
+) -> ImageMetadata {
+    let mut meta = ImageMetadata::for_render(scene, job, settings, seconds);
+    if let Some(file) = &args.camera_file {
+        meta.push_file("ember.camera_file", file);
+    }
+    if let (Some(c), Some(r)) = (&args.cell, cell) {
+        meta.push(
+            "ember.cell",
+            format!(
+                "X Y DX DY = {} {} {} {} (pixels {}..{} x {}..{} from the top left){}",
+                c[0],
+                c[1],
+                c[2],
+                c[3],
+                r.x0,
+                r.x1,
+                r.y0,
+                r.y1,
+                if args.full_frame { ", full frame" } else { "" }
+            ),
+        );
+    }
+    meta
+}
+
+/// `ember camera SCENE [--save FILE]`: the course's camera settings file of the scene's camera.
+pub(super) fn camera(a: CameraArgs) -> Result<()> {
+    let (w, h) = (a.resolution[0], a.resolution[1]);
+    check_resolution(w, h)?;
+    check_lens(&a.lens)?;
+    let scene = load_scene(&a.scene)?;
+    let (camera, _) = convert::camera(&scene, None, &a.lens, (w, h))?;
+    let text = CourseCameraFile::from_camera(&camera, &scene.bounds).to_text();
+    match &a.save {
+        None => ember::out!("{text}")?,
+        Some(path) => write_text_file(path, &text)?,
+    }
+    Ok(())
+}
+
+/// Writes `text` to `path` through a temporary sibling, so no partial file is ever left.
+fn write_text_file(path: &Path, text: &str) -> Result<()> {
+    let fail = |e: std::io::Error| anyhow::anyhow!("{}: cannot write: {e}", path.display());
+    let mut tmp_name = path.file_name().unwrap_or_default().to_os_string();
+    tmp_name.push(".ember-tmp");
+    let tmp = path.with_file_name(tmp_name);
+    std::fs::write(&tmp, text).map_err(fail)?;
+    std::fs::rename(&tmp, path).map_err(|e| {
+        let _ = std::fs::remove_file(&tmp);
+        fail(e)
+    })
 }
 
 /// `ember info SCENE`: what the scene holds and the backends of this build.

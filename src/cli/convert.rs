@@ -1,10 +1,13 @@
 //! Flags into library settings: every check and translation of a flag's value lives here.
 
-use super::args::RenderArgs;
+use super::args::{LensArgs, RenderArgs};
 use anyhow::{bail, Context, Result};
 use ember::accel::Backend;
+use ember::camera::course_file::CourseCameraFile;
+use ember::camera::Camera;
 use ember::integrators::{DirectStrategy, Estimator, Roulette};
-use ember::render::{Adaptive, RenderSettings, Shading};
+use ember::render::{Adaptive, PixelRect, RenderSettings, Shading};
+use ember::scene::Scene;
 use std::path::{Path, PathBuf};
 use std::time::Duration;
 
@@ -195,4 +198,71 @@ pub(super) fn adopt_scene_from_adaptive(args: &mut RenderArgs) {
 #[cfg(feature = "bench")]
 pub(super) fn threads_invalid(t: &[usize]) -> bool {
     t.is_empty() || t.contains(&0)
+}
+
+/// `-b` and `-d` on their own: a radius of at least 0, a positive distance.
+pub(super) fn check_lens(lens: &LensArgs) -> Result<()> {
+    if let Some(b) = lens.lens_radius {
+        if !(b.is_finite() && b >= 0.0) {
+            bail!("-b: the lens radius must be a finite number of at least 0, got {b}");
+        }
+    }
+    if let Some(d) = lens.focal_distance {
+        if !(d.is_finite() && d > 0.0) {
+            bail!("-d: the focal distance must be a positive finite number, got {d}");
+        }
+    }
+    Ok(())
+}
+
+/// The render's camera: the `-c` file's view if given, else the scene's (spec §4); then
+/// `-b`/`-d` replace the lens. Also returns a warning about the file's field of view.
+pub(super) fn camera(
+    scene: &Scene,
+    file: Option<&CourseCameraFile>,
+    lens: &LensArgs,
+    (width, height): (u32, u32),
+) -> Result<(Camera, Option<String>)> {
+    let (mut cam, warning) = match file {
+        Some(f) => f.camera(width, height),
+        None => (
+            Camera::new(&scene.camera, &scene.bounds, width, height),
+            None,
+        ),
+    };
+    if let Some(b) = lens.lens_radius {
+        cam.lens.radius = b;
+    }
+    if let Some(d) = lens.focal_distance {
+        cam.lens.focal_distance = d;
+    }
+    if !cam.lens.is_pinhole() && cam.lens.focal_distance <= 0.0 {
+        bail!("-b: a lens needs a positive focal distance; give one with -d");
+    }
+    Ok((cam, warning))
+}
+
+/// `-p X Y DX DY` (Y counted from the bottom, as the course's frame buffer) as the pixel
+/// rectangle of a `width × height` image (rows counted from the top), checked to lie inside.
+pub(super) fn cell_rect(cell: &[u32], width: u32, height: u32) -> Result<PixelRect> {
+    let &[x, y, dx, dy] = cell else {
+        bail!("-p takes four values: X Y DX DY");
+    };
+    if dx == 0 || dy == 0 {
+        bail!("-p {x} {y} {dx} {dy}: the cell is empty (DX and DY must be at least 1)");
+    }
+    if x as u64 + dx as u64 > width as u64 || y as u64 + dy as u64 > height as u64 {
+        bail!(
+            "-p {x} {y} {dx} {dy}: the cell (columns {x}..{}, rows {y}..{} from the bottom) \
+             is not inside the {width}x{height} image",
+            x as u64 + dx as u64,
+            y as u64 + dy as u64
+        );
+    }
+    Ok(PixelRect {
+        x0: x,
+        x1: x + dx,
+        y0: height - y - dy,
+        y1: height - y,
+    })
 }

@@ -1,6 +1,7 @@
 //! Light tracing (particle tracing; pbrt-v4 `LightPathIntegrator`, Mitsuba 3
 //! `ptracer`): paths start on the lights, and every non-specular vertex is connected
-//! to the pinhole camera and splatted into the pixel that sees it.
+//! to the camera (the eye, or a point drawn on the thin lens) and splatted into the
+//! pixel that sees it.
 //!
 //! What it estimates: every path of `1…m` bounces (spec §7) that starts on a `Light`
 //! (area, point, directional, ambient). Paths of 0 bounces (area lights, emissive
@@ -25,7 +26,7 @@ use crate::render::{PixelRect, RenderJob, RenderOutput, RenderSettings, Shading,
 use crate::sampling::Sampler;
 use crate::scene::{Scene, SurfaceInteraction};
 use crate::Color;
-use glam::Vec3;
+use glam::{Vec2, Vec3};
 use rayon::prelude::*;
 
 /// Light paths per chunk (one random stream each).
@@ -130,7 +131,13 @@ impl<'a> LightTracer<'a> {
             let w_light = -ray.d.normalize();
             let frame = Frame::from_normal(si.ns);
             if !material.is_delta() && self.counts(bounces) {
-                nonfinite += self.connect_to_camera(&si, &frame, material, w_light, beta, splats);
+                // A lens point only with a lens, so pinhole renders keep their random numbers.
+                let u_lens = match self.camera.lens.is_pinhole() {
+                    true => Vec2::ZERO,
+                    false => sampler.next_2d(),
+                };
+                let vertex = (&si, &frame, material);
+                nonfinite += self.connect_to_camera(vertex, u_lens, w_light, beta, splats);
             }
             if bounces >= self.max_depth {
                 break;
@@ -163,14 +170,13 @@ impl<'a> LightTracer<'a> {
     /// Connects a non-specular vertex, lit along `w_light` with power `beta`, to the eye.
     fn connect_to_camera(
         &self,
-        si: &SurfaceInteraction,
-        frame: &Frame,
-        m: &Material,
+        (si, frame, m): (&SurfaceInteraction, &Frame, &Material),
+        u_lens: Vec2,
         w_light: Vec3,
         beta: Color,
         splats: &mut Vec<Splat>,
     ) -> u32 {
-        let Some(c) = self.camera.connect(si.p) else {
+        let Some(c) = self.camera.connect(si.p, u_lens) else {
             return 0;
         };
         let (wl, wc) = (frame.to_local(w_light), frame.to_local(c.to_eye));
@@ -193,10 +199,7 @@ impl<'a> LightTracer<'a> {
             return 0;
         }
         let o = offset_ray_origin(si.p, si.p_error, si.ng, c.to_eye);
-        if self
-            .accel
-            .occluded(&Ray::segment(o, self.camera.eye - o, 1.0))
-        {
+        if self.accel.occluded(&Ray::segment(o, c.origin - o, 1.0)) {
             return 0;
         }
         splats.push((c.x, c.y, value));
@@ -207,7 +210,7 @@ impl<'a> LightTracer<'a> {
     fn seen_directly(&self, x: u32, y: u32, spp: u32, sampler: &mut Sampler) -> Color {
         let mut sum = Color::ZERO;
         for _ in 0..spp {
-            let ray = self.camera.generate_ray(x, y, sampler.next_2d());
+            let ray = self.camera.sample_ray(x, y, sampler);
             sum += match self.accel.intersect(&ray) {
                 Some(h) => {
                     let si = self.scene.interaction(&ray, &h);

@@ -139,6 +139,14 @@ impl Default for Roulette {
 }
 
 impl Roulette {
+    /// The first bounce at which roulette may end a path; `None` when it is off.
+    pub fn start(&self) -> Option<u32> {
+        match *self {
+            Roulette::Off => None,
+            Roulette::Throughput { start, .. } | Roulette::Fixed { start, .. } => Some(start),
+        }
+    }
+
     /// Continuation probability after `bounces` scattering events with throughput `beta`.
     pub fn continue_prob(&self, bounces: u32, beta: crate::Color) -> f32 {
         match *self {

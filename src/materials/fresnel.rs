@@ -37,20 +37,42 @@ pub fn refracted_cos(cos_theta_i: f32, eta_ratio: f32) -> Option<f32> {
 /// Reflectance of a conductor with complex index `eta + i·k` (per channel) at
 /// `cos_theta = |cos θ|`, with the spec's closed form.
 pub fn conductor(cos_theta: f32, eta: Color, k: Color) -> Color {
-    Color::new(
-        conductor_channel(cos_theta, eta.x, k.x),
-        conductor_channel(cos_theta, eta.y, k.y),
-        conductor_channel(cos_theta, eta.z, k.z),
-    )
+    ConductorIor::new(eta, k).reflectance(cos_theta)
 }
 
-fn conductor_channel(cos_theta: f32, eta: f32, k: f32) -> f32 {
+/// A conductor's complex index `eta + i·k` per channel, with the angle-independent
+/// terms of the Fresnel closed form (`η² − k²`, `4η²k²`) computed once, at load.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ConductorIor {
+    pub eta: Color,
+    pub k: Color,
+    /// Per channel: `η² − k²` and `4η²k²`, in f64 as the formula needs them.
+    terms: [(f64, f64); 3],
+}
+
+impl ConductorIor {
+    pub fn new(eta: Color, k: Color) -> Self {
+        let terms = [0, 1, 2].map(|i| {
+            let (eta, k) = (eta[i] as f64, k[i] as f64);
+            (eta * eta - k * k, 4.0 * eta * eta * k * k)
+        });
+        ConductorIor { eta, k, terms }
+    }
+
+    /// Reflectance at `cos_theta = |cos θ|`.
+    pub fn reflectance(&self, cos_theta: f32) -> Color {
+        let [r, g, b] = self.terms.map(|t| conductor_channel(cos_theta, t));
+        Color::new(r, g, b)
+    }
+}
+
+/// One channel, from `(η² − k², 4η²k²)`.
+fn conductor_channel(cos_theta: f32, (eta2_minus_k2, four_eta2_k2): (f64, f64)) -> f32 {
     // f64 because A² − 2ac + c² cancels badly in f32 for k ≫ 1 at grazing angles.
     let c = cos_theta.clamp(0.0, 1.0) as f64;
-    let (eta, k) = (eta as f64, k as f64);
     let s2 = 1.0 - c * c;
-    let t0 = eta * eta - k * k - s2;
-    let a2 = (t0 * t0 + 4.0 * eta * eta * k * k).sqrt();
+    let t0 = eta2_minus_k2 - s2;
+    let a2 = (t0 * t0 + four_eta2_k2).sqrt();
     let a = (0.5 * (a2 + t0)).max(0.0).sqrt();
     let rs = ratio(a2 - 2.0 * a * c + c * c, a2 + 2.0 * a * c + c * c);
     let p_term = c * c * a2 + s2 * s2;

@@ -3,7 +3,8 @@
 //! distribution of normals `D(h)·cos θh`, reflected about `h`. Two-sided: on the
 //! back face the frame is mirrored (z of both directions flipped).
 
-use super::{fresnel, BsdfSample};
+use super::fresnel::ConductorIor;
+use super::BsdfSample;
 use crate::sampling::{beckmann_d, beckmann_normal, beckmann_normal_pdf};
 use crate::Color;
 use glam::{Vec2, Vec3};
@@ -13,12 +14,13 @@ use glam::{Vec2, Vec3};
 /// finite glossy lobe rather than turning into a delta.
 pub const MIN_ALPHA: f32 = 1e-3;
 
-/// Conductor parameters with α already clamped.
-#[derive(Clone, Copy, Debug)]
+/// A rough conductor's parameters, built once when the material is made (the loader):
+/// α clamped, the Fresnel terms of its complex index precomputed.
+#[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Conductor {
+    /// Beckmann roughness, at least [`MIN_ALPHA`] (a non-finite α is taken as 1).
     pub alpha: f32,
-    pub eta: Color,
-    pub k: Color,
+    pub ior: ConductorIor,
 }
 
 impl Conductor {
@@ -26,9 +28,18 @@ impl Conductor {
         let alpha = if alpha.is_finite() { alpha } else { 1.0 };
         Conductor {
             alpha: alpha.max(MIN_ALPHA),
-            eta,
-            k,
+            ior: ConductorIor::new(eta, k),
         }
+    }
+
+    /// The real part of the complex index, per channel.
+    pub fn eta(&self) -> Color {
+        self.ior.eta
+    }
+
+    /// The imaginary part (absorption) of the complex index, per channel.
+    pub fn k(&self) -> Color {
+        self.ior.k
     }
 
     pub fn eval(&self, wo: Vec3, wi: Vec3) -> Color {
@@ -37,7 +48,7 @@ impl Conductor {
         };
         let d = beckmann_d(h, self.alpha);
         let g = self.g1(wo, h) * self.g1(wi, h);
-        let f = fresnel::conductor(wi.dot(h).abs(), self.eta, self.k);
+        let f = self.ior.reflectance(wi.dot(h).abs());
         let value = f * (d * g / (4.0 * wi.z * wo.z));
         if crate::color::is_finite(value) {
             value

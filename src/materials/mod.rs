@@ -9,7 +9,7 @@ pub mod specular;
 
 use crate::Color;
 use glam::{Vec2, Vec3};
-use microfacet::Conductor;
+pub use microfacet::Conductor;
 use std::fmt;
 
 /// What kind of scattering (and emission) a material has, as pbrt-v4's `BxDFFlags`:
@@ -53,11 +53,8 @@ pub enum Material {
         transmittance: Color,
     },
     /// Rough conductor: Beckmann NDF, separable Smith G, exact conductor Fresnel.
-    Microfacet {
-        alpha: f32,
-        eta: Color,
-        k: Color,
-    },
+    /// Its parameters are built once, by `Conductor::new`, when the material is made.
+    Microfacet(Conductor),
     /// Emits `radiance` from the front side; reflects nothing.
     Emission {
         radiance: Color,
@@ -94,7 +91,7 @@ impl Material {
     pub fn eval(&self, wo: Vec3, wi: Vec3) -> Color {
         match *self {
             Material::Lambertian { albedo } => lambertian::eval(albedo, wo, wi),
-            Material::Microfacet { alpha, eta, k } => Conductor::new(alpha, eta, k).eval(wo, wi),
+            Material::Microfacet(c) => c.eval(wo, wi),
             _ => Color::ZERO,
         }
     }
@@ -103,7 +100,7 @@ impl Material {
     pub fn pdf(&self, wo: Vec3, wi: Vec3) -> f32 {
         match *self {
             Material::Lambertian { .. } => lambertian::pdf(wo, wi),
-            Material::Microfacet { alpha, eta, k } => Conductor::new(alpha, eta, k).pdf(wo, wi),
+            Material::Microfacet(c) => c.pdf(wo, wi),
             _ => 0.0,
         }
     }
@@ -128,7 +125,7 @@ impl Material {
             Material::Refraction { ior, transmittance } => {
                 valid_ior(ior).and_then(|ior| specular::sample_refraction(ior, transmittance, wo))
             }
-            Material::Microfacet { alpha, eta, k } => Conductor::new(alpha, eta, k).sample(wo, u),
+            Material::Microfacet(c) => c.sample(wo, u),
             Material::Emission { .. } | Material::Black => None,
         }
     }
@@ -147,7 +144,7 @@ impl Material {
                     ..none
                 }
             }
-            Material::Microfacet { .. } => BsdfFlags {
+            Material::Microfacet(_) => BsdfFlags {
                 glossy: true,
                 ..none
             },
@@ -179,6 +176,37 @@ impl Material {
     }
 }
 
+impl Material {
+    /// The kind and every parameter, for `ember info`: `lambertian: albedo (0.5, 0.5, 0.5)`.
+    pub fn describe(&self) -> String {
+        use crate::color::compact as v;
+        match *self {
+            Material::Lambertian { albedo } => format!("{self}: albedo {}", v(albedo)),
+            Material::Mirror { reflectance } => format!("{self}: reflectance {}", v(reflectance)),
+            Material::Glass {
+                ior,
+                reflectance,
+                transmittance,
+            } => format!(
+                "{self}: ior {ior}, reflectance {}, transmittance {}",
+                v(reflectance),
+                v(transmittance)
+            ),
+            Material::Refraction { ior, transmittance } => {
+                format!("{self}: ior {ior}, transmittance {}", v(transmittance))
+            }
+            Material::Microfacet(c) => format!(
+                "{self}: alpha {}, eta {}, k {}",
+                c.alpha,
+                v(c.eta()),
+                v(c.k())
+            ),
+            Material::Emission { radiance } => format!("{self}: radiance {}", v(radiance)),
+            Material::Black => format!("{self} (an area light's surface)"),
+        }
+    }
+}
+
 /// A dielectric index must be positive and finite for Snell's law to mean anything.
 fn valid_ior(ior: f32) -> Option<f32> {
     (ior > 0.0 && ior.is_finite()).then_some(ior)
@@ -192,7 +220,7 @@ impl fmt::Display for Material {
             Material::Mirror { .. } => "mirror",
             Material::Glass { .. } => "glass",
             Material::Refraction { .. } => "refraction",
-            Material::Microfacet { .. } => "microfacet",
+            Material::Microfacet(_) => "microfacet",
             Material::Emission { .. } => "emission",
             Material::Black => "black",
         })

@@ -86,7 +86,9 @@ pub struct Scene {
     /// scenes built in code).
     pub material_names: Vec<String>,
     /// Two-sided emission attached to primitives on top of their material, found only by
-    /// BSDF sampling. The loader never sets it; analytic test scenes (the furnace) do.
+    /// BSDF sampling: the emitting, reflecting walls of the analytic furnace. Test builds
+    /// only (feature `testing`); the loader has no such thing.
+    #[cfg(feature = "testing")]
     pub surface_emission: Vec<(PrimId, Color)>,
 }
 
@@ -176,28 +178,37 @@ impl Scene {
     /// light when the surface is an area light's, else from the material.
     pub fn emission(&self, si: &SurfaceInteraction, wo: Vec3) -> Color {
         let cos_out = wo.dot(si.ng);
-        let mut le = match self.lights.get(si.light as usize) {
+        let le = match self.lights.get(si.light as usize) {
             Some(Light::Area(a)) => a.emitted(cos_out),
             _ => self.materials[si.material as usize].emitted(Vec3::new(0.0, 0.0, cos_out)),
         };
+        #[cfg(feature = "testing")]
         if !self.surface_emission.is_empty() {
-            le += self
-                .surface_emission
-                .iter()
-                .filter(|(p, _)| *p == si.prim)
-                .map(|(_, c)| *c)
-                .sum::<Color>();
+            return le + self.attached_emission(si.prim);
         }
         le
     }
 
-    /// Emitters that no `Light` represents (emission materials outside area lights,
-    /// attached surface emission): only BSDF sampling can find them.
+    /// The test-only emission attached to `prim`.
+    #[cfg(feature = "testing")]
+    fn attached_emission(&self, prim: PrimId) -> Color {
+        self.surface_emission
+            .iter()
+            .filter(|(p, _)| *p == prim)
+            .map(|(_, c)| *c)
+            .sum()
+    }
+
+    /// Emitters that no `Light` represents (emission materials outside area lights, and
+    /// in tests attached surface emission): only BSDF sampling can find them.
     pub fn has_unsampled_emitters(&self) -> bool {
-        !self.surface_emission.is_empty()
-            || self.triangles.iter().any(|t| {
-                t.light == NO_LIGHT && self.materials[t.material as usize].flags().emissive
-            })
+        #[cfg(feature = "testing")]
+        if !self.surface_emission.is_empty() {
+            return true;
+        }
+        self.triangles
+            .iter()
+            .any(|t| t.light == NO_LIGHT && self.materials[t.material as usize].flags().emissive)
             || self
                 .spheres
                 .iter()

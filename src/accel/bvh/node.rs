@@ -1,12 +1,13 @@
-//! The builder's 32-byte BVH node (converted to pair nodes for traversal).
+//! The builder's 32-byte binary BVH node. Traversal never reads it: after the build
+//! the binary tree is collapsed into wide nodes (`wide.rs`) and dropped.
 
 use crate::geometry::Aabb;
 use glam::Vec3;
 
-/// A node of the flat, depth-first node array. The first child of an inner node
-/// is the next node; `offset` names the second. `min` and `max` are each followed
-/// by a `u32` so one aligned 16-byte load fetches a bound (the fourth lane is
-/// ignored by the slab test).
+/// A node of the builder's flat, depth-first node array. The first child of an inner
+/// node is the next node; `offset` names the second. `offset` and `count_axis` fill
+/// the fourth lane after `min` and `max`, so a node is 32 bytes, two to a cache line
+/// while `collapse` walks the tree.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 #[repr(C, align(32))]
 pub(crate) struct BvhNode {

@@ -13,15 +13,14 @@ pub mod scenes;
 
 use super::chart::{write_chart, ChartSpec, Series};
 use super::table::Table;
+use super::{create_out_dir, write_text, Report};
 use crate::names::Named;
-use anyhow::{Context, Result};
+use anyhow::Result;
 pub use measure::Budget;
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 
 #[derive(Clone, Debug)]
 pub struct StabilityOptions {
-    /// Where `stability.csv`, `stability.md` and the charts go (created if missing).
-    pub out_dir: PathBuf,
     /// Multiplies every case's samples per pixel (1 = the report's defaults).
     pub spp_scale: f32,
     pub seed: u64,
@@ -30,7 +29,6 @@ pub struct StabilityOptions {
 impl Default for StabilityOptions {
     fn default() -> Self {
         StabilityOptions {
-            out_dir: PathBuf::from("stability"),
             spp_scale: 1.0,
             seed: 1,
         }
@@ -92,9 +90,7 @@ pub fn run_stability(opts: &StabilityOptions) -> Result<StabilityReport> {
     rows.extend(sampling::adaptive(&budget(80, 60, 512))?.rows());
     rows.extend(sampling::roulette(&budget(80, 60, 256))?.rows());
     rows.extend(light_paths::rows_if_shared(&budget(160, 120, 32))?);
-    let report = StabilityReport { rows };
-    report.write(opts)?;
-    Ok(report)
+    Ok(StabilityReport { rows })
 }
 
 impl StabilityReport {
@@ -188,17 +184,8 @@ impl StabilityReport {
         (out, scenarios)
     }
 
-    /// Writes `stability.csv`, `stability.md` and `stability_noise.{png,svg}` into `opts.out_dir`.
-    pub fn write(&self, opts: &StabilityOptions) -> Result<()> {
-        let dir = &opts.out_dir;
-        std::fs::create_dir_all(dir)
-            .with_context(|| format!("{}: cannot create", dir.display()))?;
-        let csv = dir.join("stability.csv");
-        std::fs::write(&csv, self.to_csv())
-            .with_context(|| format!("{}: cannot write", csv.display()))?;
-        let md = dir.join("stability.md");
-        std::fs::write(&md, self.to_markdown())
-            .with_context(|| format!("{}: cannot write", md.display()))?;
+    /// The noise chart `<stem>.{png,svg}`.
+    fn write_chart(&self, stem: &Path) -> Result<()> {
         let (series, scenarios) = self.strategy_noise_series();
         let labels: Vec<String> = scenarios
             .iter()
@@ -219,7 +206,30 @@ impl StabilityReport {
             log_x: false,
             log_y: true,
         };
-        write_chart(&dir.join("stability_noise"), &spec, &series)
+        write_chart(stem, &spec, &series)
+    }
+}
+
+impl Report for StabilityReport {
+    /// `stability.csv`, `stability.md` and `stability_noise.{png,svg}`.
+    fn write(&self, out_dir: &Path) -> Result<Vec<PathBuf>> {
+        create_out_dir(out_dir)?;
+        let csv = out_dir.join("stability.csv");
+        write_text(&csv, &self.to_csv())?;
+        let md = out_dir.join("stability.md");
+        write_text(&md, &self.to_markdown())?;
+        let chart = out_dir.join("stability_noise");
+        self.write_chart(&chart)?;
+        Ok(vec![
+            csv,
+            md,
+            chart.with_extension("png"),
+            chart.with_extension("svg"),
+        ])
+    }
+
+    fn summary(&self) -> String {
+        self.to_markdown()
     }
 }
 
@@ -269,11 +279,8 @@ mod tests {
             vec![(1.0, 0.8)]
         );
         let dir = tempfile::tempdir().unwrap();
-        r.write(&StabilityOptions {
-            out_dir: dir.path().join("out"),
-            ..Default::default()
-        })
-        .unwrap();
+        let files = r.write(&dir.path().join("out")).unwrap();
+        assert_eq!(files.len(), 4);
         for f in [
             "stability.csv",
             "stability.md",

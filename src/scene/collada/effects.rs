@@ -2,7 +2,7 @@
 
 use super::xml::{child, extension_technique, path, Ctx};
 use super::LoadError;
-use crate::materials::Material;
+use crate::materials::{Conductor, Material};
 use crate::Color;
 use roxmltree::Node;
 
@@ -69,11 +69,11 @@ fn read_special<'a, 'i>(ctx: &mut Ctx<'a, 'i>, node: Node<'a, 'i>) -> Result<Mat
                 transmittance: p.rgb("transmittance", 1.0)?,
             }
         }
-        _ => Material::Microfacet {
-            alpha: p.positive("alpha", 0.5)?,
-            eta: p.rgb("eta", 1.0)?,
-            k: p.rgb("k", 0.0)?,
-        },
+        _ => Material::Microfacet(Conductor::new(
+            p.positive("alpha", 0.5)?,
+            p.rgb("eta", 1.0)?,
+            p.rgb("k", 0.0)?,
+        )),
     };
     Ok(m)
 }

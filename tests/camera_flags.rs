@@ -1,0 +1,315 @@
+//! The course's camera flags end to end: `-c` camera settings files (and `ember camera
+//! --save`), `-p` cells, `-b`/`-d` thin lens. Images are compared as linear EXR, bit for bit.
+
+use ember::film::Image;
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+
+fn ember() -> Command {
+    Command::new(env!("CARGO_BIN_EXE_ember"))
+}
+
+fn shared(rel: &str) -> PathBuf {
+    PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+        .join("../shared")
+        .join(rel)
+}
+
+const SPHERES: &str = "scenes/cs184/sky/CBspheres_lambertian.dae";
+const BUNNY: &str = "scenes/cs184/sky/CBbunny.dae";
+
+fn run(args: &[&str], out: &Path, scene: &str) -> Output {
+    ember()
+        .args(args)
+        .arg("-f")
+        .arg(out)
+        .arg(shared(scene))
+        .output()
+        .unwrap()
+}
+
+/// Renders and reads the image back; panics with ember's stderr on failure.
+fn render(args: &[&str], out: &Path, scene: &str) -> Image {
+    let o = run(args, out, scene);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    ember::image_io::read_image(out).unwrap()
+}
+
+/// Expects a failure with a one-line error containing every needle, and no image.
+fn expect_error(args: &[&str], out: &Path, scene: &str, needles: &[&str]) {
+    let o = run(args, out, scene);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(!o.status.success(), "expected failure: {args:?}");
+    assert_eq!(err.trim_end().lines().count(), 1, "not one line: {err}");
+    for n in needles {
+        assert!(err.contains(n), "{err:?} does not contain {n:?}");
+    }
+    assert!(!err.contains("panicked"), "{err}");
+    assert!(!out.exists(), "an image was written");
+}
+
+const BASE: &[&str] = &["-q", "-s", "3", "-m", "2", "-r", "40", "30"];
+
+fn with<'a>(extra: &[&'a str]) -> Vec<&'a str> {
+    BASE.iter().copied().chain(extra.iter().copied()).collect()
+}
+
+#[test]
+fn saved_camera_renders_the_same_image() {
+    let dir = tempfile::tempdir().unwrap();
+    for scene in [SPHERES, BUNNY] {
+        let cam = dir.path().join("view.cam");
+        let st = ember()
+            .args(["camera", "-r", "40", "30", "--save"])
+            .arg(&cam)
+            .arg(shared(scene))
+            .output()
+            .unwrap();
+        assert!(
+            st.status.success(),
+            "{}",
+            String::from_utf8_lossy(&st.stderr)
+        );
+        let text = std::fs::read_to_string(&cam).unwrap();
+        // The course's six lines: 5, 6, 5, 9, 3, 2 numbers.
+        let counts: Vec<usize> = text.lines().map(|l| l.split_whitespace().count()).collect();
+        assert_eq!(counts, [5, 6, 5, 9, 3, 2], "{text}");
+        let plain = render(BASE, &dir.path().join("plain.exr"), scene);
+        let cam_arg = cam.to_str().unwrap();
+        let loaded = render(&with(&["-c", cam_arg]), &dir.path().join("c.exr"), scene);
+        assert_eq!(plain.pixels, loaded.pixels, "{scene}");
+        let meta = ember::image_io::read_metadata(&dir.path().join("c.exr")).unwrap();
+        assert_eq!(meta.get("ember.camera_file"), Some(cam_arg));
+    }
+}
+
+#[test]
+fn saved_lens_is_used_and_flags_replace_it() {
+    let dir = tempfile::tempdir().unwrap();
+    let cam = dir.path().join("lens.cam");
+    let st = ember()
+        .args(["camera", "-r", "40", "30", "-b", "0.1", "-d", "3", "--save"])
+        .arg(&cam)
+        .arg(shared(BUNNY))
+        .output()
+        .unwrap();
+    assert!(st.status.success());
+    let cam_arg = cam.to_str().unwrap();
+    let flags = render(
+        &with(&["-b", "0.1", "-d", "3"]),
+        &dir.path().join("flags.exr"),
+        BUNNY,
+    );
+    let file = render(&with(&["-c", cam_arg]), &dir.path().join("file.exr"), BUNNY);
+    assert_eq!(flags.pixels, file.pixels);
+    let plain = render(BASE, &dir.path().join("plain.exr"), BUNNY);
+    let pinhole = render(
+        &with(&["-c", cam_arg, "-b", "0"]),
+        &dir.path().join("pinhole.exr"),
+        BUNNY,
+    );
+    assert_eq!(plain.pixels, pinhole.pixels);
+}
+
+#[test]
+fn camera_without_save_prints_the_file() {
+    let o = ember()
+        .args(["camera", "-b", "0.05", "-d", "3.5"])
+        .arg(shared(SPHERES))
+        .output()
+        .unwrap();
+    assert!(o.status.success());
+    let text = String::from_utf8_lossy(&o.stdout);
+    assert_eq!(text.lines().count(), 6);
+    assert_eq!(text.lines().last(), Some("3.5 0.05"));
+}
+
+#[test]
+fn camera_file_moves_the_view() {
+    // The scene's camera moved 0.3 to its right: a different image, not an error.
+    let dir = tempfile::tempdir().unwrap();
+    let o = ember()
+        .args(["camera", "-r", "40", "30"])
+        .arg(shared(SPHERES))
+        .output()
+        .unwrap();
+    let text = String::from_utf8_lossy(&o.stdout).into_owned();
+    let mut lines: Vec<String> = text.lines().map(String::from).collect();
+    let mut pos: Vec<f32> = lines[1]
+        .split_whitespace()
+        .map(|w| w.parse().unwrap())
+        .collect();
+    let right: Vec<f32> = lines[3]
+        .split_whitespace()
+        .step_by(3)
+        .map(|w| w.parse().unwrap())
+        .collect();
+    for k in 0..3 {
+        pos[k] += 0.3 * right[k];
+    }
+    lines[1] = pos
+        .iter()
+        .map(|v| v.to_string())
+        .collect::<Vec<_>>()
+        .join(" ");
+    let cam = dir.path().join("moved.cam");
+    std::fs::write(&cam, lines.join("\n")).unwrap();
+    let plain = render(BASE, &dir.path().join("plain.exr"), SPHERES);
+    let moved = render(
+        &with(&["-c", cam.to_str().unwrap()]),
+        &dir.path().join("moved.exr"),
+        SPHERES,
+    );
+    assert_ne!(plain.pixels, moved.pixels);
+}
+
+#[test]
+fn malformed_camera_files_are_one_line_errors() {
+    let dir = tempfile::tempdir().unwrap();
+    let good = "49.13 37.85 1.3333 0.1 100\n0 1 5 0 1 0\n1.57 0 4 0.2 40\n\
+                1 0 0 0 1 0 0 0 1\n40 30 40\n4.7 0\n";
+    let cases = [
+        (good.replace("1.57", "abc"), "phi"),
+        (good.replace("4.7 0\n", ""), "focalDistance"),
+        (good.replace("0 1 0 0 0 1", "0 1 0 0 0 3"), "c2w"),
+        (good.replace("49.13", "-3"), "hFov"),
+    ];
+    for (i, (text, field)) in cases.iter().enumerate() {
+        let cam = dir.path().join(format!("bad{i}.cam"));
+        std::fs::write(&cam, text).unwrap();
+        let out = dir.path().join(format!("bad{i}.exr"));
+        let cam_arg = cam.to_str().unwrap();
+        expect_error(&with(&["-c", cam_arg]), &out, SPHERES, &[cam_arg, field]);
+    }
+    let missing = dir.path().join("missing.cam");
+    let out = dir.path().join("missing.exr");
+    let arg = missing.to_str().unwrap();
+    expect_error(&with(&["-c", arg]), &out, SPHERES, &[arg]);
+}
+
+/// Pixels `[x0, x0+w) × [y0, y0+h)` (rows from the top) of `img`.
+fn crop(img: &Image, x0: u32, y0: u32, w: u32, h: u32) -> Vec<ember::Color> {
+    (y0..y0 + h)
+        .flat_map(|y| (x0..x0 + w).map(move |x| (x, y)))
+        .map(|(x, y)| img.get(x, y))
+        .collect()
+}
+
+#[test]
+fn cell_equals_the_full_render() {
+    let dir = tempfile::tempdir().unwrap();
+    for extra in [&[][..], &["-a", "2", "0.2"][..]] {
+        let full = render(&with(extra), &dir.path().join("full.exr"), SPHERES);
+        // X = 5, Y = 3 from the bottom, 17 x 11: rows 30-3-11 = 16 .. 27 from the top.
+        let expected = crop(&full, 5, 16, 17, 11);
+        for t in ["1", "2"] {
+            let mut args = with(extra);
+            args.extend(["-t", t, "-p", "5", "3", "17", "11"]);
+            let cell = render(&args, &dir.path().join(format!("cell{t}.exr")), SPHERES);
+            assert_eq!((cell.width, cell.height), (17, 11));
+            assert_eq!(cell.pixels, expected, "-t {t} {extra:?}");
+            let meta = ember::image_io::read_metadata(&dir.path().join(format!("cell{t}.exr")));
+            let cell_note = meta.unwrap().get("ember.cell").map(String::from);
+            assert!(cell_note.is_some_and(|c| c.contains("pixels 5..22 x 16..27")));
+            args.push("--full-frame");
+            let framed = render(&args, &dir.path().join(format!("frame{t}.exr")), SPHERES);
+            assert_eq!((framed.width, framed.height), (40, 30));
+            assert_eq!(crop(&framed, 5, 16, 17, 11), expected);
+            let black = (0..30)
+                .flat_map(|y| (0..40).map(move |x| (x, y)))
+                .filter(|&(x, y)| !(5..22).contains(&x) || !(16..27).contains(&y))
+                .all(|(x, y)| framed.get(x, y) == ember::Color::ZERO);
+            assert!(black, "outside the cell is not black");
+        }
+    }
+}
+
+#[test]
+fn cells_outside_the_image_are_rejected() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("x.exr");
+    expect_error(
+        &with(&["-p", "30", "0", "11", "1"]),
+        &out,
+        SPHERES,
+        &["-p 30 0 11 1", "40x30"],
+    );
+    expect_error(
+        &with(&["-p", "0", "25", "4", "6"]),
+        &out,
+        SPHERES,
+        &["not inside"],
+    );
+    expect_error(
+        &with(&["-p", "0", "0", "0", "6"]),
+        &out,
+        SPHERES,
+        &["empty"],
+    );
+}
+
+#[test]
+fn zero_lens_radius_is_the_pinhole_bit_for_bit() {
+    let dir = tempfile::tempdir().unwrap();
+    let plain = render(BASE, &dir.path().join("plain.exr"), SPHERES);
+    let zero = render(
+        &with(&["-b", "0", "-d", "2.5"]),
+        &dir.path().join("b0.exr"),
+        SPHERES,
+    );
+    assert_eq!(plain.pixels, zero.pixels);
+}
+
+#[test]
+fn lens_renders_are_deterministic_and_blurred() {
+    let dir = tempfile::tempdir().unwrap();
+    let plain = render(BASE, &dir.path().join("plain.exr"), BUNNY);
+    let lens = |t: &str| {
+        render(
+            &with(&["-b", "0.1", "-d", "3", "-t", t]),
+            &dir.path().join(format!("lens{t}.exr")),
+            BUNNY,
+        )
+    };
+    let (a, b) = (lens("1"), lens("2"));
+    assert_eq!(a.pixels, b.pixels, "image depends on -t");
+    assert_ne!(a.pixels, plain.pixels);
+    // A cell of a lens render is the lens render's pixels too.
+    let cell = render(
+        &with(&["-b", "0.1", "-d", "3", "-p", "10", "10", "8", "8"]),
+        &dir.path().join("lenscell.exr"),
+        BUNNY,
+    );
+    assert_eq!(cell.pixels, crop(&a, 10, 12, 8, 8));
+}
+
+#[test]
+fn bad_lens_values_are_rejected() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("x.exr");
+    expect_error(&with(&["-b", "-0.5"]), &out, SPHERES, &["-b"]);
+    expect_error(&with(&["-b", "0.1", "-d", "0"]), &out, SPHERES, &["-d"]);
+    expect_error(&with(&["-d", "nan"]), &out, SPHERES, &["-d"]);
+}
+
+#[test]
+fn help_lists_the_course_flags() {
+    let o = ember().arg("--help").output().unwrap();
+    let help = String::from_utf8_lossy(&o.stdout);
+    for flag in [
+        "-c <FILE>",
+        "-p <X> <Y> <DX> <DY>",
+        "-b <RADIUS>",
+        "-d <DISTANCE>",
+    ] {
+        assert!(help.contains(flag), "--help lacks {flag}");
+    }
+    // A missing value is a plain error, not clap's "use '-- -c'" tip for unknown flags.
+    let o = ember().args(["-c"]).output().unwrap();
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(!o.status.success());
+    assert!(
+        !err.contains("-- -c") && !err.contains("unexpected argument"),
+        "{err}"
+    );
+}
