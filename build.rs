@@ -208,6 +208,10 @@ mod embree {
                 "--features",
             ])
             .arg("embree4")
+            // Only this target's dependencies: without it, cargo wants every
+            // platform's crates (Windows ones too), which an offline machine lacks.
+            .arg("--filter-platform")
+            .arg(env::var("TARGET").expect("cargo sets it"))
             .arg("--manifest-path")
             .arg(manifest.join("Cargo.toml"))
             .output()

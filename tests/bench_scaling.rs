@@ -2,20 +2,23 @@
 //! finite positive figures, and the CSV, Markdown and charts land in the output folder.
 
 use ember::bench::scaling::{run_scaling, ScalingMesh, ScalingOptions};
+use ember::bench::Report;
 
 #[test]
 fn tiny_scaling_run_reports_every_row_and_writes_files() {
     let dir = tempfile::tempdir().unwrap();
+    let out_dir = dir.path().join("scaling");
     let opts = ScalingOptions {
         sizes: vec![1_000, 4_000],
         rays: 2_000,
         threads: 2,
         repeats: 1,
-        out_dir: dir.path().join("scaling"),
         ..ScalingOptions::default()
     };
     let mut lines = 0;
     let report = run_scaling(&opts, |_| lines += 1).unwrap();
+    let files = report.write(&out_dir).unwrap();
+    assert!(files.iter().all(|f| f.exists()), "{files:?}");
 
     let backends = if cfg!(any(feature = "embree", feature = "embree4")) {
         5
@@ -46,15 +49,15 @@ fn tiny_scaling_run_reports_every_row_and_writes_files() {
         }
     }
 
-    let csv = std::fs::read_to_string(opts.out_dir.join("scaling.csv")).unwrap();
+    let csv = std::fs::read_to_string(out_dir.join("scaling.csv")).unwrap();
     assert_eq!(csv.lines().count(), report.rows.len() + 1);
-    let md = std::fs::read_to_string(opts.out_dir.join("scaling.md")).unwrap();
+    let md = std::fs::read_to_string(out_dir.join("scaling.md")).unwrap();
     assert!(md.contains("build ~ N^b") && md.contains("log2 N"), "{md}");
     assert!(md.contains("| random soup | native SAH | N^"), "{md}");
     for mesh in ["sphere", "soup"] {
         for metric in ["build", "memory", "camera", "incoherent", "shadow"] {
             for ext in ["png", "svg"] {
-                let path = opts.out_dir.join(format!("{mesh}_{metric}.{ext}"));
+                let path = out_dir.join(format!("{mesh}_{metric}.{ext}"));
                 let len = std::fs::metadata(&path).map_or(0, |m| m.len());
                 assert!(len > 1000, "{} missing or empty", path.display());
             }

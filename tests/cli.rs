@@ -148,6 +148,85 @@ fn embree_request_without_feature_says_how_to_get_it() {
 }
 
 #[test]
+fn info_says_what_accel_auto_picks_and_why() {
+    let st = ember()
+        .arg("info")
+        .arg(shared("scenes/cs184/sky/CBspheres_lambertian.dae"))
+        .output()
+        .unwrap();
+    assert!(st.status.success());
+    let text = String::from_utf8_lossy(&st.stdout);
+    let line = text
+        .lines()
+        .find(|l| l.starts_with("--accel auto"))
+        .unwrap_or_else(|| panic!("no auto line in {text}"));
+    // 14 primitives: the native BVH, whether or not this build has Embree.
+    assert!(line.contains("picks native SAH"), "{line}");
+    assert!(
+        line.contains("14 primitives") || line.contains("no Embree"),
+        "{line}"
+    );
+}
+
+/// `-t 1 2` takes both counts (not `2` as a scene), and `--append` adds a second
+/// run's rows to the tables already written.
+#[cfg(feature = "bench")]
+#[test]
+fn bench_accel_takes_several_thread_counts_and_appends() {
+    let dir = tempfile::tempdir().unwrap();
+    let run = |append: bool| {
+        let mut c = ember();
+        c.args([
+            "bench",
+            "accel",
+            "mesh:2000",
+            "--rays",
+            "2000",
+            "--repeats",
+            "1",
+        ])
+        .args(["--no-embree-modes", "--out"])
+        .arg(dir.path())
+        .args(["-t", "1", "2"]);
+        if append {
+            c.arg("--append");
+        }
+        let st = c.output().unwrap();
+        assert!(
+            st.status.success(),
+            "{}",
+            String::from_utf8_lossy(&st.stderr)
+        );
+        std::fs::read_to_string(dir.path().join("accel.csv")).unwrap()
+    };
+    // Nothing to append to yet: an error naming the file, before any measuring.
+    let st = ember()
+        .args(["bench", "accel", "mesh:2000", "--append", "--out"])
+        .arg(dir.path())
+        .output()
+        .unwrap();
+    assert!(!st.status.success());
+    let err = String::from_utf8_lossy(&st.stderr);
+    assert!(err.contains("accel.csv: cannot read"), "{err}");
+    assert!(!err.contains("Mrays/s"), "measured before failing: {err}");
+    let backends = if cfg!(any(feature = "embree", feature = "embree4")) {
+        4
+    } else {
+        2
+    };
+    let first = run(false);
+    assert_eq!(first.lines().count(), 1 + 2 * backends, "{first}");
+    assert!(first
+        .lines()
+        .skip(1)
+        .all(|l| l.starts_with("displaced sphere (2k tris),")));
+    let both = run(true);
+    assert_eq!(both.lines().count(), 1 + 4 * backends, "{both}");
+    let md = std::fs::read_to_string(dir.path().join("accel.md")).unwrap();
+    assert_eq!(md.lines().count(), 2 + 4 * backends, "{md}");
+}
+
+#[test]
 fn light_tracing_from_the_command_line_and_its_warning_on_glass() {
     let dir = tempfile::tempdir().unwrap();
     let out = dir.path().join("lt.exr");

@@ -24,7 +24,7 @@ fn agree(scene_rel: &str) {
         &scene,
         (160, 120),
         &s,
-        AccelKind::Embree(EmbreeQuality::Medium),
+        AccelKind::embree(EmbreeQuality::Medium),
     );
     let (mn, me) = (native.avg.mean(), embree.avg.mean());
     // Means: within 3 standard errors of one render's mean (the renders share seeds, so

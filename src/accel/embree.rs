@@ -9,6 +9,7 @@ compile_error!(
      embree4-sys's headers and EMBREE4_LIB_DIR) are mutually exclusive: enable one"
 );
 
+pub use super::EmbreeMode;
 use super::{Accel, AccelError, EmbreeQuality};
 use crate::geometry::Ray;
 use crate::scene::{PrimHit, Scene};
@@ -145,35 +146,6 @@ fn c_message(buf: &[c_char]) -> String {
     unsafe { CStr::from_ptr(buf.as_ptr()) }
         .to_string_lossy()
         .into_owned()
-}
-
-/// How Embree builds and traverses a scene.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub struct EmbreeMode {
-    pub quality: EmbreeQuality,
-    /// `RTC_SCENE_FLAG_ROBUST`: traversal that never misses a hit on an edge or vertex
-    /// shared by two triangles, at some speed. Off means no scene flags ("fast").
-    pub robust: bool,
-}
-
-impl Default for EmbreeMode {
-    /// Robust, so no ray slips between the triangles of a watertight mesh.
-    fn default() -> Self {
-        EmbreeMode {
-            quality: EmbreeQuality::default(),
-            robust: true,
-        }
-    }
-}
-
-impl EmbreeMode {
-    /// Robust traversal at `quality`: what `--accel embree` uses.
-    pub fn robust(quality: EmbreeQuality) -> EmbreeMode {
-        EmbreeMode {
-            quality,
-            robust: true,
-        }
-    }
 }
 
 /// Rays per `rtcIntersect4/8/16` packet.

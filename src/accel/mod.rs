@@ -72,7 +72,9 @@ display_from_table!(BvhBuilder);
 /// Which intersection backend, without its build setting (`--accel`).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
 pub enum Backend {
+    /// Per scene: [`choose_auto`].
     #[default]
+    Auto,
     Native,
     Embree,
 }
@@ -80,11 +82,17 @@ pub enum Backend {
 impl Named for Backend {
     const WHAT: &'static str = "backend";
     const TABLE: &'static [(Self, &'static str, &'static str)] = &[
+        (
+            Backend::Auto,
+            "auto",
+            "Per scene: the native BVH below a measured primitive count, Embree from it in builds with Embree \
+             (`ember info SCENE` says which and why)",
+        ),
         (Backend::Native, "native", "ember's own BVH"),
         (
             Backend::Embree,
             "embree",
-            "Intel Embree (builds with --features embree only)",
+            "Intel Embree, robust mode (builds with --features embree or embree4 only)",
         ),
     ];
 }
@@ -94,7 +102,7 @@ impl Backend {
     /// Whether this build can construct the backend.
     pub fn available(self) -> bool {
         match self {
-            Backend::Native => true,
+            Backend::Auto | Backend::Native => true,
             Backend::Embree => cfg!(any(feature = "embree", feature = "embree4")),
         }
     }
@@ -104,15 +112,71 @@ impl Backend {
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum AccelKind {
     Native(BvhBuilder),
-    Embree(EmbreeQuality),
+    Embree(EmbreeMode),
+    /// `--accel auto`: whichever [`choose_auto`] picks for the scene, built with these
+    /// settings.
+    Auto {
+        bvh: BvhBuilder,
+        embree: EmbreeQuality,
+    },
+}
+
+impl Default for AccelKind {
+    /// Auto with the native SAH builder and Embree's medium quality.
+    fn default() -> Self {
+        AccelKind::Auto {
+            bvh: BvhBuilder::Sah,
+            embree: EmbreeQuality::Medium,
+        }
+    }
+}
+
+impl AccelKind {
+    /// Robust Embree at `quality`: what `--accel embree` builds.
+    pub fn embree(quality: EmbreeQuality) -> AccelKind {
+        AccelKind::Embree(EmbreeMode::robust(quality))
+    }
+
+    /// The concrete backend for `scene`, and why: `Auto` asks [`choose_auto`], the
+    /// others are what they say.
+    pub fn resolve(self, scene: &Scene) -> AutoChoice {
+        match self {
+            AccelKind::Auto { bvh, embree } => choose_auto_for(
+                scene.num_prims(),
+                cfg!(any(feature = "embree", feature = "embree4")),
+                bvh,
+                embree,
+            ),
+            kind => AutoChoice {
+                kind,
+                reason: "requested".into(),
+            },
+        }
+    }
+}
+
+/// A short name, e.g. "native SAH" or "Embree medium robust".
+impl std::fmt::Display for AccelKind {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            AccelKind::Native(BvhBuilder::Midpoint) => write!(f, "native midpoint"),
+            AccelKind::Native(BvhBuilder::Sah) => write!(f, "native SAH"),
+            AccelKind::Embree(m) => write!(f, "Embree {m}"),
+            AccelKind::Auto { .. } => write!(f, "auto"),
+        }
+    }
 }
 
 impl AccelKind {
     /// `backend` with its own setting: the BVH builder or Embree's quality (the other is unused).
     pub fn new(backend: Backend, builder: BvhBuilder, quality: EmbreeQuality) -> AccelKind {
         match backend {
+            Backend::Auto => AccelKind::Auto {
+                bvh: builder,
+                embree: quality,
+            },
             Backend::Native => AccelKind::Native(builder),
-            Backend::Embree => AccelKind::Embree(quality),
+            Backend::Embree => AccelKind::embree(quality),
         }
     }
 
@@ -120,6 +184,7 @@ impl AccelKind {
         match self {
             AccelKind::Native(_) => Backend::Native,
             AccelKind::Embree(_) => Backend::Embree,
+            AccelKind::Auto { .. } => Backend::Auto,
         }
     }
 }
@@ -143,70 +208,192 @@ impl Named for EmbreeQuality {
 }
 display_from_table!(EmbreeQuality);
 
+impl EmbreeQuality {
+    pub const ALL: [EmbreeQuality; 3] = [
+        EmbreeQuality::Low,
+        EmbreeQuality::Medium,
+        EmbreeQuality::High,
+    ];
+}
+
+/// How Embree builds and traverses a scene.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct EmbreeMode {
+    pub quality: EmbreeQuality,
+    /// `RTC_SCENE_FLAG_ROBUST`: traversal that never misses a hit on an edge or vertex
+    /// shared by two triangles, at some speed. Off means no scene flags (Embree's
+    /// default, "fast").
+    pub robust: bool,
+}
+
+impl Default for EmbreeMode {
+    /// Robust, so no ray slips between the triangles of a watertight mesh.
+    fn default() -> Self {
+        EmbreeMode::robust(EmbreeQuality::default())
+    }
+}
+
+impl EmbreeMode {
+    /// Robust traversal at `quality`: what `--accel embree` uses.
+    pub fn robust(quality: EmbreeQuality) -> EmbreeMode {
+        EmbreeMode {
+            quality,
+            robust: true,
+        }
+    }
+
+    /// The scene flags this mode sets, as Embree names them.
+    pub fn scene_flags(self) -> &'static str {
+        if self.robust {
+            "ROBUST"
+        } else {
+            "NONE"
+        }
+    }
+}
+
+/// "medium robust" or "medium fast".
+impl std::fmt::Display for EmbreeMode {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        let flags = if self.robust { "robust" } else { "fast" };
+        write!(f, "{} {flags}", self.quality)
+    }
+}
+
 #[derive(Debug, thiserror::Error)]
 pub enum AccelError {
-    #[error("this build has no Embree backend; rebuild with --features embree")]
+    #[error(
+        "this build has no Embree backend; rebuild with --features embree (Embree 3) \
+         or --features embree4 (Embree 4)"
+    )]
     EmbreeUnavailable,
     #[error("Embree: {0}")]
     Embree(String),
 }
 
-/// Builds the requested backend over `scene`.
+/// Builds the requested backend over `scene` (`Auto` resolved for it), with as many
+/// build threads as the current rayon pool.
 pub fn build(scene: &Scene, kind: AccelKind) -> Result<Box<dyn Accel>, AccelError> {
-    match kind {
-        AccelKind::Native(b) => Ok(Box::new(bvh::Bvh::build(scene, b))),
-        #[cfg(any(feature = "embree", feature = "embree4"))]
-        AccelKind::Embree(q) => Ok(Box::new(embree::EmbreeAccel::build(scene, q)?)),
-        #[cfg(not(any(feature = "embree", feature = "embree4")))]
-        AccelKind::Embree(_) => Err(AccelError::EmbreeUnavailable),
+    AccelBuilder::new(rayon::current_num_threads()).build(scene, kind)
+}
+
+/// Builds acceleration structures with a fixed number of build threads. The native
+/// builders use the calling rayon pool; Embree builds on its own TBB pool, so the
+/// builder keeps one device limited to the same thread count, created on the first
+/// Embree build and shared by later ones (a benchmark times builds, not device start-up).
+pub struct AccelBuilder {
+    #[cfg_attr(not(any(feature = "embree", feature = "embree4")), allow(dead_code))]
+    threads: usize,
+    #[cfg(any(feature = "embree", feature = "embree4"))]
+    device: std::sync::OnceLock<std::sync::Arc<embree::EmbreeDevice>>,
+}
+
+impl AccelBuilder {
+    pub fn new(threads: usize) -> AccelBuilder {
+        AccelBuilder {
+            threads,
+            #[cfg(any(feature = "embree", feature = "embree4"))]
+            device: std::sync::OnceLock::new(),
+        }
+    }
+
+    /// Builds `kind` over `scene`, resolving `Auto` for it.
+    pub fn build(&self, scene: &Scene, kind: AccelKind) -> Result<Box<dyn Accel>, AccelError> {
+        match kind.resolve(scene).kind {
+            AccelKind::Native(b) => Ok(Box::new(bvh::Bvh::build(scene, b))),
+            #[cfg(any(feature = "embree", feature = "embree4"))]
+            AccelKind::Embree(mode) => Ok(Box::new(self.build_embree(scene, mode)?)),
+            #[cfg(not(any(feature = "embree", feature = "embree4")))]
+            AccelKind::Embree(_) => Err(AccelError::EmbreeUnavailable),
+            AccelKind::Auto { .. } => unreachable!("resolve never returns Auto"),
+        }
+    }
+
+    /// The Embree device of this builder's thread count (created on first use).
+    #[cfg(any(feature = "embree", feature = "embree4"))]
+    pub fn embree_device(&self) -> Result<std::sync::Arc<embree::EmbreeDevice>, AccelError> {
+        if let Some(d) = self.device.get() {
+            return Ok(d.clone());
+        }
+        let d = std::sync::Arc::new(embree::EmbreeDevice::new(self.threads)?);
+        Ok(self.device.get_or_init(|| d).clone())
+    }
+
+    /// An Embree scene in `mode`, as its concrete type (for packet queries).
+    #[cfg(any(feature = "embree", feature = "embree4"))]
+    pub fn build_embree(
+        &self,
+        scene: &Scene,
+        mode: EmbreeMode,
+    ) -> Result<embree::EmbreeAccel, AccelError> {
+        embree::EmbreeAccel::build_mode(self.embree_device()?, scene, mode)
     }
 }
 
+/// A rayon pool of `threads` tracing threads (all cores when `None`) with
+/// flush-to-zero set on each, as Embree recommends for tracing threads; the native
+/// BVH gives the same image either way (tested). Renders and benchmarks both use it.
+pub fn tracing_pool(
+    threads: Option<usize>,
+) -> Result<rayon::ThreadPool, rayon::ThreadPoolBuildError> {
+    let mut b = rayon::ThreadPoolBuilder::new().start_handler(|_| set_flush_denormals());
+    if let Some(t) = threads {
+        b = b.num_threads(t);
+    }
+    b.build()
+}
+
 /// `--accel auto`: scenes with at least this many primitives go to Embree (when
-/// compiled in), smaller ones to the native BVH. Measured with `ember bench accel`
-/// (incoherent and shadow rays, 1 and 2 threads): the native wide BVH is ahead on
-/// CBspheres_lambertian (14 primitives) and CBbunny (28.6k) and behind on the
-/// displaced spheres of 249k and 998k triangles; the crossover lies between, and
-/// this is its geometric middle until a finer sweep pins it down.
+/// compiled in), smaller ones to the native BVH. It comes from `ember bench accel`
+/// runs, native and robust Embree interleaved on displaced spheres of several sizes
+/// (BENCHMARKS.md, "Where `--accel auto` switches"; `scripts/benchmarks` prints the
+/// measured crossover beside this value). The sweep behind 85,000 had the native
+/// tree ahead on CBbunny (28.6k) and behind from 249k; a short run on a loaded
+/// machine found Embree ahead from about 12k, so the value is due to be reset from
+/// the full run once the wide native BVH (issue 8) has landed.
 pub const AUTO_EMBREE_MIN_PRIMS: usize = 85_000;
 
 /// What `--accel auto` picks for a scene, and why (for `ember info`).
 #[derive(Clone, Debug, PartialEq, Eq)]
 pub struct AutoChoice {
+    /// Never `Auto`.
     pub kind: AccelKind,
     pub reason: String,
 }
 
-/// Picks the backend for `scene` from its primitive count against the measured
-/// crossover [`AUTO_EMBREE_MIN_PRIMS`].
+/// What `--accel auto` picks for `scene` with the default settings, from its
+/// primitive count against the measured crossover [`AUTO_EMBREE_MIN_PRIMS`].
 pub fn choose_auto(scene: &Scene) -> AutoChoice {
-    choose_auto_for(
-        scene.num_prims(),
-        cfg!(any(feature = "embree", feature = "embree4")),
-    )
+    AccelKind::default().resolve(scene)
 }
 
-fn choose_auto_for(prims: usize, embree_available: bool) -> AutoChoice {
-    let native = AccelKind::Native(BvhBuilder::Sah);
+fn choose_auto_for(
+    prims: usize,
+    embree_available: bool,
+    bvh: BvhBuilder,
+    quality: EmbreeQuality,
+) -> AutoChoice {
+    let native = AccelKind::Native(bvh);
     if !embree_available {
         return AutoChoice {
             kind: native,
-            reason: "native BVH: this build has no Embree".into(),
+            reason: "this build has no Embree".into(),
         };
     }
     if prims >= AUTO_EMBREE_MIN_PRIMS {
         AutoChoice {
-            kind: AccelKind::Embree(EmbreeQuality::default()),
+            kind: AccelKind::embree(quality),
             reason: format!(
-                "Embree: {prims} primitives, at or above the measured crossover of {AUTO_EMBREE_MIN_PRIMS}"
+                "{prims} primitives, at or above the crossover of {AUTO_EMBREE_MIN_PRIMS} \
+                 from which Embree traced faster (BENCHMARKS.md)"
             ),
         }
     } else {
         AutoChoice {
             kind: native,
             reason: format!(
-                "native BVH (SAH): {prims} primitives, below the measured crossover of \
-                 {AUTO_EMBREE_MIN_PRIMS} where Embree starts to trace faster"
+                "{prims} primitives, below the crossover of {AUTO_EMBREE_MIN_PRIMS} \
+                 from which Embree traced faster (BENCHMARKS.md)"
             ),
         }
     }
@@ -222,7 +409,8 @@ pub fn backends_info() -> String {
         Err(e) => format!("Embree compiled in but unusable: {e}"),
     };
     #[cfg(not(any(feature = "embree", feature = "embree4")))]
-    let embree = "Embree not compiled in (rebuild with --features embree)".to_string();
+    let embree =
+        "Embree not compiled in (rebuild with --features embree or --features embree4)".to_string();
     format!("{native}; {embree}")
 }
 
@@ -253,12 +441,34 @@ mod tests {
 
     #[test]
     fn auto_picks_by_primitive_count() {
-        let small = choose_auto_for(14, true);
+        let (sah, med) = (BvhBuilder::Sah, EmbreeQuality::Medium);
+        let small = choose_auto_for(14, true, sah, med);
         assert_eq!(small.kind, AccelKind::Native(BvhBuilder::Sah));
         assert!(small.reason.contains("14 primitives"), "{}", small.reason);
-        let big = choose_auto_for(AUTO_EMBREE_MIN_PRIMS, true);
-        assert_eq!(big.kind, AccelKind::Embree(EmbreeQuality::Medium));
-        let without = choose_auto_for(10 * AUTO_EMBREE_MIN_PRIMS, false);
+        let big = choose_auto_for(AUTO_EMBREE_MIN_PRIMS, true, sah, med);
+        assert_eq!(big.kind, AccelKind::embree(EmbreeQuality::Medium));
+        let without = choose_auto_for(10 * AUTO_EMBREE_MIN_PRIMS, false, sah, med);
         assert_eq!(without.kind, AccelKind::Native(BvhBuilder::Sah));
+    }
+
+    #[test]
+    fn auto_keeps_the_requested_builder_and_quality() {
+        let mid = choose_auto_for(10, true, BvhBuilder::Midpoint, EmbreeQuality::High);
+        assert_eq!(mid.kind, AccelKind::Native(BvhBuilder::Midpoint));
+        let high = choose_auto_for(1 << 20, true, BvhBuilder::Midpoint, EmbreeQuality::High);
+        assert_eq!(high.kind, AccelKind::embree(EmbreeQuality::High));
+        assert_eq!(high.kind.to_string(), "Embree high robust");
+    }
+
+    #[cfg(feature = "bench")]
+    #[test]
+    fn explicit_kinds_resolve_to_themselves() {
+        let scene = crate::bench::meshes::displaced_sphere(200);
+        let k = AccelKind::Native(BvhBuilder::Midpoint);
+        assert_eq!(k.resolve(&scene).kind, k);
+        assert_ne!(
+            AccelKind::default().resolve(&scene).kind,
+            AccelKind::default()
+        );
     }
 }

@@ -1,13 +1,21 @@
-//! `ember bench accel`: build time, memory and ray throughput of every backend this
-//! build has, per scene and thread count, as data plus a Markdown table.
+//! `ember bench accel`: build time, memory, tree shape and ray throughput of every
+//! backend this build has (the native builders; Embree robust and fast), per scene
+//! and thread count, plus every Embree mode on camera rays. Each row names the Embree
+//! of the build that measured it, so the tables of an Embree 3 and an Embree 4 build
+//! merge into one ([`AccelBenchReport::merge`], `--append`).
 
-use super::measure::{make_rays, measure, tracing_pool, Backend, Builder, Measurement, Repeats};
+use super::embree_modes::{self, EmbreeModeRow};
+use super::measure::{make_rays, measure_all, three_digits, Measurement, Repeats, TreeShape};
 use super::meshes;
-use crate::accel::{AccelError, BvhBuilder, EmbreeQuality};
+use super::table::Table;
+use super::Report;
+use crate::accel::{
+    self, AccelBuilder, AccelError, AccelKind, BvhBuilder, EmbreeMode, EmbreeQuality,
+};
 use crate::scene::collada::{self, LoadError};
 use crate::scene::Scene;
-use std::fmt::Write as _;
-use std::path::PathBuf;
+use anyhow::Context;
+use std::path::{Path, PathBuf};
 
 /// A scene to measure.
 #[derive(Clone, Debug, PartialEq)]
@@ -18,6 +26,30 @@ pub enum BenchScene {
 }
 
 impl BenchScene {
+    /// `mesh:N` (N triangles, with an optional k or M suffix: `mesh:250k`) is a
+    /// generated displaced sphere; anything else a scene file.
+    pub fn parse(s: &str) -> Result<BenchScene, String> {
+        let Some(count) = s.strip_prefix("mesh:") else {
+            return Ok(BenchScene::File(PathBuf::from(s)));
+        };
+        let (digits, scale) = match count.strip_suffix(['k', 'K']) {
+            Some(d) => (d, 1_000),
+            None => match count.strip_suffix('M') {
+                Some(d) => (d, 1_000_000),
+                None => (count, 1),
+            },
+        };
+        digits
+            .parse::<usize>()
+            .ok()
+            .and_then(|n| n.checked_mul(scale))
+            .filter(|&n| (1..=1 << 28).contains(&n))
+            .map(BenchScene::DisplacedSphere)
+            .ok_or_else(|| {
+                format!("{s:?}: expected mesh:N with 1 ≤ N ≤ 2^28 triangles (e.g. mesh:250k)")
+            })
+    }
+
     pub fn name(&self) -> String {
         match self {
             BenchScene::File(p) => p.file_stem().map_or_else(
@@ -39,54 +71,87 @@ impl BenchScene {
 #[derive(Clone, Debug)]
 pub struct AccelBenchOptions {
     pub scenes: Vec<BenchScene>,
-    /// Incoherent and shadow rays per measurement (camera rays are `width × height`).
+    /// Incoherent and shadow rays per measurement.
     pub rays: usize,
+    /// Camera rays: one per pixel of a `width × height` render of the scene's camera.
     pub width: u32,
     pub height: u32,
     pub threads: Vec<usize>,
     /// Each figure is the median of this many runs.
     pub repeats: usize,
+    /// Build quality of the Embree rows of the main table (robust and fast).
     pub embree_quality: EmbreeQuality,
+    /// Also measure every Embree mode (scene flags × quality × packet width) on
+    /// camera rays, when this build has Embree.
+    pub embree_modes: bool,
     pub seed: u64,
 }
 
-impl Default for AccelBenchOptions {
-    fn default() -> Self {
+impl AccelBenchOptions {
+    /// CBbunny, CBspheres_lambertian and a ~1M-triangle displaced sphere.
+    pub fn default_scenes() -> Vec<BenchScene> {
         let sky = PathBuf::from(concat!(
             env!("CARGO_MANIFEST_DIR"),
             "/../shared/scenes/cs184/sky"
         ));
+        vec![
+            BenchScene::File(sky.join("CBbunny.dae")),
+            BenchScene::File(sky.join("CBspheres_lambertian.dae")),
+            BenchScene::DisplacedSphere(1_000_000),
+        ]
+    }
+}
+
+impl Default for AccelBenchOptions {
+    fn default() -> Self {
         AccelBenchOptions {
-            scenes: vec![
-                BenchScene::File(sky.join("CBbunny.dae")),
-                BenchScene::File(sky.join("CBspheres_lambertian.dae")),
-                BenchScene::DisplacedSphere(1_000_000),
-            ],
+            scenes: AccelBenchOptions::default_scenes(),
             rays: 500_000,
             width: 480,
             height: 360,
             threads: vec![1, 2],
             repeats: 5,
             embree_quality: EmbreeQuality::Medium,
+            embree_modes: true,
             seed: 7,
         }
     }
 }
 
-/// One backend at one thread count on one scene. Throughputs are in Mrays/s.
+/// One backend at one thread count on one scene, measured by one build of ember.
 #[derive(Clone, Debug, PartialEq)]
 pub struct AccelBenchRow {
     pub scene: String,
     pub prims: usize,
-    pub backend: String,
-    pub is_embree: bool,
     pub threads: usize,
+    /// [`AccelKind`]'s name, e.g. "native SAH" or "Embree medium fast".
+    pub backend: String,
+    /// `Some` for Embree rows.
+    pub embree_mode: Option<EmbreeMode>,
+    /// The Embree this build of ember links ("Embree 4.4.0 AVX2"), "none" without one:
+    /// tells apart the rows of an Embree 3 and an Embree 4 build in a merged table.
+    pub build: String,
+    /// Whether `--accel auto` picks this backend for this scene in that build.
+    pub auto: bool,
     pub measured: Measurement,
 }
 
+impl AccelBenchRow {
+    pub fn is_embree(&self) -> bool {
+        self.embree_mode.is_some()
+    }
+
+    /// The Embree scene flags of the row ("—" for the native BVH).
+    pub fn scene_flags(&self) -> &'static str {
+        self.embree_mode.map_or("—", EmbreeMode::scene_flags)
+    }
+}
+
+/// The main table's rows and the Embree modes rows.
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct AccelBenchReport {
     pub rows: Vec<AccelBenchRow>,
+    pub modes: Vec<EmbreeModeRow>,
 }
 
 #[derive(Debug, thiserror::Error)]
@@ -99,95 +164,347 @@ pub enum BenchError {
     ThreadPool(#[from] rayon::ThreadPoolBuildError),
 }
 
-fn backends(opts: &AccelBenchOptions) -> Vec<Backend> {
+const HAS_EMBREE: bool = cfg!(any(feature = "embree", feature = "embree4"));
+
+/// The backends of the main table: both native builders, and robust and fast Embree.
+fn backends(quality: EmbreeQuality) -> Vec<AccelKind> {
     let mut list = vec![
-        Backend::Native(BvhBuilder::Midpoint),
-        Backend::Native(BvhBuilder::Sah),
+        AccelKind::Native(BvhBuilder::Midpoint),
+        AccelKind::Native(BvhBuilder::Sah),
     ];
-    if cfg!(any(feature = "embree", feature = "embree4")) {
-        list.push(Backend::Embree(opts.embree_quality));
+    if HAS_EMBREE {
+        for robust in [true, false] {
+            list.push(AccelKind::Embree(EmbreeMode { quality, robust }));
+        }
     }
     list
 }
 
-/// Runs the whole benchmark; `progress` hears one line per finished row.
+/// Runs the whole benchmark; `progress` hears one line per finished measurement.
 pub fn run(
     opts: &AccelBenchOptions,
     mut progress: impl FnMut(&str),
 ) -> Result<AccelBenchReport, BenchError> {
     let mut report = AccelBenchReport::default();
     let repeats = Repeats {
-        count: opts.repeats,
+        count: opts.repeats.max(1),
         budget_s: f64::INFINITY,
     };
     for bench_scene in &opts.scenes {
         let scene = bench_scene.load()?;
+        let name = bench_scene.name();
         let rays = make_rays(&scene, opts.width, opts.height, opts.rays, opts.seed);
+        let auto = AccelKind::default().resolve(&scene).kind;
         for &threads in &opts.threads {
-            let pool = tracing_pool(threads)?;
-            let builder = Builder::new(threads)?;
-            for backend in backends(opts) {
-                let m = measure(&scene, &rays, &pool, &builder, backend, repeats)?;
+            let pool = accel::tracing_pool(Some(threads))?;
+            let builder = AccelBuilder::new(threads);
+            let build = embree_modes::build_label(&builder)?;
+            let kinds = backends(opts.embree_quality);
+            let measured = measure_all(&scene, &rays, &pool, &builder, &kinds, repeats)?;
+            for (kind, m) in kinds.into_iter().zip(measured) {
                 let row = AccelBenchRow {
-                    scene: bench_scene.name(),
+                    scene: name.clone(),
                     prims: scene.num_prims(),
-                    backend: backend.label().to_string(),
-                    is_embree: backend.is_embree(),
                     threads: pool.current_num_threads(),
+                    backend: kind.to_string(),
+                    embree_mode: match kind {
+                        AccelKind::Embree(m) => Some(m),
+                        _ => None,
+                    },
+                    build: build.clone(),
+                    auto: kind == auto,
                     measured: m,
                 };
                 progress(&format!(
-                    "{} / {} / {} threads: done",
-                    row.scene, row.backend, row.threads
+                    "{} / {} / {} threads: {:.2} / {:.2} / {:.2} Mrays/s",
+                    row.scene,
+                    row.backend,
+                    row.threads,
+                    m.camera_mrays,
+                    m.incoherent_mrays,
+                    m.shadow_mrays
                 ));
                 report.rows.push(row);
+            }
+            if HAS_EMBREE && opts.embree_modes {
+                let modes = embree_modes::embree_modes(
+                    &scene,
+                    &name,
+                    &rays.camera,
+                    &pool,
+                    &builder,
+                    opts.repeats,
+                )?;
+                progress(&format!("{name} / Embree modes / {threads} threads: done"));
+                report.modes.extend(modes);
             }
         }
     }
     Ok(report)
 }
 
+const HEADER: [&str; 18] = [
+    "scene",
+    "prims",
+    "threads",
+    "backend",
+    "scene flags",
+    "build's Embree",
+    "build (ms)",
+    "memory (MB)",
+    "camera (Mrays/s)",
+    "incoherent (Mrays/s)",
+    "shadow (Mrays/s)",
+    "nodes",
+    "leaves",
+    "depth",
+    "SAH cost",
+    "auto picks",
+    "native/Embree robust (cam / inc / shadow)",
+    "native/Embree fast (cam / inc / shadow)",
+];
+
 impl AccelBenchReport {
-    /// Markdown table; the ratio column is native/Embree throughput (camera,
-    /// incoherent, shadow) at the same scene and thread count.
-    pub fn to_markdown(&self) -> String {
-        let mut s = String::from(
-            "| scene | prims | backend | threads | build (ms) | memory (MB) | camera (Mrays/s) \
-             | incoherent (Mrays/s) | shadow (Mrays/s) | nodes | leaves | SAH cost \
-             | native/Embree (cam / inc / shadow) |\n\
-             |---|---:|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---|\n",
-        );
+    /// The main table. The ratio columns are a native row's throughput over the
+    /// Embree row of the same build, scene and thread count (robust, then fast).
+    pub fn table(&self) -> Table {
+        let mut t = Table::new(HEADER);
         for r in &self.rows {
-            let ratio = self.embree_row(r).filter(|_| !r.is_embree).map_or_else(
-                || "—".to_string(),
-                |e| {
-                    format!(
-                        "{:.2} / {:.2} / {:.2}",
-                        r.measured.camera_mrays / e.measured.camera_mrays,
-                        r.measured.incoherent_mrays / e.measured.incoherent_mrays,
-                        r.measured.shadow_mrays / e.measured.shadow_mrays
-                    )
-                },
-            );
-            let _ = writeln!(
-                s,
-                "| {} | {} | {} | {} {} {} | {} |",
-                r.scene,
-                r.prims,
-                r.backend,
-                r.threads,
-                r.measured.markdown_cells(),
-                r.measured.tree_cells(),
-                ratio
-            );
+            let m = &r.measured;
+            let tree = |f: fn(&TreeShape) -> String| m.tree.as_ref().map_or("—".into(), f);
+            let ratio = |robust: bool| {
+                self.embree_row(r, robust)
+                    .filter(|_| !r.is_embree())
+                    .map_or("—".into(), |e| {
+                        let e = &e.measured;
+                        format!(
+                            "{:.2} / {:.2} / {:.2}",
+                            m.camera_mrays / e.camera_mrays,
+                            m.incoherent_mrays / e.incoherent_mrays,
+                            m.shadow_mrays / e.shadow_mrays
+                        )
+                    })
+            };
+            t.push(vec![
+                r.scene.clone(),
+                r.prims.to_string(),
+                r.threads.to_string(),
+                r.backend.clone(),
+                r.scene_flags().into(),
+                r.build.clone(),
+                three_digits(m.build_ms),
+                three_digits(m.memory_mb),
+                format!("{:.2}", m.camera_mrays),
+                format!("{:.2}", m.incoherent_mrays),
+                format!("{:.2}", m.shadow_mrays),
+                tree(|t| t.nodes.to_string()),
+                tree(|t| t.leaves.to_string()),
+                tree(|t| t.depth.to_string()),
+                tree(|t| format!("{:.2}", t.sah_cost)),
+                if r.auto { "yes" } else { "" }.into(),
+                ratio(true),
+                ratio(false),
+            ]);
         }
-        s
+        t
     }
 
-    fn embree_row(&self, r: &AccelBenchRow) -> Option<&AccelBenchRow> {
-        self.rows
+    /// Where `--accel auto` should switch, from these rows: the fewest primitives from
+    /// which, on every measured scene that large, robust Embree traces both
+    /// incoherent and shadow rays faster than the native SAH tree of the same build at
+    /// every thread count. `None` when the largest scene still favours the native tree.
+    pub fn crossover(&self) -> Option<usize> {
+        let embree_ahead = |scene: &str| {
+            self.rows
+                .iter()
+                .filter(|r| r.scene == scene && r.backend == "native SAH")
+                .all(|n| {
+                    self.embree_row(n, true).is_some_and(|e| {
+                        e.measured.incoherent_mrays > n.measured.incoherent_mrays
+                            && e.measured.shadow_mrays > n.measured.shadow_mrays
+                    })
+                })
+        };
+        let mut scenes: Vec<(usize, bool)> = first_seen(self.rows.iter().map(|r| r.scene.clone()))
             .iter()
-            .find(|e| e.is_embree && e.scene == r.scene && e.threads == r.threads)
+            .map(|s| {
+                let prims = self
+                    .rows
+                    .iter()
+                    .find(|r| &r.scene == s)
+                    .map_or(0, |r| r.prims);
+                (prims, embree_ahead(s))
+            })
+            .collect();
+        scenes.sort_by_key(|&(prims, _)| std::cmp::Reverse(prims));
+        let mut from = None;
+        for (prims, ahead) in scenes {
+            if !ahead {
+                break;
+            }
+            from = Some(prims);
+        }
+        from
+    }
+
+    /// One line on [`AccelBenchReport::crossover`] against the crossover `--accel auto` uses.
+    pub fn crossover_note(&self) -> String {
+        let now = accel::AUTO_EMBREE_MIN_PRIMS;
+        match self.crossover() {
+            Some(p) => format!(
+                "Robust Embree is ahead of native SAH (incoherent and shadow rays, every thread count) \
+                 on every measured scene from {p} primitives up; --accel auto switches at {now}."
+            ),
+            None => format!(
+                "Native SAH keeps up with robust Embree on the largest measured scene \
+                 (incoherent or shadow rays); --accel auto switches at {now}."
+            ),
+        }
+    }
+
+    fn embree_row(&self, r: &AccelBenchRow, robust: bool) -> Option<&AccelBenchRow> {
+        self.rows.iter().find(|e| {
+            e.embree_mode.is_some_and(|m| m.robust == robust)
+                && e.scene == r.scene
+                && e.threads == r.threads
+                && e.build == r.build
+        })
+    }
+
+    pub fn modes_table(&self) -> Table {
+        embree_modes::table(&self.modes)
+    }
+
+    /// Reads back the rows of a main table written by [`AccelBenchReport::table`] (its
+    /// CSV); the ratio columns are recomputed, not read.
+    pub fn rows_from_table(t: &Table) -> Result<Vec<AccelBenchRow>, String> {
+        if t.header != HEADER {
+            return Err(format!("not a bench accel table: header {:?}", t.header));
+        }
+        t.rows.iter().map(|c| row_from_cells(c)).collect()
+    }
+
+    /// `other`'s rows after this report's, grouped by scene (in first-seen order) and
+    /// thread count, so the rows of two builds sit together.
+    pub fn merge(mut self, other: AccelBenchReport) -> AccelBenchReport {
+        self.rows.extend(other.rows);
+        self.modes.extend(other.modes);
+        let scenes = first_seen(self.rows.iter().map(|r| r.scene.clone()));
+        let rank = |s: &str| scenes.iter().position(|x| x == s);
+        self.rows.sort_by_key(|r| (rank(&r.scene), r.threads));
+        self.modes.sort_by_key(|r| (rank(&r.scene), r.threads));
+        self
+    }
+
+    /// What [`Report::write`] left in `out_dir` (no modes when that file is absent).
+    pub fn read(out_dir: &Path) -> anyhow::Result<AccelBenchReport> {
+        let main = out_dir.join("accel.csv");
+        let text = std::fs::read_to_string(&main)
+            .with_context(|| format!("{}: cannot read", main.display()))?;
+        let rows = Table::from_csv(&text)
+            .and_then(|t| Self::rows_from_table(&t))
+            .map_err(|e| anyhow::anyhow!("{}: {e}", main.display()))?;
+        let modes_path = out_dir.join("embree_modes.csv");
+        let modes = match std::fs::read_to_string(&modes_path) {
+            Ok(text) => Table::from_csv(&text)
+                .and_then(|t| embree_modes::rows_from_table(&t))
+                .map_err(|e| anyhow::anyhow!("{}: {e}", modes_path.display()))?,
+            Err(e) if e.kind() == std::io::ErrorKind::NotFound => Vec::new(),
+            Err(e) => {
+                return Err(anyhow::anyhow!(
+                    "{}: cannot read: {e}",
+                    modes_path.display()
+                ))
+            }
+        };
+        Ok(AccelBenchReport { rows, modes })
+    }
+}
+
+fn first_seen(items: impl Iterator<Item = String>) -> Vec<String> {
+    let mut out: Vec<String> = Vec::new();
+    for s in items {
+        if !out.contains(&s) {
+            out.push(s);
+        }
+    }
+    out
+}
+
+fn row_from_cells(c: &[String]) -> Result<AccelBenchRow, String> {
+    let num = |i: usize| {
+        c[i].parse::<f64>()
+            .map_err(|_| format!("{}: not a number: {:?}", HEADER[i], c[i]))
+    };
+    let count = |i: usize| {
+        c[i].parse::<usize>()
+            .map_err(|_| format!("{}: not a count: {:?}", HEADER[i], c[i]))
+    };
+    let embree_mode = match c[3].strip_prefix("Embree ") {
+        None => None,
+        Some(mode) => {
+            let quality = EmbreeQuality::ALL
+                .into_iter()
+                .find(|q| mode.starts_with(&q.to_string()))
+                .ok_or_else(|| format!("unknown Embree backend {:?}", c[3]))?;
+            Some(EmbreeMode {
+                quality,
+                robust: c[4] == "ROBUST",
+            })
+        }
+    };
+    let tree = if c[11] == "—" {
+        None
+    } else {
+        Some(TreeShape {
+            nodes: count(11)?,
+            leaves: count(12)?,
+            depth: count(13)?,
+            sah_cost: num(14)?,
+        })
+    };
+    Ok(AccelBenchRow {
+        scene: c[0].clone(),
+        prims: count(1)?,
+        threads: count(2)?,
+        backend: c[3].clone(),
+        embree_mode,
+        build: c[5].clone(),
+        auto: c[15] == "yes",
+        measured: Measurement {
+            build_ms: num(6)?,
+            memory_mb: num(7)?,
+            camera_mrays: num(8)?,
+            incoherent_mrays: num(9)?,
+            shadow_mrays: num(10)?,
+            tree,
+        },
+    })
+}
+
+impl Report for AccelBenchReport {
+    /// `accel.csv`/`.md`, and `embree_modes.csv`/`.md` when there are modes rows.
+    fn write(&self, out_dir: &Path) -> anyhow::Result<Vec<PathBuf>> {
+        super::create_out_dir(out_dir)?;
+        let mut stems = vec![out_dir.join("accel")];
+        self.table().write(&stems[0])?;
+        if !self.modes.is_empty() {
+            stems.push(out_dir.join("embree_modes"));
+            self.modes_table().write(&stems[1])?;
+        }
+        Ok(stems
+            .iter()
+            .flat_map(|s| [s.with_extension("csv"), s.with_extension("md")])
+            .collect())
+    }
+
+    fn summary(&self) -> String {
+        let mut out = self.table().to_markdown();
+        if !self.modes.is_empty() {
+            out += "\n";
+            out += &self.modes_table().to_markdown();
+        }
+        out + "\n" + &self.crossover_note() + "\n"
     }
 }
 
@@ -195,28 +512,201 @@ impl AccelBenchReport {
 mod tests {
     use super::*;
 
-    #[test]
-    fn markdown_ratio_is_native_over_embree() {
-        let row = |backend: &str, is_embree, mrays| AccelBenchRow {
+    fn row(backend: AccelKind, build: &str, mrays: f64) -> AccelBenchRow {
+        AccelBenchRow {
             scene: "s".into(),
             prims: 1,
-            backend: backend.into(),
-            is_embree,
             threads: 1,
+            backend: backend.to_string(),
+            embree_mode: match backend {
+                AccelKind::Embree(m) => Some(m),
+                _ => None,
+            },
+            build: build.into(),
+            auto: false,
             measured: Measurement {
                 build_ms: 1.0,
-                memory_mb: 1.0,
+                memory_mb: 1.5,
                 camera_mrays: mrays,
                 incoherent_mrays: mrays,
                 shadow_mrays: mrays,
-                tree: None,
+                tree: matches!(backend, AccelKind::Native(_)).then_some(TreeShape {
+                    nodes: 3,
+                    leaves: 9,
+                    depth: 2,
+                    sah_cost: 4.25,
+                }),
             },
+        }
+    }
+
+    const SAH: AccelKind = AccelKind::Native(BvhBuilder::Sah);
+    const FAST: AccelKind = AccelKind::Embree(EmbreeMode {
+        quality: EmbreeQuality::Medium,
+        robust: false,
+    });
+
+    #[test]
+    fn ratios_are_native_over_embree_of_the_same_build() {
+        let e3 = "Embree 3.13.5 (AVX2, native ray packets of 8)";
+        let e4 = "Embree 4.4.0 (AVX2, native ray packets of 8)";
+        let first = AccelBenchReport {
+            rows: vec![
+                row(SAH, e3, 5.0),
+                row(AccelKind::embree(EmbreeQuality::Medium), e3, 10.0),
+                row(FAST, e3, 20.0),
+            ],
+            modes: vec![],
         };
+        let second = AccelBenchReport {
+            rows: vec![
+                row(SAH, e4, 6.0),
+                row(AccelKind::embree(EmbreeQuality::Medium), e4, 3.0),
+            ],
+            modes: vec![],
+        };
+        let md = first.merge(second).table().to_markdown();
+        assert!(
+            md.contains("| 0.50 / 0.50 / 0.50 | 0.25 / 0.25 / 0.25 |"),
+            "{md}"
+        );
+        assert!(md.contains("| 2.00 / 2.00 / 2.00 | — |"), "{md}");
+        assert!(
+            md.contains("| Embree medium fast | NONE | Embree 3.13.5"),
+            "{md}"
+        );
+        assert!(md.contains("| 3 | 9 | 2 | 4.25 |"), "{md}");
+        assert_eq!(md.lines().count(), 2 + 5);
+    }
+
+    #[test]
+    fn crossover_is_where_embree_stays_ahead() {
+        let at = |scene: &str, prims, kind: AccelKind, mrays| AccelBenchRow {
+            scene: scene.into(),
+            prims,
+            ..row(kind, "e", mrays)
+        };
+        let robust = AccelKind::embree(EmbreeQuality::Medium);
+        let rows = |sizes: &[(usize, f64)]| AccelBenchReport {
+            rows: sizes
+                .iter()
+                .flat_map(|&(p, native)| {
+                    let name = p.to_string();
+                    [at(&name, p, SAH, native), at(&name, p, robust, 1.0)]
+                })
+                .collect(),
+            modes: vec![],
+        };
+        // Native ahead at 10, behind at 100 and 1000, ahead again at 50 (noise).
+        let r = rows(&[(10, 2.0), (50, 1.5), (100, 0.5), (1000, 0.5)]);
+        assert_eq!(r.crossover(), Some(100));
+        assert!(r.crossover_note().contains("from 100 primitives up"));
+        assert_eq!(rows(&[(10, 0.5), (1000, 1.5)]).crossover(), None);
+        assert_eq!(rows(&[(10, 0.5), (1000, 0.5)]).crossover(), Some(10));
+    }
+
+    #[test]
+    fn the_csv_reads_back_into_the_same_rows() {
         let report = AccelBenchReport {
-            rows: vec![row("native SAH", false, 5.0), row("Embree", true, 10.0)],
+            rows: vec![
+                row(SAH, "none", 5.0),
+                row(FAST, "Embree 4.4.0 (AVX2, x)", 7.25),
+            ],
+            modes: vec![],
         };
-        let md = report.to_markdown();
-        assert!(md.contains("| 0.50 / 0.50 / 0.50 |"), "{md}");
-        assert_eq!(md.lines().count(), 4);
+        let t = Table::from_csv(&report.table().to_csv()).expect("csv");
+        assert_eq!(AccelBenchReport::rows_from_table(&t), Ok(report.rows));
+        let mut bad = t.clone();
+        bad.rows[0][8] = "fast".into();
+        assert!(AccelBenchReport::rows_from_table(&bad)
+            .unwrap_err()
+            .contains("camera"));
+    }
+
+    #[test]
+    fn merge_groups_rows_by_scene_then_threads() {
+        let at = |scene: &str, threads, build: &str| AccelBenchRow {
+            scene: scene.into(),
+            threads,
+            ..row(SAH, build, 1.0)
+        };
+        let a = AccelBenchReport {
+            rows: vec![at("x", 1, "3"), at("x", 2, "3"), at("y", 1, "3")],
+            modes: vec![],
+        };
+        let b = AccelBenchReport {
+            rows: vec![at("x", 1, "4"), at("x", 2, "4"), at("y", 1, "4")],
+            modes: vec![],
+        };
+        let order: Vec<(String, usize, String)> = a
+            .merge(b)
+            .rows
+            .into_iter()
+            .map(|r| (r.scene, r.threads, r.build))
+            .collect();
+        let want = [
+            ("x", 1, "3"),
+            ("x", 1, "4"),
+            ("x", 2, "3"),
+            ("x", 2, "4"),
+            ("y", 1, "3"),
+            ("y", 1, "4"),
+        ];
+        assert_eq!(
+            order,
+            want.map(|(s, t, b)| (s.to_string(), t, b.to_string()))
+        );
+    }
+
+    #[test]
+    fn scenes_parse_as_files_or_generated_meshes() {
+        assert_eq!(
+            BenchScene::parse("mesh:250k"),
+            Ok(BenchScene::DisplacedSphere(250_000))
+        );
+        assert_eq!(
+            BenchScene::parse("mesh:2M"),
+            Ok(BenchScene::DisplacedSphere(2_000_000))
+        );
+        assert_eq!(
+            BenchScene::parse("mesh:5000"),
+            Ok(BenchScene::DisplacedSphere(5_000))
+        );
+        assert_eq!(
+            BenchScene::parse("a/b.dae"),
+            Ok(BenchScene::File("a/b.dae".into()))
+        );
+        for bad in ["mesh:", "mesh:0", "mesh:x", "mesh:-3", "mesh:999999M"] {
+            assert!(BenchScene::parse(bad).is_err(), "{bad}");
+        }
+    }
+
+    #[test]
+    fn a_small_run_measures_every_backend_and_mode() {
+        let opts = AccelBenchOptions {
+            scenes: vec![BenchScene::DisplacedSphere(2_000)],
+            rays: 1_000,
+            width: 16,
+            height: 12,
+            threads: vec![1],
+            repeats: 1,
+            ..Default::default()
+        };
+        let report = run(&opts, |_| {}).expect("runs");
+        let embree_rows = if HAS_EMBREE { 2 } else { 0 };
+        assert_eq!(report.rows.len(), 2 + embree_rows);
+        assert_eq!(report.modes.len(), if HAS_EMBREE { 24 } else { 0 });
+        // Auto picks the native SAH tree for 2k triangles.
+        let auto: Vec<&str> = report
+            .rows
+            .iter()
+            .filter(|r| r.auto)
+            .map(|r| r.backend.as_str())
+            .collect();
+        assert_eq!(auto, ["native SAH"]);
+        for r in &report.rows {
+            assert_eq!(r.is_embree(), r.measured.tree.is_none(), "{}", r.backend);
+            assert!(r.measured.incoherent_mrays > 0.0 && r.measured.memory_mb > 0.0);
+        }
     }
 }

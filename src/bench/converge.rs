@@ -186,7 +186,7 @@ pub fn methods(base: &RenderSettings, scene: &Scene, compare_backends: bool) -> 
                 strategy: default_strategy,
                 ..base.clone()
             },
-            accel: AccelKind::Embree(EmbreeQuality::Medium),
+            accel: AccelKind::embree(EmbreeQuality::Medium),
         });
     }
     v

@@ -1,37 +1,15 @@
-//! Every Embree mode this build can run, on one scene's camera rays: robust or fast
-//! scene flags, low/medium/high build quality, and rays traced one at a time
+//! The Embree modes part of `ember bench accel`: on one scene's camera rays, robust or
+//! fast scene flags, low/medium/high build quality, and rays traced one at a time
 //! (`rtcIntersect1`) or in packets of 4, 8 and 16 (`rtcIntersect4/8/16`). Each row
-//! names the Embree it ran (version and ISA) and the flags it used, so tables of an
-//! `embree` (Embree 3) and an `embree4` build can be merged.
+//! names the Embree it ran (version and ISA) and the flags it used, so the tables of
+//! an `embree` (Embree 3) and an `embree4` build can be merged.
 
-use super::measure::{quality_name, three_digits};
-use crate::accel::{AccelError, EmbreeQuality};
-use crate::camera::Camera;
+use super::measure::three_digits;
+pub use super::measure::tiled_camera_rays;
+use super::table::Table;
+use crate::accel::{AccelBuilder, AccelError, EmbreeMode, EmbreeQuality};
 use crate::geometry::Ray;
 use crate::scene::Scene;
-use glam::Vec2;
-use std::fmt::Write as _;
-
-#[derive(Clone, Debug)]
-pub struct EmbreeModesOptions {
-    pub width: u32,
-    pub height: u32,
-    /// Tracing threads, and Embree's build threads.
-    pub threads: usize,
-    /// Each figure is the median of this many runs.
-    pub repeats: usize,
-}
-
-impl Default for EmbreeModesOptions {
-    fn default() -> Self {
-        EmbreeModesOptions {
-            width: 480,
-            height: 360,
-            threads: 2,
-            repeats: 7,
-        }
-    }
-}
 
 /// How camera rays reach Embree.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -57,92 +35,86 @@ impl RayQuery {
     }
 }
 
+/// The ray query flags of every row: the shim passes Embree's defaults
+/// (`rtcInitIntersectContext` in 3, `rtcInitIntersectArguments` in 4), which are
+/// INCOHERENT in both.
+pub const QUERY_FLAGS: &str = "INCOHERENT (default)";
+
 #[derive(Clone, Debug, PartialEq)]
 pub struct EmbreeModeRow {
-    /// Version and ISA, e.g. "Embree 4.4.0 (AVX2, native ray packets of 8)".
+    pub scene: String,
+    /// [`build_label`]: version and ISA, e.g. "Embree 4.4.0 AVX2".
     pub embree: String,
-    pub quality: EmbreeQuality,
+    pub mode: EmbreeMode,
     /// `rtcSetSceneFlags` as Embree reports it back: "ROBUST" or "NONE".
-    pub scene_flags: &'static str,
+    pub scene_flags: String,
     pub query: RayQuery,
-    /// The ray query flags: the shim passes Embree's defaults (`rtcInitIntersectContext`
-    /// in 3, `rtcInitIntersectArguments` in 4), which are INCOHERENT in both.
-    pub query_flags: &'static str,
     pub threads: usize,
     pub build_ms: f64,
     pub camera_mrays: f64,
 }
 
-/// Camera rays through the pixel centres, ordered by 4×4 pixel tiles and inside a
-/// tile in Morton order, so every run of 4, 8 or 16 rays covers a 2×2, 4×2 or 4×4
-/// block: the coherent packets Embree's packet kernels are made for.
-pub fn tiled_camera_rays(scene: &Scene, width: u32, height: u32) -> Vec<Ray> {
-    let cam = Camera::new(&scene.camera, &scene.bounds, width, height);
-    let mut rays = Vec::with_capacity(width as usize * height as usize);
-    for ty in (0..height).step_by(4) {
-        for tx in (0..width).step_by(4) {
-            for k in 0..16u32 {
-                // Bits 0 and 2 of k give x, bits 1 and 3 give y.
-                let (x, y) = (
-                    tx + (k & 1) + ((k >> 1) & 2),
-                    ty + ((k >> 1) & 1) + ((k >> 2) & 2),
-                );
-                if x < width && y < height {
-                    rays.push(cam.generate_ray(x, y, Vec2::splat(0.5)));
-                }
-            }
-        }
+/// The Embree of this build as rows name it ("Embree 4.4.0 AVX2"), "none" without one.
+pub fn build_label(builder: &AccelBuilder) -> Result<String, AccelError> {
+    #[cfg(any(feature = "embree", feature = "embree4"))]
+    {
+        let info = builder.embree_device()?.info();
+        let (a, b, c) = info.version;
+        Ok(format!("Embree {a}.{b}.{c} {}", info.isa()))
     }
-    rays
+    #[cfg(not(any(feature = "embree", feature = "embree4")))]
+    {
+        let _ = builder;
+        Ok("none".into())
+    }
 }
 
-/// Measures every mode on `scene`. Errors when this build has no Embree.
+/// Measures every mode on `scene`'s `camera` rays (in tiled order) with `builder`'s
+/// device on `pool`; each figure is the median of `repeats` runs. Errors when this
+/// build has no Embree.
 #[cfg(any(feature = "embree", feature = "embree4"))]
 pub fn embree_modes(
     scene: &Scene,
-    opts: &EmbreeModesOptions,
+    scene_name: &str,
+    camera: &[Ray],
+    pool: &rayon::ThreadPool,
+    builder: &AccelBuilder,
+    repeats: usize,
 ) -> Result<Vec<EmbreeModeRow>, AccelError> {
-    use super::measure::tracing_pool;
     use super::median;
-    use crate::accel::embree::{EmbreeAccel, EmbreeDevice, EmbreeMode};
-    use std::sync::Arc;
     use std::time::Instant;
 
-    let pool = tracing_pool(opts.threads).map_err(|e| AccelError::Embree(e.to_string()))?;
-    let device = Arc::new(EmbreeDevice::new(opts.threads)?);
-    let embree = device.info().to_string();
-    let rays = tiled_camera_rays(scene, opts.width, opts.height);
+    let embree = build_label(builder)?;
     let mut rows = Vec::new();
     for robust in [true, false] {
-        for quality in [
-            EmbreeQuality::Low,
-            EmbreeQuality::Medium,
-            EmbreeQuality::High,
-        ] {
+        for quality in EmbreeQuality::ALL {
             let mode = EmbreeMode { quality, robust };
             let mut build_s = Vec::new();
             let mut accel = None;
-            for _ in 0..opts.repeats.max(1) {
+            for _ in 0..repeats.max(1) {
                 drop(accel.take());
                 let start = Instant::now();
-                accel = Some(EmbreeAccel::build_mode(device.clone(), scene, mode)?);
+                accel = Some(pool.install(|| builder.build_embree(scene, mode))?);
                 build_s.push(start.elapsed().as_secs_f64());
             }
             let accel = accel.expect("built at least once");
-            for query in RayQuery::ALL {
-                trace(&pool, &accel, &rays, query); // warm-up
-                let mut times: Vec<f64> = (0..opts.repeats.max(1))
-                    .map(|_| trace(&pool, &accel, &rays, query))
-                    .collect();
+            let mut times = [(); 4].map(|_| Vec::new());
+            trace(pool, &accel, camera, RayQuery::Single); // warm-up
+            for _ in 0..repeats.max(1) {
+                for (q, query) in RayQuery::ALL.into_iter().enumerate() {
+                    times[q].push(trace(pool, &accel, camera, query));
+                }
+            }
+            for (q, query) in RayQuery::ALL.into_iter().enumerate() {
                 rows.push(EmbreeModeRow {
+                    scene: scene_name.to_string(),
                     embree: embree.clone(),
-                    quality,
-                    scene_flags: accel.scene_flags(),
+                    mode,
+                    scene_flags: accel.scene_flags().to_string(),
                     query,
-                    query_flags: "INCOHERENT (default)",
-                    threads: opts.threads,
+                    threads: pool.current_num_threads(),
                     build_ms: 1e3 * median(&mut build_s.clone()),
-                    camera_mrays: rays.len() as f64 / median(&mut times) / 1e6,
+                    camera_mrays: camera.len() as f64 / median(&mut times[q]) / 1e6,
                 });
             }
         }
@@ -154,7 +126,11 @@ pub fn embree_modes(
 #[cfg(not(any(feature = "embree", feature = "embree4")))]
 pub fn embree_modes(
     _scene: &Scene,
-    _opts: &EmbreeModesOptions,
+    _scene_name: &str,
+    _camera: &[Ray],
+    _pool: &rayon::ThreadPool,
+    _builder: &AccelBuilder,
+    _repeats: usize,
 ) -> Result<Vec<EmbreeModeRow>, AccelError> {
     Err(AccelError::EmbreeUnavailable)
 }
@@ -196,90 +172,132 @@ fn trace(
     start.elapsed().as_secs_f64()
 }
 
-/// A Markdown table of `rows`, one line per mode, with the flags each used.
-pub fn markdown(rows: &[EmbreeModeRow]) -> String {
-    let mut out = String::from(
-        "| Embree | quality | scene flags | query | query flags | threads | build (ms) | camera (Mrays/s) |\n\
-         |---|---|---|---|---|---|---|---|\n",
-    );
+const HEADER: [&str; 10] = [
+    "scene",
+    "Embree",
+    "quality",
+    "scene flags",
+    "query",
+    "query flags",
+    "threads",
+    "build (ms)",
+    "camera (Mrays/s)",
+    "vs rtcIntersect1",
+];
+
+/// The rows as a table, one line per mode, with the flags each used and the packet
+/// query's speed-up over single rays of the same build.
+pub fn table(rows: &[EmbreeModeRow]) -> Table {
+    let mut t = Table::new(HEADER);
     for r in rows {
-        // Writing into a String cannot fail.
-        let _ = writeln!(
-            out,
-            "| {} | {} | {} | {} | {} | {} | {} | {} |",
-            r.embree,
-            quality_name(r.quality),
-            r.scene_flags,
+        let single = rows.iter().find(|s| {
+            s.query == RayQuery::Single
+                && s.scene == r.scene
+                && s.embree == r.embree
+                && s.mode == r.mode
+                && s.threads == r.threads
+        });
+        t.push(vec![
+            r.scene.clone(),
+            r.embree.clone(),
+            r.mode.quality.to_string(),
+            r.scene_flags.clone(),
             r.query.call(),
-            r.query_flags,
-            r.threads,
+            QUERY_FLAGS.into(),
+            r.threads.to_string(),
             three_digits(r.build_ms),
             three_digits(r.camera_mrays),
-        );
+            single.map_or("—".into(), |s| {
+                format!("{:.2}×", r.camera_mrays / s.camera_mrays)
+            }),
+        ]);
     }
-    out
+    t
+}
+
+/// Reads back rows [`table`] wrote (its CSV), for merging the tables of two builds.
+pub fn rows_from_table(t: &Table) -> Result<Vec<EmbreeModeRow>, String> {
+    if t.header != HEADER {
+        return Err(format!("not an Embree modes table: header {:?}", t.header));
+    }
+    t.rows
+        .iter()
+        .map(|c| {
+            let quality = match c[2].as_str() {
+                "low" => EmbreeQuality::Low,
+                "medium" => EmbreeQuality::Medium,
+                "high" => EmbreeQuality::High,
+                q => return Err(format!("unknown quality {q:?}")),
+            };
+            let query = match c[4].strip_prefix("rtcIntersect").map(str::parse) {
+                Some(Ok(1)) => RayQuery::Single,
+                Some(Ok(n @ (4 | 8 | 16))) => RayQuery::Packet(n),
+                _ => return Err(format!("unknown query {:?}", c[4])),
+            };
+            let num = |i: usize| {
+                c[i].parse::<f64>()
+                    .map_err(|_| format!("{}: not a number: {:?}", HEADER[i], c[i]))
+            };
+            Ok(EmbreeModeRow {
+                scene: c[0].clone(),
+                embree: c[1].clone(),
+                mode: EmbreeMode {
+                    quality,
+                    robust: c[3] == "ROBUST",
+                },
+                scene_flags: c[3].clone(),
+                query,
+                threads: num(6)? as usize,
+                build_ms: num(7)?,
+                camera_mrays: num(8)?,
+            })
+        })
+        .collect()
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::bench::meshes;
 
-    #[test]
-    fn tiles_put_every_pixel_once_and_packets_on_compact_blocks() {
-        let scene = meshes::displaced_sphere(200);
-        let (w, h) = (10, 6);
-        let rays = tiled_camera_rays(&scene, w, h);
-        let cam = Camera::new(&scene.camera, &scene.bounds, w, h);
-        let mut pixels: Vec<(u32, u32)> = Vec::new();
-        for r in &rays {
-            let p = (0..h)
-                .flat_map(|y| (0..w).map(move |x| (x, y)))
-                .find(|&(x, y)| cam.generate_ray(x, y, Vec2::splat(0.5)) == *r)
-                .expect("a pixel centre's ray");
-            pixels.push(p);
+    fn row(query: RayQuery, mrays: f64) -> EmbreeModeRow {
+        EmbreeModeRow {
+            scene: "s".into(),
+            embree: "Embree 4.4.0 (AVX2, native ray packets of 8)".into(),
+            mode: EmbreeMode {
+                quality: EmbreeQuality::High,
+                robust: false,
+            },
+            scene_flags: "NONE".into(),
+            query,
+            threads: 2,
+            build_ms: 42.0,
+            camera_mrays: mrays,
         }
-        let mut sorted = pixels.clone();
-        sorted.sort();
-        sorted.dedup();
-        assert_eq!(sorted.len(), (w * h) as usize);
-        // The first packet of 8 is the 4×2 block at the origin.
-        let mut first8 = pixels[..8].to_vec();
-        first8.sort();
-        let block: Vec<(u32, u32)> = (0..4).flat_map(|x| (0..2).map(move |y| (x, y))).collect();
-        assert_eq!(first8, block);
     }
 
     #[test]
-    fn markdown_names_the_flags_of_each_row() {
-        let row = EmbreeModeRow {
-            embree: "Embree 4.4.0 (AVX2, native ray packets of 8)".into(),
-            quality: EmbreeQuality::High,
-            scene_flags: "NONE",
-            query: RayQuery::Packet(8),
-            query_flags: "INCOHERENT (default)",
-            threads: 2,
-            build_ms: 42.0,
-            camera_mrays: 35.4,
-        };
-        let md = markdown(&[row]);
+    fn table_names_the_flags_of_each_row_and_reads_back() {
+        let rows = vec![row(RayQuery::Single, 20.0), row(RayQuery::Packet(8), 35.4)];
+        let t = table(&rows);
+        let md = t.to_markdown();
         assert!(
-            md.contains("| high | NONE | rtcIntersect8 | INCOHERENT (default) | 2 | 42.0 | 35.4 |"),
+            md.contains(
+                "| high | NONE | rtcIntersect8 | INCOHERENT (default) | 2 | 42.0 | 35.4 | 1.77× |"
+            ),
             "{md}"
         );
+        let back = rows_from_table(&Table::from_csv(&t.to_csv()).expect("csv")).expect("rows");
+        assert_eq!(back, rows);
     }
 
     #[cfg(any(feature = "embree", feature = "embree4"))]
     #[test]
     fn every_mode_gets_a_row() {
-        let scene = meshes::displaced_sphere(2_000);
-        let opts = EmbreeModesOptions {
-            width: 32,
-            height: 16,
-            threads: 1,
-            repeats: 1,
-        };
-        let rows = embree_modes(&scene, &opts).expect("Embree runs");
+        let scene = crate::bench::meshes::displaced_sphere(2_000);
+        let camera = tiled_camera_rays(&scene, 32, 16);
+        let pool = crate::accel::tracing_pool(Some(1)).expect("pool");
+        let builder = AccelBuilder::new(1);
+        let rows = embree_modes(&scene, "sphere", &camera, &pool, &builder, 1).expect("Embree");
         assert_eq!(rows.len(), 2 * 3 * 4);
         assert_eq!(
             rows.iter().filter(|r| r.scene_flags == "ROBUST").count(),

@@ -8,14 +8,13 @@
 
 use super::chart::{write_chart, ChartSpec, Series};
 use super::fit::{log2_fit, n_log_n_fit, power_law_fit, LinearFit, NLogNFit, PowerLawFit};
-use super::measure::{
-    make_rays, measure, three_digits, tracing_pool, Backend, Builder, Measurement, Repeats,
-};
+use super::measure::{make_rays, measure_all, three_digits, Measurement, Repeats};
 use super::meshes;
-use crate::accel::{BvhBuilder, EmbreeQuality};
+use super::table::Table;
+use super::Report;
+use crate::accel::{self, AccelBuilder, AccelKind, BvhBuilder, EmbreeQuality};
 use crate::scene::Scene;
 use anyhow::{bail, Context, Result};
-use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 
 /// A family of generated meshes, one per size.
@@ -67,8 +66,6 @@ pub struct ScalingOptions {
     /// A figure (a build, or a traversal of one ray set) stops repeating once its
     /// runs have taken this many seconds in total.
     pub budget_s: f64,
-    /// Where the CSV, Markdown and charts go.
-    pub out_dir: PathBuf,
     /// Measure Embree at its three build qualities when this build has it.
     pub include_embree: bool,
     /// Growth fits use only sizes from this count up (all sizes when fewer than
@@ -86,7 +83,6 @@ impl Default for ScalingOptions {
             threads: std::thread::available_parallelism().map_or(1, |n| n.get()),
             repeats: 3,
             budget_s: 2.0,
-            out_dir: PathBuf::from("bench-out/scaling"),
             include_embree: true,
             fit_min_triangles: 16_000,
             seed: 7,
@@ -111,20 +107,14 @@ pub struct ScalingReport {
     pub fit_min_triangles: usize,
 }
 
-fn backends(include_embree: bool) -> Vec<Backend> {
+/// Both native builders, and robust Embree at each build quality.
+fn backends(include_embree: bool) -> Vec<AccelKind> {
     let mut list = vec![
-        Backend::Native(BvhBuilder::Midpoint),
-        Backend::Native(BvhBuilder::Sah),
+        AccelKind::Native(BvhBuilder::Midpoint),
+        AccelKind::Native(BvhBuilder::Sah),
     ];
     if include_embree && cfg!(any(feature = "embree", feature = "embree4")) {
-        list.extend(
-            [
-                EmbreeQuality::Low,
-                EmbreeQuality::Medium,
-                EmbreeQuality::High,
-            ]
-            .map(Backend::Embree),
-        );
+        list.extend(EmbreeQuality::ALL.map(AccelKind::embree));
     }
     list
 }
@@ -136,8 +126,8 @@ fn camera_resolution(rays: usize) -> (u32, u32) {
     (width, height)
 }
 
-/// Measures every mesh, size and backend, writes `scaling.csv`, `scaling.md` and
-/// the charts into `opts.out_dir`, and returns the report. `progress` hears one
+/// Measures every mesh, size and backend and returns the report (its [`Report::write`]
+/// writes `scaling.csv`, `scaling.md` and the charts). `progress` hears one
 /// line per measured row.
 pub fn run_scaling(opts: &ScalingOptions, mut progress: impl FnMut(&str)) -> Result<ScalingReport> {
     if opts.sizes.is_empty() || opts.sizes.contains(&0) {
@@ -146,8 +136,8 @@ pub fn run_scaling(opts: &ScalingOptions, mut progress: impl FnMut(&str)) -> Res
     if opts.rays == 0 || opts.threads == 0 {
         bail!("scaling: rays and threads must be at least 1");
     }
-    let pool = tracing_pool(opts.threads)?;
-    let builder = Builder::new(opts.threads)?;
+    let pool = accel::tracing_pool(Some(opts.threads))?;
+    let builder = AccelBuilder::new(opts.threads);
     let repeats = Repeats {
         count: opts.repeats.max(1),
         budget_s: opts.budget_s,
@@ -161,9 +151,17 @@ pub fn run_scaling(opts: &ScalingOptions, mut progress: impl FnMut(&str)) -> Res
         for &size in &opts.sizes {
             let scene = mesh.generate(size, opts.seed);
             let rays = make_rays(&scene, width, height, opts.rays, opts.seed);
-            for backend in backends(opts.include_embree) {
-                let m = measure(&scene, &rays, &pool, &builder, backend, repeats)?;
-                let row = ScalingRow::new(mesh, scene.triangles.len(), backend, opts.threads, m);
+            let kinds = backends(opts.include_embree);
+            let measured = measure_all(&scene, &rays, &pool, &builder, &kinds, repeats)?;
+            for (kind, m) in kinds.into_iter().zip(measured) {
+                let row = ScalingRow {
+                    mesh,
+                    triangles: scene.triangles.len(),
+                    backend: kind.to_string(),
+                    is_embree: matches!(kind, AccelKind::Embree(_)),
+                    threads: opts.threads,
+                    measured: m,
+                };
                 progress(&format!(
                     "{} / {} tris / {}: build {} ms, {} MB, {:.2} / {:.2} / {:.2} Mrays/s",
                     mesh.name(),
@@ -179,27 +177,7 @@ pub fn run_scaling(opts: &ScalingOptions, mut progress: impl FnMut(&str)) -> Res
             }
         }
     }
-    report.write_all(&opts.out_dir)?;
     Ok(report)
-}
-
-impl ScalingRow {
-    fn new(
-        mesh: ScalingMesh,
-        triangles: usize,
-        backend: Backend,
-        threads: usize,
-        m: Measurement,
-    ) -> Self {
-        ScalingRow {
-            mesh,
-            triangles,
-            backend: backend.label_with_quality(),
-            is_embree: backend.is_embree(),
-            threads,
-            measured: m,
-        }
-    }
 }
 
 /// A measured quantity of a row, for charts and fits.
@@ -335,67 +313,75 @@ impl ScalingReport {
         }
     }
 
-    pub fn to_csv(&self) -> String {
-        let mut s = String::from(
-            "mesh,triangles,backend,threads,build_ms,memory_mb,camera_mrays,incoherent_mrays,shadow_mrays\n",
-        );
+    /// One row per measurement.
+    pub fn table(&self) -> Table {
+        let mut t = Table::new([
+            "mesh",
+            "triangles",
+            "backend",
+            "threads",
+            "build (ms)",
+            "memory (MB)",
+            "camera (Mrays/s)",
+            "incoherent (Mrays/s)",
+            "shadow (Mrays/s)",
+        ]);
         for r in &self.rows {
-            let _ = writeln!(
-                s,
-                "{},{},{},{},{:.6},{:.6},{:.6},{:.6},{:.6}",
-                r.mesh.name(),
-                r.triangles,
-                r.backend,
-                r.threads,
-                r.measured.build_ms,
-                r.measured.memory_mb,
-                r.measured.camera_mrays,
-                r.measured.incoherent_mrays,
-                r.measured.shadow_mrays
-            );
+            let m = &r.measured;
+            t.push(vec![
+                r.mesh.name().into(),
+                r.triangles.to_string(),
+                r.backend.clone(),
+                r.threads.to_string(),
+                three_digits(m.build_ms),
+                three_digits(m.memory_mb),
+                format!("{:.3}", m.camera_mrays),
+                format!("{:.3}", m.incoherent_mrays),
+                format!("{:.3}", m.shadow_mrays),
+            ]);
         }
-        s
+        t
     }
 
     /// The measurements as one table, then the fitted growth of each backend.
     pub fn to_markdown(&self) -> String {
-        let mut s = String::from(
-            "| mesh | triangles | backend | threads | build (ms) | memory (MB) | camera (Mrays/s) \
-             | incoherent (Mrays/s) | shadow (Mrays/s) |\n|---|---:|---|---:|---:|---:|---:|---:|---:|\n",
-        );
-        for r in &self.rows {
-            let _ = writeln!(
-                s,
-                "| {} | {} | {} | {} {} |",
-                r.mesh.name(),
-                r.triangles,
-                r.backend,
-                r.threads,
-                r.measured.markdown_cells()
-            );
-        }
-        s.push_str(&self.growth_markdown());
-        s
+        format!(
+            "{}\n{}\n\n{}",
+            self.table().to_markdown(),
+            self.growth_caption(),
+            self.growth_table().to_markdown()
+        )
     }
 
-    fn growth_markdown(&self) -> String {
-        let mut s = format!(
-            "\nGrowth, least squares over N ≥ {} triangles (all sizes when fewer than two qualify). \
+    fn growth_caption(&self) -> String {
+        format!(
+            "Growth, least squares over N ≥ {} triangles (all sizes when fewer than two qualify). \
              Build: a power law N^b fitted on log-log axes, and a·N·log2 N (a in ns). \
-             Traversal: time per ray (ns, wall time over all threads) = c + d·log2 N, and its power-law exponent.\n\n\
-             | mesh | backend | build ~ N^b (R²) | build = a·N·log2 N: a (R²) | memory ~ N^b (R²) \
-             | camera: c + d·log2 N (R²) | incoherent: c + d·log2 N (R²) | shadow: c + d·log2 N (R²) |\n\
-             |---|---|---|---|---|---|---|---|\n",
+             Traversal: time per ray (ns, wall time over all threads) = c + d·log2 N, and its power-law exponent.",
             self.fit_min_triangles
-        );
+        )
+    }
+
+    /// The fitted growth of each backend on each mesh.
+    pub fn growth_table(&self) -> Table {
+        let mut t = Table::new([
+            "mesh",
+            "backend",
+            "build ~ N^b (R²)",
+            "build = a·N·log2 N: a (R²)",
+            "memory ~ N^b (R²)",
+            "camera: c + d·log2 N (R²)",
+            "incoherent: c + d·log2 N (R²)",
+            "shadow: c + d·log2 N (R²)",
+        ]);
+        let power = |p: Option<PowerLawFit>| {
+            p.map_or("—".into(), |p| {
+                format!("N^{:.2} ({:.3})", p.exponent, p.r2)
+            })
+        };
         for mesh in self.meshes() {
             for backend in self.backends(mesh) {
                 let f = self.fits(mesh, backend);
-                let power = |p: Option<PowerLawFit>| {
-                    p.map_or("—".into(), |p| {
-                        format!("N^{:.2} ({:.3})", p.exponent, p.r2)
-                    })
-                };
                 let nlogn = f.build_n_log_n.map_or("—".into(), |p| {
                     format!("{} ({:.3})", three_digits(p.coefficient * 1e6), p.r2)
                 });
@@ -407,21 +393,19 @@ impl ScalingReport {
                     _ => "—".into(),
                 };
                 let [cam, inc, sh] = [0, 1, 2].map(per_ray);
-                let _ = writeln!(
-                    s,
-                    "| {} | {} | {} | {} | {} | {} | {} | {} |",
-                    mesh.name(),
-                    backend,
+                t.push(vec![
+                    mesh.name().into(),
+                    backend.into(),
                     power(f.build_power),
                     nlogn,
                     power(f.memory_power),
                     cam,
                     inc,
-                    sh
-                );
+                    sh,
+                ]);
             }
         }
-        s
+        t
     }
 
     /// Five log-log charts per mesh against the triangle count (build time,
@@ -461,15 +445,26 @@ impl ScalingReport {
         }
         Ok(stems)
     }
+}
 
-    /// `scaling.csv`, `scaling.md` and the charts.
-    pub fn write_all(&self, out_dir: &Path) -> Result<()> {
-        std::fs::create_dir_all(out_dir)
-            .with_context(|| format!("creating {}", out_dir.display()))?;
-        std::fs::write(out_dir.join("scaling.csv"), self.to_csv())?;
-        std::fs::write(out_dir.join("scaling.md"), self.to_markdown())?;
-        self.write_charts(out_dir)?;
-        Ok(())
+impl Report for ScalingReport {
+    /// `scaling.csv`, `scaling.md` (the table and the growth fits) and the charts.
+    fn write(&self, out_dir: &Path) -> Result<Vec<PathBuf>> {
+        super::create_out_dir(out_dir)?;
+        let stem = out_dir.join("scaling");
+        self.table().write(&stem)?;
+        let md = stem.with_extension("md");
+        super::write_text(&md, &self.to_markdown())?;
+        let mut files = vec![stem.with_extension("csv"), md];
+        for chart in self.write_charts(out_dir)? {
+            files.push(chart.with_extension("png"));
+            files.push(chart.with_extension("svg"));
+        }
+        Ok(files)
+    }
+
+    fn summary(&self) -> String {
+        self.to_markdown()
     }
 }
 

@@ -36,6 +36,29 @@ impl Table {
         s
     }
 
+    /// Reads what [`Table::to_csv`] wrote: the first line is the header, every row
+    /// must have as many cells. Quoted cells may hold commas, quotes and newlines.
+    pub fn from_csv(text: &str) -> Result<Table, String> {
+        let mut lines = parse_csv(text)?.into_iter();
+        let header = lines.next().ok_or("empty CSV: no header")?;
+        let mut t = Table {
+            header,
+            rows: Vec::new(),
+        };
+        for (i, row) in lines.enumerate() {
+            if row.len() != t.header.len() {
+                return Err(format!(
+                    "CSV line {}: {} cells, the header has {}",
+                    i + 2,
+                    row.len(),
+                    t.header.len()
+                ));
+            }
+            t.rows.push(row);
+        }
+        Ok(t)
+    }
+
     /// A GitHub-flavoured Markdown table.
     pub fn to_markdown(&self) -> String {
         let line = |cells: &[String]| format!("| {} |\n", cells.join(" | "));
@@ -65,6 +88,39 @@ fn csv_cell(c: &str) -> String {
     }
 }
 
+/// Records of RFC 4180 CSV (a final newline optional).
+fn parse_csv(text: &str) -> Result<Vec<Vec<String>>, String> {
+    let (mut records, mut record, mut cell) = (Vec::new(), Vec::new(), String::new());
+    let mut chars = text.chars().peekable();
+    let mut quoted = false;
+    while let Some(c) = chars.next() {
+        match (quoted, c) {
+            (true, '"') if chars.peek() == Some(&'"') => {
+                chars.next();
+                cell.push('"');
+            }
+            (true, '"') => quoted = false,
+            (true, c) => cell.push(c),
+            (false, '"') if cell.is_empty() => quoted = true,
+            (false, ',') => record.push(std::mem::take(&mut cell)),
+            (false, '\n') => {
+                record.push(std::mem::take(&mut cell));
+                records.push(std::mem::take(&mut record));
+            }
+            (false, '\r') => {}
+            (false, c) => cell.push(c),
+        }
+    }
+    if quoted {
+        return Err("CSV ends inside a quoted cell".into());
+    }
+    if !cell.is_empty() || !record.is_empty() {
+        record.push(cell);
+        records.push(record);
+    }
+    Ok(records)
+}
+
 #[cfg(test)]
 mod tests {
     use super::Table;
@@ -75,5 +131,15 @@ mod tests {
         t.push(vec!["1".into(), "x, \"y\"".into()]);
         assert_eq!(t.to_csv(), "a,b\n1,\"x, \"\"y\"\"\"\n");
         assert_eq!(t.to_markdown(), "| a | b |\n|---|---|\n| 1 | x, \"y\" |\n");
+    }
+
+    #[test]
+    fn csv_reads_back_what_it_wrote() {
+        let mut t = Table::new(["a", "b", "c"]);
+        t.push(vec!["1".into(), "x, \"y\"".into(), "two\nlines".into()]);
+        t.push(vec!["".into(), "".into(), "z".into()]);
+        assert_eq!(Table::from_csv(&t.to_csv()), Ok(t));
+        assert!(Table::from_csv("a,b\n1\n").unwrap_err().contains("line 2"));
+        assert!(Table::from_csv("a\n\"open\n").is_err());
     }
 }

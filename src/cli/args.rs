@@ -147,13 +147,18 @@ pub enum BenchCommand {
         #[arg(short = 't', value_name = "THREADS")]
         threads: Option<usize>,
     },
-    /// Build time, memory and Mrays/s (camera, incoherent, shadow rays) of every backend this build has,
-    /// at each thread count, with the native/Embree ratio. Default scenes: CBbunny, CBspheres_lambertian, a ~1M-triangle displaced sphere.
+    /// Build time, memory, tree shape (nodes, leaves, depth, SAH cost) and Mrays/s (camera, incoherent, shadow rays)
+    /// of every backend this build has (native midpoint and SAH; Embree robust and fast), at each thread count, with the
+    /// native/Embree ratios; with Embree, also every Embree mode (scene flags × build quality × rtcIntersect1/4/8/16) on
+    /// camera rays. Writes accel.csv/.md and embree_modes.csv/.md to --out. Default scenes: CBbunny, CBspheres_lambertian,
+    /// mesh:1M. Merge an Embree 3 and an Embree 4 build's tables by running the second with --append.
     #[command(allow_negative_numbers = true)]
     Accel {
-        /// Scenes to measure instead of the defaults.
-        scenes: Vec<PathBuf>,
-        /// Incoherent and shadow rays per measurement (camera rays are 480x360).
+        /// Scenes to measure instead of the defaults: .dae files, or mesh:N for a generated displaced sphere of about
+        /// N triangles (mesh:250k, mesh:1M).
+        #[arg(value_parser = parse_bench_scene)]
+        scenes: Vec<ember::bench::accel::BenchScene>,
+        /// Incoherent and shadow rays per measurement (camera rays: one per pixel of a 480x360 render).
         #[arg(long, default_value_t = 500_000)]
         rays: usize,
         /// Thread counts to measure: `-t 1 2` or `-t 1,2` (scenes go before the options, or after `--`).
@@ -162,19 +167,23 @@ pub enum BenchCommand {
         /// Each figure is the median of this many runs.
         #[arg(long, default_value_t = 5)]
         repeats: usize,
-        /// Embree's build quality.
+        /// Embree's build quality in the main table (the Embree modes table has all three).
         #[arg(long, value_parser = named::<EmbreeQuality>(), default_value_t = EmbreeQuality::default())]
         quality: EmbreeQuality,
-        /// Triangle count of the generated displaced sphere (0 leaves it out).
-        #[arg(long, default_value_t = 1_000_000)]
-        mesh_triangles: usize,
+        /// Leave out the Embree modes table.
+        #[arg(long)]
+        no_embree_modes: bool,
+        /// Add this run's rows to the tables already in --out (e.g. an Embree 4 build's after an Embree 3 build's)
+        /// instead of replacing them.
+        #[arg(long, conflicts_with = "scaling")]
+        append: bool,
         /// Instead: generated meshes (displaced sphere, random soup) from 1k to 4M triangles, every native builder and
         /// Embree quality, charted against triangle count (log-log) with fitted growth. Writes CSV, Markdown and charts to --out.
         #[arg(long)]
         scaling: bool,
-        /// Output folder of --scaling.
-        #[arg(long, default_value = "bench-out/scaling")]
-        out: PathBuf,
+        /// Output folder (default: bench-out/accel, or bench-out/scaling with --scaling).
+        #[arg(long)]
+        out: Option<PathBuf>,
     },
     /// Error against render time for each method (direct: hemisphere / light / MIS; GI: roulette, -l, adaptive, backends).
     /// Writes <out>/<scene>_m<M>.csv and error-vs-time charts (PNG and SVG), prints the time each method needs to reach an error.
@@ -239,13 +248,18 @@ pub enum BenchCommand {
         /// Worker threads (default: all cores).
         #[arg(short = 't', value_name = "THREADS")]
         threads: Option<usize>,
-        /// Backend.
-        #[arg(long, value_parser = named::<Backend>(), default_value_t = Backend::Native)]
+        /// Backend (auto: as for a render).
+        #[arg(long, value_parser = named::<Backend>(), default_value_t = Backend::Auto)]
         accel: Backend,
         /// Output folder (render.csv, render.md).
         #[arg(long, default_value = "bench-out/render")]
         out: PathBuf,
     },
+}
+
+#[cfg(feature = "bench")]
+fn parse_bench_scene(s: &str) -> Result<ember::bench::accel::BenchScene, String> {
+    ember::bench::accel::BenchScene::parse(s)
 }
 
 #[derive(Args, Debug)]
@@ -309,8 +323,9 @@ pub struct RenderArgs {
     #[command(flatten)]
     pub lens: LensArgs,
 
-    /// Intersection backend.
-    #[arg(long, value_parser = named::<Backend>(), default_value_t = Backend::Native)]
+    /// Intersection backend. auto: the native BVH below a measured primitive count, Embree from it (in builds
+    /// with Embree; `ember info SCENE` says which and why).
+    #[arg(long, value_parser = named::<Backend>(), default_value_t = Backend::Auto)]
     pub accel: Backend,
 
     /// How the native BVH is built [default: sah] (not with --accel embree).

@@ -2,7 +2,7 @@
 
 use super::args::BenchCommand;
 use super::convert::{check_resolution, threads_invalid};
-use anyhow::{bail, Result};
+use anyhow::{bail, Context, Result};
 use ember::accel::{AccelKind, BvhBuilder, EmbreeQuality};
 use ember::bench::{self, Report};
 use std::path::{Path, PathBuf};
@@ -32,16 +32,41 @@ fn run_on_pool(which: BenchCommand) -> Result<()> {
             out,
             repeats,
             ..
-        } => bench_scaling(out, repeats),
+        } => bench_scaling(out.unwrap_or_else(|| "bench-out/scaling".into()), repeats),
         BenchCommand::Accel {
             scenes,
             rays,
             threads,
             repeats,
             quality,
-            mesh_triangles,
+            no_embree_modes,
+            append,
+            out,
             ..
-        } => bench_accel(scenes, rays, threads, repeats, quality, mesh_triangles),
+        } => {
+            if threads_invalid(&threads) {
+                bail!("--threads: each count must be at least 1");
+            }
+            let defaults = bench::accel::AccelBenchOptions::default();
+            let opts = bench::accel::AccelBenchOptions {
+                scenes: if scenes.is_empty() {
+                    defaults.scenes.clone()
+                } else {
+                    scenes
+                },
+                rays,
+                threads,
+                repeats: repeats.max(1),
+                embree_quality: quality,
+                embree_modes: !no_embree_modes,
+                ..defaults
+            };
+            bench_accel(
+                &opts,
+                &out.unwrap_or_else(|| "bench-out/accel".into()),
+                append,
+            )
+        }
         BenchCommand::Converge {
             scene,
             reference,
@@ -114,48 +139,27 @@ fn bench_stability(out: PathBuf, spp_scale: f32, seed: u64) -> Result<()> {
 
 fn bench_scaling(out: PathBuf, repeats: usize) -> Result<()> {
     let opts = bench::scaling::ScalingOptions {
-        out_dir: out.clone(),
         repeats: repeats.max(1),
         ..Default::default()
     };
-    // run_scaling writes its report.
     let report = bench::scaling::run_scaling(&opts, |line| ember::errln!("ember: {line}"))?;
-    ember::outln!("{}", report.to_markdown())?;
-    ember::outln!("wrote {}/scaling.csv, scaling.md and charts", out.display())?;
-    Ok(())
+    finish(&report, &out)
 }
 
-fn bench_accel(
-    scenes: Vec<PathBuf>,
-    rays: usize,
-    threads: Vec<usize>,
-    repeats: usize,
-    quality: EmbreeQuality,
-    mesh_triangles: usize,
-) -> Result<()> {
-    use bench::accel::{run, AccelBenchOptions, BenchScene};
-    let mut opts = AccelBenchOptions {
-        rays,
-        threads,
-        repeats: repeats.max(1),
-        ..Default::default()
+fn bench_accel(opts: &bench::accel::AccelBenchOptions, out: &Path, append: bool) -> Result<()> {
+    use bench::accel::{run, AccelBenchReport};
+    // Read what to append to before the long run, so a missing file fails at once.
+    let earlier = if append {
+        Some(AccelBenchReport::read(out).context("--append")?)
+    } else {
+        None
     };
-    if threads_invalid(&opts.threads) {
-        bail!("--threads: each count must be at least 1");
-    }
-    if !scenes.is_empty() {
-        opts.scenes = scenes.into_iter().map(BenchScene::File).collect();
-    }
-    opts.scenes
-        .retain(|s| !matches!(s, BenchScene::DisplacedSphere(_)));
-    if mesh_triangles > 0 {
-        opts.scenes
-            .push(BenchScene::DisplacedSphere(mesh_triangles));
-    }
-    opts.embree_quality = quality;
-    let report = run(&opts, |line| ember::errln!("ember: {line}"))?;
-    ember::outln!("{}", report.to_markdown())?;
-    Ok(())
+    let report = run(opts, |line| ember::errln!("ember: {line}"))?;
+    let report = match earlier {
+        Some(e) => e.merge(report),
+        None => report,
+    };
+    finish(&report, out)
 }
 
 fn bench_converge(opts: bench::converge::ConvergeOptions) -> Result<()> {

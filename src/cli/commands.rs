@@ -54,11 +54,20 @@ pub(super) fn render(mut args: RenderArgs) -> Result<()> {
         None => None,
     };
     let interrupt = interrupt::install()?;
-    let kind = accel::AccelKind::new(
+    let kind = match accel::AccelKind::new(
         args.accel,
         args.bvh.unwrap_or_default(),
         args.embree_quality.unwrap_or_default(),
-    );
+    ) {
+        // The BVH-cost heat map counts the native tree's traversal steps, which
+        // Embree does not expose: auto keeps the native tree for it.
+        accel::AccelKind::Auto { bvh, .. }
+            if settings.shading == ember::render::Shading::BvhCost =>
+        {
+            accel::AccelKind::Native(bvh)
+        }
+        kind => kind,
+    };
     let pool = thread_pool(args.threads)?;
     // The buffers are the cell's, unless the cell is written in a full frame.
     let (mw, mh) = match (cell, args.full_frame) {
@@ -451,6 +460,12 @@ pub(super) fn info(path: &Path, w: u32, h: u32) -> Result<()> {
         ember::out!("{}", ember::info::bvh_info(&bvh.name(), &stats, build_ms))?;
     }
     ember::outln!("{}", accel::backends_info())?;
+    let auto = accel::choose_auto(&scene);
+    ember::outln!(
+        "--accel auto (the default) picks {}: {}",
+        auto.kind,
+        auto.reason
+    )?;
     Ok(())
 }
 
@@ -463,16 +478,10 @@ fn load_scene(path: &Path) -> Result<Scene> {
 }
 
 pub(super) fn thread_pool(threads: Option<usize>) -> Result<rayon::ThreadPool> {
-    // Flush-to-zero on every tracing thread, as Embree recommends; the native BVH
-    // gives the same image either way (tested).
-    let mut b = rayon::ThreadPoolBuilder::new().start_handler(|_| accel::set_flush_denormals());
-    if let Some(t) = threads {
-        if t == 0 {
-            bail!("-t: thread count must be at least 1");
-        }
-        b = b.num_threads(t);
+    if threads == Some(0) {
+        bail!("-t: thread count must be at least 1");
     }
-    Ok(b.build()?)
+    Ok(accel::tracing_pool(threads)?)
 }
 
 fn progress_bar(total: u64, quiet: bool) -> ProgressBar {

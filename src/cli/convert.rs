@@ -62,8 +62,13 @@ pub(super) fn check_flags(args: &RenderArgs) -> Result<()> {
     if embree && args.bvh.is_some() {
         bail!("--bvh chooses the native BVH's builder; it does nothing with --accel embree");
     }
-    if !embree && args.embree_quality.is_some() {
-        bail!("--embree-quality applies only with --accel embree");
+    if args.embree_quality.is_some() && !Backend::Embree.available() {
+        bail!(
+            "--embree-quality: this build has no Embree backend (rebuild with --features embree)"
+        );
+    }
+    if args.embree_quality.is_some() && args.accel == Backend::Native {
+        bail!("--embree-quality applies only with --accel embree or auto");
     }
     if embree && args.shading == Shading::BvhCost {
         bail!("--shading bvh-cost counts the native BVH's node and primitive tests, which Embree does not expose; use --accel native");
