@@ -9,6 +9,7 @@ pub mod adaptive;
 pub mod bench;
 pub mod camera;
 pub mod color;
+pub mod distribution;
 pub mod export;
 pub mod film;
 pub mod geometry;

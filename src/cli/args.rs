@@ -119,6 +119,9 @@ pub struct ExportArgs {
     /// Output folder (created if missing); files are named after the scene.
     #[arg(long = "out", default_value = ".")]
     pub out: PathBuf,
+    /// Environment map replacing the scene's ambient light, as the renderer's -e (exported in Mitsuba's orientation).
+    #[arg(short = 'e', value_name = "FILE.exr")]
+    pub env_map: Option<PathBuf>,
 }
 
 #[derive(Clone, Copy, Debug, ValueEnum)]
@@ -295,6 +298,10 @@ pub struct RenderArgs {
     #[arg(short = 'H')]
     pub hemisphere: bool,
 
+    /// Environment light: a latitude-longitude .exr map (row 0 = +Y, u = 0 at -X, u = 1/4 at +Z, as the course's) around the scene, importance-sampled by luminance x sin(theta). Replaces the scene's ambient light.
+    #[arg(short = 'e', value_name = "FILE.exr")]
+    pub env_map: Option<PathBuf>,
+
     /// Output image; .png (8-bit sRGB) or .exr (linear float). Default: <scene stem>.png.
     #[arg(short = 'f', value_name = "FILE")]
     pub output: Option<PathBuf>,
@@ -345,7 +352,7 @@ pub struct RenderArgs {
     #[arg(long, value_name = "COUNT")]
     pub cost_scale: Option<f32>,
 
-    /// Estimator. auto: light tracing when every light is a point light and nothing is specular or self-emitting (CBempty: see BENCHMARKS.md, stability case 9); otherwise path tracing with MIS (light + BSDF sampling) when the scene has glossy surfaces or an ambient light, light sampling otherwise. A direct-lighting strategy name means path tracing with it. -H forces hemisphere.
+    /// Estimator. auto: light tracing when every light is a point light and nothing is specular or self-emitting (CBempty: see BENCHMARKS.md, stability case 9); otherwise path tracing with MIS (light + BSDF sampling) when the scene has glossy surfaces or an ambient or environment (-e) light, light sampling otherwise. A direct-lighting strategy name means path tracing with it. -H forces hemisphere.
     #[arg(long, value_parser = integrator(), default_value = AUTO)]
     pub integrator: IntegratorChoice,
 

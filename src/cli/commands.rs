@@ -2,8 +2,8 @@
 
 use super::args::{CameraArgs, ExportArgs, ExportFormat, RenderArgs};
 use super::convert::{
-    self, adopt_scene_from_adaptive, cell_rect, check_flags, check_lens, check_resolution,
-    flag_warnings, output_path, run_plan, settings_from, RunPlan,
+    self, adopt_scene_from_adaptive, apply_env_map, cell_rect, check_flags, check_lens,
+    check_resolution, flag_warnings, output_path, run_plan, settings_from, RunPlan,
 };
 use super::interrupt::{self, Interrupted};
 use anyhow::{bail, Result};
@@ -48,9 +48,12 @@ pub(super) fn render(mut args: RenderArgs) -> Result<()> {
         .transpose()?;
     let out = output_path(&args, &scene_path)?;
     // Claim the outputs before loading, so a bad path fails at once and no partial file appears.
-    let mut pending = PendingImage::claim(&out, &[&scene_path])?;
+    let inputs: Vec<&Path> = std::iter::once(scene_path.as_path())
+        .chain(args.env_map.as_deref())
+        .collect();
+    let mut pending = PendingImage::claim(&out, &inputs)?;
     let pending_rate = match settings.adaptive {
-        Some(_) => Some(PendingImage::claim(&rate_path(&out), &[&scene_path])?),
+        Some(_) => Some(PendingImage::claim(&rate_path(&out), &inputs)?),
         None => None,
     };
     let interrupt = interrupt::install()?;
@@ -76,7 +79,8 @@ pub(super) fn render(mut args: RenderArgs) -> Result<()> {
     };
     check_memory(mw, mh, plan)?;
     let t0 = Instant::now();
-    let scene = load_scene(&scene_path)?;
+    let mut scene = load_scene(&scene_path)?;
+    apply_env_map(args.env_map.as_deref(), &mut scene)?;
     let t_load = t0.elapsed();
     let (camera, camera_warning) =
         convert::camera(&scene, camera_file.as_ref(), &args.lens, (width, height))?;
@@ -392,6 +396,9 @@ fn render_metadata(
     if let Some(file) = &args.camera_file {
         meta.push_file("ember.camera_file", file);
     }
+    if let Some(file) = &args.env_map {
+        meta.push_file("ember.env_map", file);
+    }
     if let (Some(c), Some(r)) = (&args.cell, cell) {
         meta.push(
             "ember.cell",
@@ -518,7 +525,8 @@ pub(super) fn export(a: ExportArgs) -> Result<()> {
     if a.spp == 0 {
         bail!("-s must be at least 1");
     }
-    let scene = load_scene(&a.scene)?;
+    let mut scene = load_scene(&a.scene)?;
+    apply_env_map(a.env_map.as_deref(), &mut scene)?;
     let camera = ember::camera::Camera::new(&scene.camera, &scene.bounds, w, h);
     std::fs::create_dir_all(&a.out)
         .map_err(|e| anyhow::anyhow!("{}: cannot create folder: {e}", a.out.display()))?;

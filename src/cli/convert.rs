@@ -158,6 +158,9 @@ pub(super) fn settings_from(args: &RenderArgs) -> Result<RenderSettings> {
         (None, Some(_)) => u32::MAX,
         (None, None) => 1,
     };
+    if args.env_map.is_some() && estimator(args) == Some(Estimator::LightTracing) {
+        bail!("-e: light tracing does not support environment maps; use path tracing (--integrator auto, light or mis)");
+    }
     Ok(RenderSettings {
         spp,
         light_samples: args.light_samples.max(1),
@@ -205,6 +208,14 @@ pub(super) fn threads_invalid(t: &[usize]) -> bool {
     t.is_empty() || t.contains(&0)
 }
 
+/// `-e FILE.exr`: the scene lit by that environment map instead of its ambient light.
+pub(super) fn apply_env_map(env_map: Option<&Path>, scene: &mut ember::scene::Scene) -> Result<()> {
+    if let Some(path) = env_map {
+        let env = ember::lights::EnvironmentMap::load(path)?;
+        scene.set_environment(std::sync::Arc::new(env));
+    }
+    Ok(())
+}
 /// `-b` and `-d` on their own: a radius of at least 0, a positive distance.
 pub(super) fn check_lens(lens: &LensArgs) -> Result<()> {
     if let Some(b) = lens.lens_radius {

@@ -21,6 +21,7 @@ use crate::camera::Camera;
 use crate::color::is_finite;
 use crate::film::Image;
 use crate::geometry::{Frame, Ray};
+use crate::lights::Light;
 use crate::materials::{specular, Material};
 use crate::render::{PixelRect, RenderJob, RenderOutput, RenderSettings, Shading, StopToken};
 use crate::sampling::Sampler;
@@ -297,6 +298,18 @@ pub fn warnings(scene: &Scene, s: &RenderSettings) -> Vec<String> {
         w.push(
             "light tracing starts paths on lights only: light that emissive surfaces \
              (not lights) cast on the scene is missing; use path tracing"
+                .into(),
+        );
+    }
+    if s.max_depth > 0
+        && scene
+            .lights
+            .iter()
+            .any(|l| matches!(l, Light::Environment(_)))
+    {
+        w.push(
+            "light tracing starts no paths on environment maps: the light they cast \
+             on the scene is missing; use path tracing"
                 .into(),
         );
     }

@@ -28,6 +28,9 @@ impl Light {
     /// direction of travel, just outside that sphere. `None` for degenerate lights.
     pub fn sample_le(&self, bounds: &Aabb, u_pos: Vec2, u_dir: Vec2) -> Option<EmissionSample> {
         let s = match *self {
+            // Environment maps do not start light paths (yet): the CLI refuses
+            // light tracing with -e and `light_tracing::warnings` says so.
+            Light::Environment(_) => return None,
             Light::Area(a) => a.sample_le(u_pos, u_dir),
             Light::Point {
                 position,

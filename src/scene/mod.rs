@@ -183,6 +183,29 @@ impl Scene {
         }
     }
 
+    /// Lights the scene with `env` (`-e`): it replaces the file's hemisphere (ambient)
+    /// lights, which would otherwise add to it. Area lights keep their surfaces, whose
+    /// light indices are renumbered past the removed lights.
+    pub fn set_environment(&mut self, env: std::sync::Arc<crate::lights::EnvironmentMap>) {
+        let mut renumber = Vec::with_capacity(self.lights.len());
+        let mut kept = Vec::with_capacity(self.lights.len() + 1);
+        for light in self.lights.drain(..) {
+            if matches!(light, Light::Ambient { .. }) {
+                renumber.push(NO_LIGHT);
+            } else {
+                renumber.push(kept.len() as u32);
+                kept.push(light);
+            }
+        }
+        kept.push(Light::Environment(env));
+        self.lights = kept;
+        for t in &mut self.triangles {
+            if t.light != NO_LIGHT {
+                t.light = renumber[t.light as usize];
+            }
+        }
+    }
+
     /// The index of the material of light surfaces, added on first use.
     fn black_material(&mut self) -> u32 {
         match self.materials.iter().position(|m| *m == Material::Black) {

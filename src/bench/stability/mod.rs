@@ -3,6 +3,7 @@
 //! about it. Every case is a function returning its measurements; the integration
 //! tests (tests/stability.rs) assert on the same functions at small budgets.
 
+pub mod environment;
 pub mod glass;
 pub mod light_paths;
 pub mod lights;
@@ -55,7 +56,7 @@ pub struct StabilityReport {
 }
 
 /// What ember does about each case, for the report.
-pub const EMBER_DOES: [(&str, &str); 9] = [
+pub const EMBER_DOES: [(&str, &str); 10] = [
     ("1", "Hemisphere and BSDF-only sampling cannot see delta lights; `RenderJob::warnings` says so (the CLI prints it). The default strategies sample lights."),
     ("2", "Light sampling and MIS (the defaults: MIS for glossy or ambient-lit scenes, light sampling otherwise) sample the light's area: their noise does not grow as the light shrinks; -H's grows as √(2π/Ω)."),
     ("3", "MIS (power heuristic) is the default whenever the scene has glossy surfaces: never much worse than the better of light and BSDF sampling."),
@@ -65,6 +66,7 @@ pub const EMBER_DOES: [(&str, &str); 9] = [
     ("7", "The default stopping rule (`crate::adaptive`) never takes a pixel whose samples are all zero as converged unless every pixel within 5 px saw constant values in a first batch over the image; other pixels follow the course's rule up to -s. Unbiased within noise here at the same -s cap; the old 4·batch guard (`StopRule::PerPixel`) only halved the bias."),
     ("8", "Roulette divides by the continuation probability (unbiased); the default is throughput-based from bounce 3 with q ≥ 0.05."),
     ("9", "Light tracing (`--integrator light-tracing`): paths start on the lights and connect to the camera; `--integrator auto` picks it when every light is a point light and nothing is specular or self-emitting. The path tracer stays the default elsewhere."),
+    ("10", "`-e` samples the environment map by luminance × sin θ (a 2-D piecewise-constant distribution, pbrt's), combined with BSDF sampling by MIS (the default whenever the scene has an environment light)."),
 ];
 
 pub fn run_stability(opts: &StabilityOptions) -> Result<StabilityReport> {
@@ -90,6 +92,7 @@ pub fn run_stability(opts: &StabilityOptions) -> Result<StabilityReport> {
     rows.extend(sampling::adaptive(&budget(80, 60, 512))?.rows());
     rows.extend(sampling::roulette(&budget(80, 60, 256))?.rows());
     rows.extend(light_paths::rows_if_shared(&budget(160, 120, 32))?);
+    rows.extend(environment::sun_sky(&budget(80, 60, 64))?.rows());
     Ok(StabilityReport { rows })
 }
 
