@@ -7,12 +7,33 @@
 
 fn main() {
     println!("cargo:rerun-if-changed=build.rs");
+    git_hash();
     // Both on is refused by a compile_error! in src/accel/embree.rs.
     #[cfg(all(
         any(feature = "embree", feature = "embree4"),
         not(all(feature = "embree", feature = "embree4"))
     ))]
     embree::build();
+}
+
+/// `EMBER_GIT_HASH` for the image metadata: the commit being built, or "unknown"
+/// outside a git checkout (a crate tarball). Rebuilt when HEAD moves.
+fn git_hash() {
+    let git = |args: &[&str]| {
+        std::process::Command::new("git")
+            .args(args)
+            .output()
+            .ok()
+            .filter(|o| o.status.success())
+            .map(|o| String::from_utf8_lossy(&o.stdout).trim().to_string())
+    };
+    let hash = git(&["rev-parse", "HEAD"]).unwrap_or_else(|| "unknown".into());
+    println!("cargo:rustc-env=EMBER_GIT_HASH={hash}");
+    for path in ["HEAD", "refs/heads"] {
+        if let Some(p) = git(&["rev-parse", "--git-path", path]) {
+            println!("cargo:rerun-if-changed={p}");
+        }
+    }
 }
 
 #[cfg(all(

@@ -19,7 +19,7 @@
 use crate::color::{is_finite, luminance};
 use crate::film::Image;
 use crate::integrators::PathIntegrator;
-use crate::render::{Adaptive, PixelRect, RenderJob, RenderOutput, RenderSettings};
+use crate::render::{Adaptive, PixelRect, RenderJob, RenderOutput, RenderSettings, StopToken};
 use crate::sampling::Sampler;
 use crate::Color;
 use rayon::prelude::*;
@@ -120,6 +120,7 @@ pub fn render(
     a: Adaptive,
     rect: PixelRect,
     progress: &(dyn Fn(u64) + Sync),
+    stop: &StopToken,
 ) -> RenderOutput {
     let (camera, w) = (&job.camera, job.camera.width);
     let spp = settings.spp.max(1);
@@ -148,6 +149,9 @@ pub fn render(
         .map(|i| {
             let (x, y) = (halo.x0 + i as u32 % hw, halo.y0 + i as u32 / hw);
             let mut p = PixelStats::default();
+            if stop.should_stop() {
+                return p;
+            }
             for _ in 0..a.batch.min(spp) {
                 sample(x, y, &mut p);
             }
@@ -155,14 +159,20 @@ pub fn render(
         })
         .collect();
     let quiet = quiet_neighbourhoods(&pilot, hw, halo.height(), r);
-    let rows: Vec<Vec<PixelStats>> = (rect.y0..rect.y1)
+    // Rows in a scattered order, so that the progress bar's ETA is not fooled by
+    // empty background at the top; put back in order below.
+    let order: Vec<u32> = crate::render::scattered(rect.height() as usize)
+        .map(|i| rect.y0 + i as u32)
+        .collect();
+    let mut rows: Vec<(u32, Vec<PixelStats>)> = order
         .into_par_iter()
         .map(|y| {
             let row: Vec<PixelStats> = (rect.x0..rect.x1)
                 .map(|x| {
                     let i = ((y - halo.y0) * hw + (x - halo.x0)) as usize;
                     let mut p = pilot[i];
-                    while p.n < spp && !may_stop(&p, quiet[i], a) {
+                    // Once stopped, a pixel keeps the samples it has (its pilot).
+                    while p.n < spp && !may_stop(&p, quiet[i], a) && !stop.should_stop() {
                         for _ in 0..a.batch.min(spp - p.n) {
                             sample(x, y, &mut p);
                         }
@@ -171,10 +181,11 @@ pub fn render(
                 })
                 .collect();
             progress(rect.width() as u64);
-            row
+            (y, row)
         })
         .collect();
-    let stats: Vec<PixelStats> = rows.into_iter().flatten().collect();
+    rows.sort_unstable_by_key(|&(y, _)| y);
+    let stats: Vec<PixelStats> = rows.into_iter().flat_map(|(_, row)| row).collect();
     let mut image = Image::new(rect.width(), rect.height());
     for (px, p) in image.pixels.iter_mut().zip(&stats) {
         *px = p.mean();
@@ -183,7 +194,6 @@ pub fn render(
         image,
         samples: stats.iter().map(|p| p.n).collect(),
         nonfinite_samples: stats.iter().map(|p| p.nonfinite as u64).sum(),
-        cost_scale: None,
     }
 }
 

@@ -103,20 +103,18 @@ impl PendingImage {
             }
         }
         let tmp = temp_sibling(path);
-        let file = OpenOptions::new()
-            .write(true)
-            .create_new(true)
-            .open(&tmp)
-            .map_err(|source| ImageIoError::Write {
-                path: display,
-                source,
-            })?;
+        let file = create_temp(&tmp, path)?;
         Ok(PendingImage {
             path: path.to_path_buf(),
             tmp,
             format,
             file: Some(file),
         })
+    }
+
+    /// The format the path's extension names.
+    pub fn format(&self) -> OutputFormat {
+        self.format
     }
 
     /// The final path the image will be renamed to.
@@ -131,40 +129,68 @@ impl PendingImage {
 
     /// As [`PendingImage::write`], recording `meta` in the file (EXR attributes, PNG text).
     pub fn write_with_metadata(
-        self,
+        mut self,
         img: &Image,
         meta: &ImageMetadata,
     ) -> Result<(), ImageIoError> {
-        self.write_image(ImageData::Whole(img), meta)
+        self.commit(ImageData::Whole(img), meta)
     }
 
     /// Writes a part of a sharded render (an EXR, see [`write_part_exr`]).
-    pub fn write_part(self, part: &Part) -> Result<(), ImageIoError> {
+    pub fn write_part(mut self, part: &Part) -> Result<(), ImageIoError> {
         if self.format != OutputFormat::Exr {
             return Err(ImageIoError::Encode {
                 path: self.path.display().to_string(),
                 msg: "a part of a sharded render (--shard, --spp-offset) must be an .exr".into(),
             });
         }
-        self.write_image(ImageData::Part(part), &part.meta)
+        self.commit(ImageData::Part(part), &part.meta)
     }
 
-    fn write_image(mut self, data: ImageData, meta: &ImageMetadata) -> Result<(), ImageIoError> {
-        let display = self.path.display().to_string();
-        let file = self.file.take().expect("a pending image is written once");
-        write_to_file(data, meta, file, self.format, &display)?;
-        std::fs::rename(&self.tmp, &self.path).map_err(|source| ImageIoError::Write {
-            path: display,
-            source,
-        })?;
-        self.tmp = PathBuf::new();
+    /// Writes `img` to the path now (a checkpoint of a long render) and claims a new
+    /// temporary for the next write, so the path always holds a whole image.
+    pub fn checkpoint(&mut self, img: &Image, meta: &ImageMetadata) -> Result<(), ImageIoError> {
+        self.commit(ImageData::Whole(img), meta)?;
+        self.file = Some(create_temp(&self.tmp, &self.path)?);
         Ok(())
+    }
+
+    /// Encodes into the temporary, syncs it and renames it into place.
+    fn commit(&mut self, data: ImageData, meta: &ImageMetadata) -> Result<(), ImageIoError> {
+        let display = self.path.display().to_string();
+        let file = self
+            .file
+            .take()
+            .expect("a pending image is claimed before each write");
+        let written = write_to_file(data, meta, file, self.format, &display).and_then(|()| {
+            std::fs::rename(&self.tmp, &self.path).map_err(|source| ImageIoError::Write {
+                path: display,
+                source,
+            })
+        });
+        if written.is_err() {
+            let _ = std::fs::remove_file(&self.tmp);
+        }
+        written
     }
 }
 
+/// Creates the temporary `tmp` of output `path`, failing if it exists.
+fn create_temp(tmp: &Path, path: &Path) -> Result<File, ImageIoError> {
+    OpenOptions::new()
+        .write(true)
+        .create_new(true)
+        .open(tmp)
+        .map_err(|source| ImageIoError::Write {
+            path: path.display().to_string(),
+            source,
+        })
+}
+
 impl Drop for PendingImage {
+    /// Removes the temporary if it is still claimed (not renamed into place).
     fn drop(&mut self) {
-        if !self.tmp.as_os_str().is_empty() {
+        if self.file.is_some() {
             let _ = std::fs::remove_file(&self.tmp);
         }
     }

@@ -2,7 +2,9 @@
 //! headers as string attributes and into PNG files as text chunks, read back by
 //! `ember info IMAGE`. Shard headers and merges reuse the same list.
 
-use crate::render::{RenderJob, RenderSettings};
+use crate::integrators::Estimator;
+use crate::render::{RenderJob, RenderSettings, StopReason};
+use crate::scene::Scene;
 use std::path::Path;
 
 /// Ordered key/value strings describing how an image was made.
@@ -16,6 +18,7 @@ impl ImageMetadata {
     pub fn provenance() -> Self {
         let mut m = ImageMetadata::default();
         m.push("ember.version", env!("CARGO_PKG_VERSION"));
+        m.push("ember.git_hash", env!("EMBER_GIT_HASH"));
         let args: Vec<String> = std::env::args().collect();
         m.push("ember.command_line", args.join(" "));
         m.push("ember.cpu", cpu_model());
@@ -37,11 +40,14 @@ impl ImageMetadata {
             "ember.resolution",
             format!("{}x{}", job.camera.width, job.camera.height),
         );
-        m.push("ember.spp", s.spp);
+        match s.spp {
+            u32::MAX => m.push("ember.spp", "no cap"),
+            spp => m.push("ember.spp", spp),
+        }
         m.push("ember.light_samples", s.light_samples);
         m.push("ember.max_depth", s.max_depth);
         m.push("ember.accumulate", s.accumulate);
-        m.push("ember.estimator", s.strategy_for(&job.scene));
+        m.push("ember.estimator", estimator_label(s, &job.scene));
         m.push("ember.roulette", format!("{:?}", s.roulette));
         m.push("ember.adaptive", format!("{:?}", s.adaptive));
         m.push("ember.shading", s.shading);
@@ -60,6 +66,31 @@ impl ImageMetadata {
         m.push("ember.backend", job.accel.name());
         m.push("ember.render_seconds", format!("{render_seconds:.3}"));
         m
+    }
+
+    /// The samples the image holds: per-pixel mean, least and most, the passes done,
+    /// and why the render ended early (`ember.stopped`) or `complete`.
+    pub fn push_samples(&mut self, samples: &[u32], passes: Option<u32>, stop: Option<StopReason>) {
+        let total: u64 = samples.iter().map(|&s| s as u64).sum();
+        let mean = total as f64 / samples.len().max(1) as f64;
+        let min = samples.iter().min().copied().unwrap_or(0);
+        let max = samples.iter().max().copied().unwrap_or(0);
+        self.push(
+            "ember.samples_per_pixel",
+            format!("mean {mean:.3}, min {min}, max {max}"),
+        );
+        let rendered = samples.iter().filter(|&&s| s > 0).count();
+        self.push(
+            "ember.pixels_rendered",
+            format!("{rendered} of {}", samples.len()),
+        );
+        if let Some(p) = passes {
+            self.push("ember.passes", p);
+        }
+        self.push(
+            "ember.stopped",
+            stop.map_or("complete".to_string(), |r| r.to_string()),
+        );
     }
 
     /// Appends `key = value` (a repeated key keeps both, in order).
@@ -92,6 +123,15 @@ impl ImageMetadata {
             .iter()
             .map(|(k, v)| format!("{k}: {v}\n"))
             .collect()
+    }
+}
+
+/// What `--integrator` (perhaps auto) chose for `scene`: light tracing, or path
+/// tracing with its direct-lighting strategy.
+pub fn estimator_label(s: &RenderSettings, scene: &Scene) -> String {
+    match s.estimator_for(scene) {
+        Estimator::LightTracing => Estimator::LightTracing.to_string(),
+        e => format!("{e} ({})", s.strategy_for(scene)),
     }
 }
 

@@ -28,6 +28,7 @@ fn write_info(out: &mut String, scene: &Scene, width: u32, height: u32) -> std::
         scene.triangles.len() - light_tris,
         light_tris
     )?;
+    write_meshes(out, scene)?;
     writeln!(out, "spheres: {}", scene.spheres.len())?;
     writeln!(out, "lights: {}", scene.lights.len())?;
     for (i, l) in scene.lights.iter().enumerate() {
@@ -35,7 +36,10 @@ fn write_info(out: &mut String, scene: &Scene, width: u32, height: u32) -> std::
     }
     writeln!(out, "materials: {}", scene.materials.len())?;
     for (i, m) in scene.materials.iter().enumerate() {
-        writeln!(out, "  [{i}] {}", m.describe())?;
+        match scene.material_names.get(i) {
+            Some(name) => writeln!(out, "  [{i}] {name}: {}", m.describe())?,
+            None => writeln!(out, "  [{i}] {}", m.describe())?,
+        }
     }
     write_camera(out, scene, width, height)?;
     if scene.bounds.is_empty() {
@@ -54,6 +58,43 @@ fn write_info(out: &mut String, scene: &Scene, width: u32, height: u32) -> std::
         writeln!(out, "  {w}")?;
     }
     Ok(())
+}
+
+/// One line per mesh instance: its name, triangle count and materials' names.
+fn write_meshes(out: &mut String, scene: &Scene) -> std::fmt::Result {
+    writeln!(out, "meshes: {}", scene.meshes.len())?;
+    for (i, m) in scene.meshes.iter().enumerate() {
+        let materials: Vec<String> = m
+            .materials
+            .iter()
+            .map(|&k| match scene.material_names.get(k as usize) {
+                Some(name) => format!("[{k}] {name}"),
+                None => format!("[{k}]"),
+            })
+            .collect();
+        writeln!(
+            out,
+            "  [{i}] {}: {} triangles, material {}",
+            m.name,
+            m.count,
+            materials.join(", ")
+        )?;
+    }
+    Ok(())
+}
+
+/// The native BVH's shape: nodes, depth, leaf sizes, SAH cost and build time.
+pub fn bvh_info(name: &str, s: &crate::accel::bvh::BvhStats, build_ms: f64) -> String {
+    format!(
+        "{name}: {} nodes ({}-wide), {} leaves of {:.2} primitives on average (at most 4), \
+         depth {}, SAH cost {:.2}, built in {build_ms:.1} ms\n",
+        s.nodes,
+        s.width,
+        s.leaves,
+        s.prims as f64 / s.leaves.max(1) as f64,
+        s.max_depth,
+        s.sah_cost
+    )
 }
 
 fn write_camera(out: &mut String, scene: &Scene, width: u32, height: u32) -> std::fmt::Result {

@@ -2,8 +2,14 @@
 //! plain or adaptive sample counts. `RenderJob` (job.rs) owns what is rendered.
 
 mod job;
+mod memory;
+mod progressive;
+mod stop;
 
 pub use job::{average, Halves, PixelRect, RenderJob};
+pub use memory::{available_bytes, render_bytes};
+pub use progressive::{pass_seed, pass_spp, render_passes, Film};
+pub use stop::{StopReason, StopToken};
 
 use crate::color::{is_finite, luminance};
 use crate::film::{heat_map, Image};
@@ -24,7 +30,9 @@ pub enum Shading {
     Radiance,
     /// `0.5·n + 0.5` of the shading normal.
     Normals,
-    /// Heat map of BVH nodes + primitives tested per camera ray.
+    /// BVH nodes + primitives tested per camera ray: the image holds the raw counts
+    /// (mean over the pixel's rays, in every channel); [`RenderOutput::cost_heat_map`]
+    /// colours them.
     BvhCost,
 }
 
@@ -149,8 +157,6 @@ pub struct RenderOutput {
     pub samples: Vec<u32>,
     /// Samples whose radiance was NaN or infinite and were counted as black (should be 0).
     pub nonfinite_samples: u64,
-    /// For `Shading::BvhCost`: the count that maps to red.
-    pub cost_scale: Option<f32>,
 }
 
 impl RenderOutput {
@@ -182,20 +188,77 @@ impl RenderOutput {
         let counts: Vec<f32> = self.samples.iter().map(|&s| s as f32).collect();
         heat_map(self.image.width, self.image.height, &counts, spp as f32)
     }
+
+    /// The raw samples per pixel, in every channel (the rate map as data, for EXR).
+    pub fn sample_count_image(&self) -> Image {
+        Image {
+            pixels: self
+                .samples
+                .iter()
+                .map(|&s| Color::splat(s as f32))
+                .collect(),
+            ..self.image.clone()
+        }
+    }
+
+    /// For `Shading::BvhCost`: the heat map (blue 0, red `scale`) and the scale, which
+    /// is the 99th percentile of the pixels' counts unless given (a fixed scale lets
+    /// images of two builders compare).
+    pub fn cost_heat_map(&self, scale: Option<f32>) -> (Image, f32) {
+        let costs: Vec<f32> = self.image.pixels.iter().map(|c| c.x).collect();
+        let scale = scale.unwrap_or_else(|| percentile(&costs, 0.99).max(1.0));
+        (
+            heat_map(self.image.width, self.image.height, &costs, scale),
+            scale,
+        )
+    }
+
+    /// For `Shading::BvhCost`: the mean count per camera ray (pixels weighted by their rays).
+    pub fn mean_cost_per_ray(&self) -> f64 {
+        let rays = self.total_samples().max(1) as f64;
+        let pixels = self.image.pixels.iter().zip(&self.samples);
+        pixels.map(|(c, &n)| c.x as f64 * n as f64).sum::<f64>() / rays
+    }
 }
 
 const TILE: u32 = 16;
+const TILE_PIXELS: usize = (TILE * TILE) as usize;
 
-/// The tiles covering `rect`, as their top-left pixels.
+/// The tiles covering `rect`, as their top-left pixels, in a scattered order: every
+/// stretch of the list samples the whole image, so progress (and its ETA) measured in
+/// pixels tracks the work, and a stopped render is spread over the frame, not
+/// a band of background at the top. The image does not depend on the order.
 fn tiles(rect: PixelRect) -> Vec<(u32, u32)> {
-    (rect.y0..rect.y1)
+    let rows: Vec<(u32, u32)> = (rect.y0..rect.y1)
         .step_by(TILE as usize)
         .flat_map(|y| {
             (rect.x0..rect.x1)
                 .step_by(TILE as usize)
                 .map(move |x| (x, y))
         })
-        .collect()
+        .collect();
+    scattered(rows.len()).map(|i| rows[i]).collect()
+}
+
+/// `0..n` in a scattered order (every index once): work scheduled in this order
+/// samples the whole image early, so progress measured in pixels tracks the work.
+pub(crate) fn scattered(n: usize) -> impl Iterator<Item = usize> {
+    let stride = scatter_stride(n);
+    (0..n).map(move |i| i * stride % n)
+}
+
+/// A step near `n / φ` with no factor in common with `n`, so `i · step mod n` visits
+/// every index once, jumping across the image.
+fn scatter_stride(n: usize) -> usize {
+    let gcd = |mut a: usize, mut b: usize| {
+        while b != 0 {
+            (a, b) = (b, a % b);
+        }
+        a
+    };
+    (((n as f64) * 0.618_034) as usize..n.max(1))
+        .find(|&s| s > 0 && gcd(s, n) == 1)
+        .unwrap_or(1)
 }
 
 /// The pixels of the tile at `(x0, y0)` inside `rect`, row by row.
@@ -205,21 +268,23 @@ fn tile_pixels(rect: PixelRect, (x0, y0): (u32, u32)) -> impl Iterator<Item = (u
 }
 
 /// Renders pixels `rect` of `job`. `progress` is called with the number of pixels finished.
+/// Once `stop` says so, the remaining pixels are left black with 0 samples.
 fn render_rect(
     job: &RenderJob,
     settings: &RenderSettings,
     rect: PixelRect,
     progress: &(dyn Fn(u64) + Sync),
+    stop: &StopToken,
 ) -> RenderOutput {
     if settings.shading == Shading::Radiance {
         if settings.estimator_for(&job.scene) == Estimator::LightTracing {
-            return light_tracing::render(job, settings, rect, progress);
+            return light_tracing::render(job, settings, rect, progress, stop);
         }
         if let Some(a) = settings
             .adaptive
             .filter(|a| a.rule == StopRule::Neighbourhood)
         {
-            return crate::adaptive::render(job, settings, a, rect, progress);
+            return crate::adaptive::render(job, settings, a, rect, progress, stop);
         }
     }
     let tiles = tiles(rect);
@@ -228,23 +293,39 @@ fn render_rect(
         job.accel.as_ref(),
         settings.path_settings(&job.scene),
     );
-    let results: Vec<Vec<PixelResult>> = tiles
-        .par_iter()
-        .map(|&tile| {
-            let out: Vec<PixelResult> = tile_pixels(rect, tile)
-                .map(|(x, y)| render_pixel(job, settings, &integrator, x, y))
-                .collect();
-            progress(out.len() as u64);
-            out
-        })
-        .collect();
-    assemble(rect, &tiles, results, settings)
+    // Every tile's slot is allocated up front, so memory does not grow while rendering.
+    let mut results = vec![PixelResult::NOT_RENDERED; tiles.len() * TILE_PIXELS];
+    results
+        .par_chunks_mut(TILE_PIXELS)
+        .zip(tiles.par_iter())
+        .for_each(|(slots, &tile)| {
+            let mut n = 0;
+            for (slot, (x, y)) in slots.iter_mut().zip(tile_pixels(rect, tile)) {
+                if stop.should_stop() {
+                    break;
+                }
+                *slot = render_pixel(job, settings, &integrator, x, y);
+                n += 1;
+            }
+            progress(n);
+        });
+    assemble(rect, &tiles, &results)
 }
 
+#[derive(Clone, Copy)]
 struct PixelResult {
     value: Color,
     samples: u32,
     nonfinite: u32,
+}
+
+impl PixelResult {
+    /// A pixel skipped because the render was stopped.
+    const NOT_RENDERED: PixelResult = PixelResult {
+        value: Color::ZERO,
+        samples: 0,
+        nonfinite: 0,
+    };
 }
 
 fn render_pixel(
@@ -307,17 +388,12 @@ fn converged(a: Adaptive, n: u32, s1: f64, s2: f64) -> bool {
 }
 
 /// The image of `rect` (its own size, row-major) from the tiles' pixels.
-fn assemble(
-    rect: PixelRect,
-    tiles: &[(u32, u32)],
-    results: Vec<Vec<PixelResult>>,
-    s: &RenderSettings,
-) -> RenderOutput {
+fn assemble(rect: PixelRect, tiles: &[(u32, u32)], results: &[PixelResult]) -> RenderOutput {
     let (w, h) = (rect.width(), rect.height());
     let mut image = Image::new(w, h);
     let mut samples = vec![0u32; (w * h) as usize];
     let mut nonfinite = 0u64;
-    for (&tile, pixels) in tiles.iter().zip(results) {
+    for (&tile, pixels) in tiles.iter().zip(results.chunks(TILE_PIXELS)) {
         for ((x, y), p) in tile_pixels(rect, tile).zip(pixels) {
             let i = ((y - rect.y0) * w + (x - rect.x0)) as usize;
             image.pixels[i] = p.value;
@@ -325,18 +401,10 @@ fn assemble(
             nonfinite += p.nonfinite as u64;
         }
     }
-    let mut cost_scale = None;
-    if s.shading == Shading::BvhCost {
-        let costs: Vec<f32> = image.pixels.iter().map(|c| c.x).collect();
-        let scale = percentile(&costs, 0.99).max(1.0);
-        image = heat_map(w, h, &costs, scale);
-        cost_scale = Some(scale);
-    }
     RenderOutput {
         image,
         samples,
         nonfinite_samples: nonfinite,
-        cost_scale,
     }
 }
 
@@ -379,4 +447,25 @@ fn render_warnings(scene: &Scene, s: &RenderSettings) -> Vec<String> {
         w.push("the scene has no lights and no emissive surfaces: the image will be black".into());
     }
     w
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn scattered_tiles_cover_every_tile_once_and_jump_across_the_image() {
+        for (w, h) in [(1, 1), (16, 16), (480, 360), (100, 37)] {
+            let rect = PixelRect::full(w, h);
+            let t = tiles(rect);
+            let mut sorted = t.clone();
+            sorted.sort_unstable();
+            sorted.dedup();
+            assert_eq!(sorted.len(), t.len());
+            assert_eq!(t.len() as u32, w.div_ceil(TILE) * h.div_ceil(TILE));
+        }
+        // The first tenth of a 480x360 frame's tiles reaches its bottom half.
+        let t = tiles(PixelRect::full(480, 360));
+        assert!(t[..t.len() / 10].iter().any(|&(_, y)| y >= 180));
+    }
 }

@@ -55,7 +55,7 @@ fn exr_output_and_adaptive_rate_map() {
     assert_eq!((img.width, img.height), (64, 48));
     // The light is seen directly at radiance 10: EXR keeps linear values above 1.
     assert!(img.pixels.iter().any(|p| p.x > 5.0));
-    assert!(dir.path().join("x_rate.png").exists());
+    assert!(dir.path().join("x_rate.exr").exists());
 }
 
 fn fails_with(args: &[&str], needle: &str) {

@@ -8,12 +8,34 @@ use ember::names::Named;
 use ember::render::Shading;
 use std::path::PathBuf;
 
+/// What `--help` adds after the options: stopping a render, and where ember differs
+/// from the course's binary on purpose (the README says the same).
+const AFTER_HELP: &str = "\
+Stopping a render:
+  Ctrl-C (or SIGTERM) stops within one pixel's time, writes the pixels finished so far
+  (the rest black; samples per pixel and `stopped: interrupted` in the file's metadata,
+  see `ember info IMAGE`) through a temporary file renamed into place, never a partial
+  file, and exits with status 130. A second Ctrl-C quits at once, writing nothing.
+  --time S renders passes of 1, 1, 2, 4, 8, 16, 16, ... spp until S seconds are spent
+  (or -s is reached), then writes; --checkpoint S writes the image so far every S seconds.
+
+Where ember differs from the CS184 binary on purpose:
+  - the field of view does not depend on the resolution (the course's shrinks below 800x600);
+  - vertex normals come from the file (the course recomputes them);
+  - the sky (ambient light) is seen by rays that escape, not only by light sampling;
+  - -a does not stop a pixel after one batch of identical samples (a pixel of zeros
+    beside a small light), it takes more batches first;
+  - -t defaults to all cores, and the image does not depend on it;
+  - <out>_rate.png is written only with -a.
+  The full list is in shared/docs/scene-semantics.md, section 9.";
+
 /// ember — a physically based CPU path tracer for the CS184 COLLADA scenes.
 ///
 /// Accepts the CS184 pathtracer command line verbatim, e.g.
 ///   ember -t 8 -s 64 -l 16 -m 5 -r 480 360 -f out.png scene.dae
 #[derive(Parser, Debug)]
-#[command(name = "ember", version, about, long_about = None, args_conflicts_with_subcommands = true, args_override_self = true)]
+#[command(after_help = AFTER_HELP)]
+#[command(name = "ember", version, about, long_about = None, args_conflicts_with_subcommands = true, args_override_self = true, allow_negative_numbers = true)]
 pub struct Cli {
     #[command(subcommand)]
     pub command: Option<Command>,
@@ -33,9 +55,11 @@ pub enum Command {
         #[arg(required = true)]
         parts: Vec<PathBuf>,
     },
-    /// Print what a scene contains (geometry, lights, materials, camera, bounds) and the backends of this build.
+    /// Print what a scene contains (meshes with their object and material names, lights, materials, camera, bounds),
+    /// the native BVH's shape and build time, and the backends of this build; for a .png/.exr ember wrote, how it was made.
+    #[command(allow_negative_numbers = true)]
     Info {
-        /// The .dae scene file.
+        /// The .dae scene file, or an image ember wrote.
         scene: PathBuf,
         /// Resolution at which to report the camera's field of view.
         #[arg(short = 'r', num_args = 2, action = clap::ArgAction::Set, value_names = ["WIDTH", "HEIGHT"], default_values_t = [480, 360])]
@@ -46,6 +70,7 @@ pub enum Command {
     Camera(CameraArgs),
     /// Write the scene for another renderer, meaning exactly what ember renders
     /// (spec semantics): `ember export --format mitsuba SCENE.dae -r W H -s SPP -m M --out DIR`.
+    #[command(allow_negative_numbers = true)]
     Export(ExportArgs),
     /// Measure speed: `ember bench render` (samples/s of full renders).
     #[cfg(feature = "bench")]
@@ -120,6 +145,7 @@ pub enum ExportFormat {
 pub enum BenchCommand {
     /// Where methods fail: a row per case (delta lights, tiny lights, glossy vs rough, caustics, scale, grazing rays,
     /// adaptive sampling, roulette) with what each method does there. Writes stability.csv, stability.md and a chart.
+    #[command(allow_negative_numbers = true)]
     Stability {
         /// Output folder.
         #[arg(long, default_value = "bench-out/stability")]
@@ -130,12 +156,16 @@ pub enum BenchCommand {
         /// Random seed.
         #[arg(long, default_value_t = 0)]
         seed: u64,
+        /// Worker threads (default: all cores).
+        #[arg(short = 't', value_name = "THREADS")]
+        threads: Option<usize>,
     },
     /// Build time, memory, tree shape (nodes, leaves, depth, SAH cost) and Mrays/s (camera, incoherent, shadow rays)
     /// of every backend this build has (native midpoint and SAH; Embree robust and fast), at each thread count, with the
     /// native/Embree ratios; with Embree, also every Embree mode (scene flags × build quality × rtcIntersect1/4/8/16) on
     /// camera rays. Writes accel.csv/.md and embree_modes.csv/.md to --out. Default scenes: CBbunny, CBspheres_lambertian,
     /// mesh:1M. Merge an Embree 3 and an Embree 4 build's tables by running the second with --append.
+    #[command(allow_negative_numbers = true)]
     Accel {
         /// Scenes to measure instead of the defaults: .dae files, or mesh:N for a generated displaced sphere of about
         /// N triangles (mesh:250k, mesh:1M).
@@ -144,7 +174,7 @@ pub enum BenchCommand {
         /// Incoherent and shadow rays per measurement (camera rays: one per pixel of a 480x360 render).
         #[arg(long, default_value_t = 500_000)]
         rays: usize,
-        /// Thread counts to measure: `-t 1 2` or `-t 1,2`.
+        /// Thread counts to measure: `-t 1 2` or `-t 1,2` (scenes go before the options, or after `--`).
         #[arg(short = 't', long, num_args = 1.., value_delimiter = ',', default_values_t = [1, 2])]
         threads: Vec<usize>,
         /// Each figure is the median of this many runs.
@@ -170,6 +200,7 @@ pub enum BenchCommand {
     },
     /// Error against render time for each method (direct: hemisphere / light / MIS; GI: roulette, -l, adaptive, backends).
     /// Writes <out>/<scene>_m<M>.csv and error-vs-time charts (PNG and SVG), prints the time each method needs to reach an error.
+    #[command(allow_negative_numbers = true)]
     Converge {
         /// The .dae scene.
         scene: PathBuf,
@@ -209,8 +240,12 @@ pub enum BenchCommand {
         /// Mitsuba variants to run with --mitsuba, comma-separated.
         #[arg(long, value_delimiter = ',', default_value = "llvm_ad_rgb")]
         mitsuba_variants: Vec<String>,
+        /// Worker threads (default: all cores).
+        #[arg(short = 't', value_name = "THREADS")]
+        threads: Option<usize>,
     },
     /// Samples per second for CBspheres_lambertian and CBbunny at 480x360, 64 spp, -m 5.
+    #[command(allow_negative_numbers = true)]
     Render {
         /// Scenes to render (default: the two CS184 scenes from ../shared).
         scenes: Vec<PathBuf>,
@@ -222,7 +257,10 @@ pub enum BenchCommand {
         max_depth: u32,
         /// Repetitions per scene (the median is reported).
         #[arg(long, default_value_t = 3)]
-        repeat: u32,
+        repeats: u32,
+        /// Worker threads (default: all cores).
+        #[arg(short = 't', value_name = "THREADS")]
+        threads: Option<usize>,
         /// Backend (auto: as for a render).
         #[arg(long, value_parser = named::<Backend>(), default_value_t = Backend::Auto)]
         accel: Backend,
@@ -246,9 +284,9 @@ pub struct RenderArgs {
     #[arg(short = 't', value_name = "THREADS")]
     pub threads: Option<usize>,
 
-    /// Camera rays (samples) per pixel; with -a, the cap per pixel.
-    #[arg(short = 's', value_name = "SPP", default_value_t = 1)]
-    pub spp: u32,
+    /// Camera rays (samples) per pixel; with -a, the cap per pixel [default: 1; with --time, no cap].
+    #[arg(short = 's', value_name = "SPP")]
+    pub spp: Option<u32>,
 
     /// Light samples per area light at every shading point (delta lights take one).
     #[arg(short = 'l', value_name = "SAMPLES", default_value_t = 1)]
@@ -307,17 +345,22 @@ pub struct RenderArgs {
     #[arg(long, value_parser = named::<Backend>(), default_value_t = Backend::Auto)]
     pub accel: Backend,
 
-    /// How the native BVH is built.
-    #[arg(long, value_parser = named::<BvhBuilder>(), default_value_t = BvhBuilder::Sah)]
-    pub bvh: BvhBuilder,
+    /// How the native BVH is built [default: sah] (not with --accel embree).
+    #[arg(long, value_parser = named::<BvhBuilder>())]
+    pub bvh: Option<BvhBuilder>,
 
-    /// Embree's build quality (with --accel embree).
-    #[arg(long, value_parser = named::<EmbreeQuality>(), default_value_t = EmbreeQuality::Medium)]
-    pub embree_quality: EmbreeQuality,
+    /// Embree's build quality [default: medium] (only with --accel embree).
+    #[arg(long, value_parser = named::<EmbreeQuality>())]
+    pub embree_quality: Option<EmbreeQuality>,
 
     /// What each pixel shows.
     #[arg(long, value_parser = named::<Shading>(), default_value_t = Shading::Radiance)]
     pub shading: Shading,
+
+    /// With --shading bvh-cost: the count (nodes + primitives tested per camera ray) shown red in a PNG,
+    /// so images of two builders compare [default: the image's 99th percentile]. An EXR holds the raw counts.
+    #[arg(long, value_name = "COUNT")]
+    pub cost_scale: Option<f32>,
 
     /// Estimator. auto: light tracing when every light is a point light and nothing is specular or self-emitting (CBempty: see BENCHMARKS.md, stability case 9); otherwise path tracing with MIS (light + BSDF sampling) when the scene has glossy surfaces or an ambient or environment (-e) light, light sampling otherwise. A direct-lighting strategy name means path tracing with it. -H forces hemisphere.
     #[arg(long, value_parser = integrator(), default_value = AUTO)]
@@ -330,6 +373,16 @@ pub struct RenderArgs {
     /// First bounce at which Russian roulette may end a path.
     #[arg(long, default_value_t = 3, value_name = "BOUNCE")]
     pub rr_start: u32,
+
+    /// Render for at most SECONDS (after loading), in passes of 1, 1, 2, 4, 8, 16, 16, ... samples per
+    /// pixel, then write what was rendered; -s, if given, still caps the samples.
+    #[arg(long = "time", value_name = "SECONDS")]
+    pub time: Option<f64>,
+
+    /// Write the image so far every SECONDS (after the pass that ends the interval), so a long render
+    /// that is killed leaves its latest checkpoint. Renders in passes, as --time does.
+    #[arg(long, value_name = "SECONDS")]
+    pub checkpoint: Option<f64>,
 
     /// Random seed; the same seed gives the same image whatever -t is.
     #[arg(long, default_value_t = 0)]
@@ -439,8 +492,8 @@ mod tests {
     #[test]
     fn flags_take_every_name_of_the_library_tables() {
         check("accel", |a| a.accel);
-        check("bvh", |a| a.bvh);
-        check("embree-quality", |a| a.embree_quality);
+        check("bvh", |a| a.bvh.unwrap_or_default());
+        check("embree-quality", |a| a.embree_quality.unwrap_or_default());
         check("shading", |a| a.shading);
         let integrators = listed("integrator");
         for &(_, name, _) in DirectStrategy::TABLE {

@@ -9,11 +9,23 @@ use std::path::{Path, PathBuf};
 
 /// `ember bench ...`: each benchmark runs, writes its report, prints its summary.
 pub(super) fn run(which: BenchCommand) -> Result<()> {
+    // `-t` of the benchmarks that run on one rayon pool (accel measures its own list).
+    let threads = match &which {
+        BenchCommand::Stability { threads, .. }
+        | BenchCommand::Converge { threads, .. }
+        | BenchCommand::Render { threads, .. } => *threads,
+        BenchCommand::Accel { .. } => None,
+    };
+    super::commands::thread_pool(threads)?.install(|| run_on_pool(which))
+}
+
+fn run_on_pool(which: BenchCommand) -> Result<()> {
     match which {
         BenchCommand::Stability {
             out,
             spp_scale,
             seed,
+            ..
         } => bench_stability(out, spp_scale, seed),
         BenchCommand::Accel {
             scaling: true,
@@ -69,6 +81,7 @@ pub(super) fn run(which: BenchCommand) -> Result<()> {
             seed,
             mitsuba,
             mitsuba_variants,
+            ..
         } => {
             check_resolution(resolution[0], resolution[1])?;
             bench_converge(bench::converge::ConvergeOptions {
@@ -95,9 +108,10 @@ pub(super) fn run(which: BenchCommand) -> Result<()> {
             scenes,
             spp,
             max_depth,
-            repeat,
+            repeats,
             accel: a,
             out,
+            ..
         } => bench_render(
             bench::render::RenderBenchOptions {
                 scenes: if scenes.is_empty() {
@@ -107,7 +121,7 @@ pub(super) fn run(which: BenchCommand) -> Result<()> {
                 },
                 spp,
                 max_depth,
-                repeat: repeat.max(1),
+                repeat: repeats.max(1),
                 accel: AccelKind::new(a, BvhBuilder::default(), EmbreeQuality::default()),
             },
             out,

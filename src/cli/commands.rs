@@ -2,24 +2,32 @@
 
 use super::args::{CameraArgs, ExportArgs, ExportFormat, RenderArgs};
 use super::convert::{
-    self, adopt_scene_from_adaptive, apply_env_map, cell_rect, check_lens, check_resolution,
-    output_path, part_plan, settings_from,
+    self, adopt_scene_from_adaptive, apply_env_map, cell_rect, check_flags, check_lens,
+    check_resolution, flag_warnings, output_path, part_plan, run_plan, settings_from, RunPlan,
 };
+use super::interrupt::{self, Interrupted};
 use anyhow::{bail, Result};
 use ember::accel;
 use ember::camera::course_file::CourseCameraFile;
+use ember::image_io::{OutputFormat, PendingImage};
 use ember::image_metadata::ImageMetadata;
 use ember::integrators::Estimator;
-use ember::render::{PixelRect, RenderJob, RenderSettings};
+use ember::render::{
+    render_passes, Film, PixelRect, RenderJob, RenderOutput, RenderSettings, Shading, StopReason,
+    StopToken,
+};
 use ember::scene::{collada, Scene};
+use ember::shard::Shard;
 use indicatif::{ProgressBar, ProgressStyle};
 use std::io::IsTerminal;
 use std::path::{Path, PathBuf};
+use std::sync::atomic::Ordering;
 use std::time::Instant;
 
 /// `ember [OPTIONS] SCENE`: one render to an image file.
 pub(super) fn render(mut args: RenderArgs) -> Result<()> {
     adopt_scene_from_adaptive(&mut args);
+    check_flags(&args)?;
     if !args.accel.available() {
         bail!("{}", accel::AccelError::EmbreeUnavailable);
     }
@@ -29,6 +37,10 @@ pub(super) fn render(mut args: RenderArgs) -> Result<()> {
     let (width, height) = (args.resolution[0], args.resolution[1]);
     check_resolution(width, height)?;
     let settings = settings_from(&args)?;
+    for w in flag_warnings(&args) {
+        ember::errln!("ember: warning: {w}");
+    }
+    let plan = run_plan(&args, &settings)?;
     check_lens(&args.lens)?;
     let camera_file = (args.camera_file.as_deref())
         .map(CourseCameraFile::read)
@@ -42,15 +54,17 @@ pub(super) fn render(mut args: RenderArgs) -> Result<()> {
     let inputs: Vec<&Path> = std::iter::once(scene_path.as_path())
         .chain(args.env_map.as_deref())
         .collect();
-    let pending = ember::image_io::PendingImage::claim(&out, &inputs)?;
-    let pending_rate = match (settings.adaptive, part) {
-        (Some(_), None) => Some(ember::image_io::PendingImage::claim(
-            &rate_path(&out),
-            &inputs,
-        )?),
+    let mut pending = PendingImage::claim(&out, &inputs)?;
+    let pending_rate = match (settings.adaptive, &part) {
+        (Some(_), None) => Some(PendingImage::claim(&rate_path(&out), &inputs)?),
         _ => None,
     };
-    let kind = match accel::AccelKind::new(args.accel, args.bvh, args.embree_quality) {
+    let interrupt = interrupt::install()?;
+    let kind = match accel::AccelKind::new(
+        args.accel,
+        args.bvh.unwrap_or_default(),
+        args.embree_quality.unwrap_or_default(),
+    ) {
         // The BVH-cost heat map counts the native tree's traversal steps, which
         // Embree does not expose: auto keeps the native tree for it.
         accel::AccelKind::Auto { bvh, .. }
@@ -61,6 +75,12 @@ pub(super) fn render(mut args: RenderArgs) -> Result<()> {
         kind => kind,
     };
     let pool = thread_pool(args.threads)?;
+    // The buffers are the cell's, unless the cell is written in a full frame.
+    let (mw, mh) = match (cell, args.full_frame) {
+        (Some(r), false) => (r.width(), r.height()),
+        _ => (width, height),
+    };
+    check_memory(mw, mh, plan)?;
     let t0 = Instant::now();
     let mut scene = load_scene(&scene_path)?;
     apply_env_map(args.env_map.as_deref(), &mut scene)?;
@@ -76,66 +96,44 @@ pub(super) fn render(mut args: RenderArgs) -> Result<()> {
     let t1 = Instant::now();
     let job = pool.install(|| RenderJob::with_camera(scene, kind, camera))?;
     let t_build = t1.elapsed();
+    // Again now that the scene and its BVH hold their share.
+    check_memory(mw, mh, plan)?;
+    if interrupt.load(Ordering::Relaxed) {
+        return Err(Interrupted("interrupted before rendering; nothing written".into()).into());
+    }
     for w in job.warnings(&settings) {
         ember::errln!("ember: warning: {w}");
     }
-    if cell.is_some() && settings.shading == ember::render::Shading::BvhCost {
-        ember::errln!("ember: warning: -p: the bvh-cost heat map is scaled to the cell's own pixels, not the full image's");
+    if cell.is_some() && settings.shading == Shading::BvhCost && args.cost_scale.is_none() {
+        ember::errln!("ember: warning: -p: the bvh-cost heat map is scaled to the cell's own pixels, not the full image's; --cost-scale fixes the scale");
     }
-    let rect = match (part, cell) {
-        (Some((band, _)), _) => band,
-        (None, Some(cell)) => cell,
-        (None, None) => job.full_frame(),
-    };
-    let pb = progress_bar(rect.area(), args.quiet);
     let t2 = Instant::now();
-    let mut output = pool.install(|| job.render_rect(&settings, rect, &|n| pb.inc(n)));
-    let t_render = t2.elapsed();
-    pb.finish_and_clear();
-    if args.full_frame {
-        output = output.into_frame(rect, width, height);
+    let mut stop = StopToken::never().with_flag(interrupt);
+    if let Some(t) = plan.time {
+        stop = stop.with_deadline(t2 + t);
     }
-    let mut meta = render_metadata(
-        &scene_path,
-        &args,
-        &job,
-        &settings,
+    let run = RenderRun {
+        scene_path: &scene_path,
+        out: &out,
+        args: &args,
+        job: &job,
+        settings: &settings,
         cell,
-        t_render.as_secs_f64(),
-    );
-    match part {
-        None => pending.write_with_metadata(&output.image, &meta)?,
-        Some((rect, shard)) => {
-            if let Some(shard) = shard {
-                meta.push("ember.shard", shard);
-            }
-            pending.write_part(&ember::shard::Part {
-                name: out.display().to_string(),
-                meta: meta.clone(),
-                frame: (width, height),
-                rect,
-                image: output.image.clone(),
-                samples: output.samples.clone(),
-            })?
-        }
-    }
-    if let Some(pending_rate) = pending_rate {
-        let rate = pending_rate.path().to_path_buf();
-        pending_rate.write_with_metadata(&output.rate_image(settings.spp), &meta)?;
-        if !args.quiet {
-            ember::errln!("ember: sample rate map written to {}", rate.display());
-        }
-    }
-    if output.nonfinite_samples > 0 {
+        part,
+    };
+    let done = pool.install(|| run.execute(plan, &stop, &mut pending))?;
+    let t_render = t2.elapsed();
+    let cost_scale = run.write(&done, pending, pending_rate, t_render.as_secs_f64())?;
+    if done.output.nonfinite_samples > 0 {
         ember::errln!(
             "ember: warning: {} samples were NaN or infinite and were counted as black",
-            output.nonfinite_samples
+            done.output.nonfinite_samples
         );
     }
     if !args.quiet {
-        let samples = output.total_samples();
+        let samples = done.output.total_samples();
         ember::errln!(
-            "ember: {}: loaded in {:.1} ms, {} built in {:.1} ms, {} samples in {:.3} s ({:.2} M samples/s), wrote {}",
+            "ember: {}: loaded in {:.1} ms, {} built in {:.1} ms, {} samples in {:.3} s ({:.2} M samples/s); {}; wrote {}",
             scene_path.display(),
             t_load.as_secs_f64() * 1e3,
             job.accel.name(),
@@ -143,11 +141,50 @@ pub(super) fn render(mut args: RenderArgs) -> Result<()> {
             samples,
             t_render.as_secs_f64(),
             samples as f64 / t_render.as_secs_f64() / 1e6,
+            run.settings_summary(&done, pool.current_num_threads()),
             out.display()
         );
-        if let Some(s) = output.cost_scale {
-            ember::errln!("ember: bvh-cost scale: blue = 0, red = {s:.0} nodes + primitives tested per camera ray (99th percentile)");
-        }
+    }
+    run.outcome(&done, cost_scale)
+}
+
+/// The bvh-cost image: raw counts in an EXR, a heat map (blue 0, red `scale`) in a PNG.
+/// Returns the scale used; both it and the mean cost go into the metadata.
+fn write_cost_map(
+    pending: PendingImage,
+    output: &RenderOutput,
+    scale: Option<f32>,
+    meta: &mut ImageMetadata,
+) -> Result<f32> {
+    let (heat, scale) = output.cost_heat_map(scale);
+    meta.push("ember.cost_scale", scale);
+    meta.push(
+        "ember.mean_cost_per_ray",
+        format!("{:.4}", output.mean_cost_per_ray()),
+    );
+    let image = match pending.format() {
+        OutputFormat::Exr => &output.image,
+        OutputFormat::Png => &heat,
+    };
+    pending.write_with_metadata(image, meta)?;
+    Ok(scale)
+}
+
+/// Refuses a render whose buffers (all allocated up front) would not fit in the
+/// memory left, instead of dying of an allocation failure halfway.
+fn check_memory(width: u32, height: u32, plan: RunPlan) -> Result<()> {
+    let need = ember::render::render_bytes(width, height, plan.in_passes());
+    let Some(free) = ember::render::available_bytes() else {
+        return Ok(());
+    };
+    if need > free {
+        let gib = |b: u64| b as f64 / (1u64 << 30) as f64;
+        bail!(
+            "-r {width} {height}: the render needs about {:.1} GiB for its image buffers, but only {:.1} GiB \
+             of memory is available (MemAvailable, cgroup memory.max); choose a smaller -r",
+            gib(need),
+            gib(free)
+        );
     }
     Ok(())
 }
@@ -171,6 +208,228 @@ pub(super) fn merge(out: &Path, parts: &[PathBuf]) -> Result<()> {
         out.display()
     );
     Ok(())
+}
+
+/// What a render produced, and why it ended early if it did.
+struct Rendered {
+    output: RenderOutput,
+    passes: Option<u32>,
+    stopped: Option<StopReason>,
+}
+
+/// One render's fixed inputs, shared by its run, its checkpoints and its metadata.
+struct RenderRun<'a> {
+    scene_path: &'a Path,
+    out: &'a Path,
+    args: &'a RenderArgs,
+    job: &'a RenderJob,
+    settings: &'a RenderSettings,
+    /// `-p`: the cell rendered instead of the whole image.
+    cell: Option<PixelRect>,
+    /// `--shard`/`--spp-offset`: the band of a part for `ember merge`, and its shard.
+    part: Option<(PixelRect, Option<Shard>)>,
+}
+
+impl RenderRun<'_> {
+    /// Writes the image (and the rate map with -a) with their metadata; returns the
+    /// bvh-cost scale used, if the image is a cost map.
+    fn write(
+        &self,
+        done: &Rendered,
+        pending: PendingImage,
+        pending_rate: Option<PendingImage>,
+        seconds: f64,
+    ) -> Result<Option<f32>> {
+        let mut meta = self.metadata(done, seconds);
+        let cost_scale = match self.settings.shading {
+            Shading::BvhCost => Some(write_cost_map(
+                pending,
+                &done.output,
+                self.args.cost_scale,
+                &mut meta,
+            )?),
+            _ => {
+                match self.part {
+                    None => pending.write_with_metadata(&done.output.image, &meta)?,
+                    Some((rect, shard)) => {
+                        if let Some(shard) = shard {
+                            meta.push("ember.shard", shard);
+                        }
+                        pending.write_part(&ember::shard::Part {
+                            name: self.out.display().to_string(),
+                            meta: meta.clone(),
+                            frame: (self.job.camera.width, self.job.camera.height),
+                            rect,
+                            image: done.output.image.clone(),
+                            samples: done.output.samples.clone(),
+                        })?
+                    }
+                }
+                None
+            }
+        };
+        if let Some(pending_rate) = pending_rate {
+            let rate = pending_rate.path().to_path_buf();
+            // The rate map: raw samples per pixel in an EXR, the course's colours in a PNG.
+            let image = match pending_rate.format() {
+                OutputFormat::Exr => done.output.sample_count_image(),
+                OutputFormat::Png => done.output.rate_image(self.settings.spp),
+            };
+            pending_rate.write_with_metadata(&image, &meta)?;
+            if !self.args.quiet {
+                ember::errln!("ember: sample rate map written to {}", rate.display());
+            }
+        }
+        Ok(cost_scale)
+    }
+
+    /// The last words: the cost map's scale, and how a stopped render ended (an
+    /// interrupt is an `Interrupted` error, for exit status 130).
+    fn outcome(&self, done: &Rendered, cost_scale: Option<f32>) -> Result<()> {
+        if let (Some(scale), false) = (cost_scale, self.args.quiet) {
+            ember::errln!(
+                "ember: bvh-cost: mean {:.2} nodes + primitives tested per camera ray; PNG scale: blue = 0, red = {scale} ({})",
+                done.output.mean_cost_per_ray(),
+                match self.args.cost_scale {
+                    Some(_) => "--cost-scale",
+                    None => "99th percentile",
+                }
+            );
+        }
+        match done.stopped {
+            Some(StopReason::Interrupted) => Err(Interrupted(format!(
+                "interrupted: wrote what was rendered so far ({}) to {}",
+                coverage(&done.output.samples),
+                self.out.display()
+            ))
+            .into()),
+            Some(StopReason::TimeUp) if !self.args.quiet => {
+                ember::errln!(
+                    "ember: time budget spent: wrote {}",
+                    coverage(&done.output.samples)
+                );
+                Ok(())
+            }
+            _ => Ok(()),
+        }
+    }
+
+    /// Renders in one pass, or in passes (writing checkpoints to `pending`) as `plan` says.
+    fn execute(
+        &self,
+        plan: RunPlan,
+        stop: &StopToken,
+        pending: &mut PendingImage,
+    ) -> Result<Rendered> {
+        let frame = match (self.part, self.cell) {
+            (Some((band, _)), _) => band,
+            (None, Some(cell)) => cell,
+            (None, None) => self.job.full_frame(),
+        };
+        let t0 = Instant::now();
+        if !plan.in_passes() {
+            let pb = progress_bar(frame.area(), self.args.quiet);
+            let output = self
+                .job
+                .render_rect_until(self.settings, frame, &|n| pb.inc(n), stop);
+            pb.finish_and_clear();
+            return Ok(Rendered {
+                output: self.framed(output),
+                passes: None,
+                stopped: stop.reason(),
+            });
+        }
+        // A time budget shows time spent; otherwise samples traced.
+        let pb = match plan.time {
+            Some(t) => progress_bar(t.as_millis() as u64, self.args.quiet),
+            None => progress_bar(frame.area() * self.settings.spp as u64, self.args.quiet),
+        };
+        let tick = |n: u64| match plan.time {
+            Some(_) => pb.set_position(t0.elapsed().as_millis() as u64),
+            None => pb.inc(n),
+        };
+        let mut last = Instant::now();
+        let mut checkpoint = |film: &Film| -> Result<()> {
+            match plan.checkpoint {
+                Some(every) if last.elapsed() >= every => {
+                    let output = self.framed(film.output());
+                    let mut meta = self.metadata_base(t0.elapsed().as_secs_f64());
+                    meta.push_samples(&output.samples, Some(film.passes), None);
+                    meta.push("ember.checkpoint", "true");
+                    pending.checkpoint(&output.image, &meta)?;
+                    last = Instant::now();
+                    Ok(())
+                }
+                _ => Ok(()),
+            }
+        };
+        let (film, stopped) =
+            render_passes(self.job, self.settings, frame, &tick, stop, &mut checkpoint)?;
+        pb.finish_and_clear();
+        Ok(Rendered {
+            output: self.framed(film.output()),
+            passes: Some(film.passes),
+            stopped,
+        })
+    }
+
+    /// With `-p … --full-frame`, the cell placed in the black full-size image.
+    fn framed(&self, output: RenderOutput) -> RenderOutput {
+        match (self.cell, self.args.full_frame) {
+            (Some(rect), true) => {
+                output.into_frame(rect, self.job.camera.width, self.job.camera.height)
+            }
+            _ => output,
+        }
+    }
+
+    fn metadata_base(&self, seconds: f64) -> ImageMetadata {
+        render_metadata(
+            self.scene_path,
+            self.args,
+            self.job,
+            self.settings,
+            self.cell,
+            seconds,
+        )
+    }
+
+    /// The metadata of the final image: settings, samples taken, and how it ended.
+    fn metadata(&self, done: &Rendered, seconds: f64) -> ImageMetadata {
+        let mut meta = self.metadata_base(seconds);
+        meta.push_samples(&done.output.samples, done.passes, done.stopped);
+        meta
+    }
+
+    /// The settings that matter, for the summary line: estimator, samples, -m, -l, seed, threads.
+    fn settings_summary(&self, done: &Rendered, threads: usize) -> String {
+        let s = self.settings;
+        let n = done.output.samples.len().max(1) as f64;
+        let mean = done.output.total_samples() as f64 / n;
+        let spp = match (s.adaptive, done.stopped, done.passes) {
+            (None, None, _) => format!("{} spp", mean.round()),
+            (Some(_), _, _) => format!("mean {mean:.1} spp (cap {}, -a)", s.spp),
+            (None, _, _) => format!("mean {mean:.1} spp"),
+        };
+        format!(
+            "{} estimator, {spp}, -m {}, -l {}, seed {}, {threads} threads",
+            ember::image_metadata::estimator_label(s, &self.job.scene),
+            s.max_depth,
+            s.light_samples,
+            s.seed
+        )
+    }
+}
+
+/// "N of M pixels, mean X spp": how much of the image a stopped render holds.
+fn coverage(samples: &[u32]) -> String {
+    let rendered = samples.iter().filter(|&&s| s > 0).count();
+    let total: u64 = samples.iter().map(|&s| s as u64).sum();
+    format!(
+        "{rendered} of {} pixels, mean {:.2} spp",
+        samples.len(),
+        total as f64 / samples.len().max(1) as f64
+    )
 }
 
 /// What the image records: the render's settings, and the camera file and cell if given.
@@ -250,6 +509,12 @@ pub(super) fn info(path: &Path, w: u32, h: u32) -> Result<()> {
     let scene = load_scene(path)?;
     ember::outln!("{}", path.display())?;
     ember::out!("{}", ember::info::scene_info(&scene, w, h))?;
+    let t0 = Instant::now();
+    let bvh = accel::build(&scene, accel::AccelKind::Native(accel::BvhBuilder::Sah))?;
+    let build_ms = t0.elapsed().as_secs_f64() * 1e3;
+    if let Some(stats) = bvh.bvh_stats() {
+        ember::out!("{}", ember::info::bvh_info(&bvh.name(), &stats, build_ms))?;
+    }
     ember::outln!("{}", accel::backends_info())?;
     let auto = accel::choose_auto(&scene);
     ember::outln!(
@@ -268,7 +533,7 @@ fn load_scene(path: &Path) -> Result<Scene> {
     Ok(scene)
 }
 
-fn thread_pool(threads: Option<usize>) -> Result<rayon::ThreadPool> {
+pub(super) fn thread_pool(threads: Option<usize>) -> Result<rayon::ThreadPool> {
     if threads == Some(0) {
         bail!("-t: thread count must be at least 1");
     }
@@ -289,13 +554,17 @@ fn progress_bar(total: u64, quiet: bool) -> ProgressBar {
     pb
 }
 
-/// `out.png` → `out_rate.png`: the adaptive sample-rate map beside the image.
+/// `out.png` → `out_rate.png` (`out.exr` → `out_rate.exr`, raw counts): the adaptive
+/// sample-rate map beside the image.
 fn rate_path(out: &Path) -> PathBuf {
     let stem = out
         .file_stem()
         .map(|s| s.to_string_lossy().into_owned())
         .unwrap_or_default();
-    out.with_file_name(format!("{stem}_rate.png"))
+    let ext = out
+        .extension()
+        .map_or("png".into(), |e| e.to_string_lossy());
+    out.with_file_name(format!("{stem}_rate.{ext}"))
 }
 
 /// `ember export`: the scene in another renderer's format, for side-by-side measurements.

@@ -2,6 +2,7 @@
 
 use super::args::{LensArgs, RenderArgs};
 use anyhow::{bail, Context, Result};
+use ember::accel::Backend;
 use ember::camera::course_file::CourseCameraFile;
 use ember::camera::Camera;
 use ember::integrators::{DirectStrategy, Estimator, Roulette};
@@ -9,12 +10,88 @@ use ember::render::{Adaptive, PixelRect, RenderSettings, Shading};
 use ember::scene::Scene;
 use ember::shard::Shard;
 use std::path::{Path, PathBuf};
+use std::time::Duration;
+
+/// How a render runs: in one pass, or in passes under a time budget and/or with checkpoints.
+#[derive(Clone, Copy, Debug, Default)]
+pub(super) struct RunPlan {
+    pub time: Option<Duration>,
+    pub checkpoint: Option<Duration>,
+}
+
+impl RunPlan {
+    /// Whether the render is a sequence of passes ([`ember::render::render_passes`]).
+    pub fn in_passes(&self) -> bool {
+        self.time.is_some() || self.checkpoint.is_some()
+    }
+}
+
+/// `--time` and `--checkpoint`, checked against the settings they run.
+pub(super) fn run_plan(args: &RenderArgs, settings: &RenderSettings) -> Result<RunPlan> {
+    let seconds = |flag: &str, v: Option<f64>| -> Result<Option<Duration>> {
+        v.map(|s| {
+            Duration::try_from_secs_f64(s)
+                .ok()
+                .filter(|d| !d.is_zero())
+                .with_context(|| format!("{flag}: expected a positive number of seconds, got {s}"))
+        })
+        .transpose()
+    };
+    let plan = RunPlan {
+        time: seconds("--time", args.time)?,
+        checkpoint: seconds("--checkpoint", args.checkpoint)?,
+    };
+    if plan.in_passes() && settings.adaptive.is_some() {
+        bail!("--time and --checkpoint render in passes, which -a (adaptive sampling) does not: use one or the other");
+    }
+    if plan.in_passes() && settings.shading == Shading::BvhCost {
+        bail!("--time and --checkpoint render in passes, which --shading bvh-cost (one heat map) does not");
+    }
+    Ok(plan)
+}
 
 pub(super) fn check_resolution(w: u32, h: u32) -> Result<()> {
     if w == 0 || h == 0 || (w as u64) * (h as u64) > 1 << 28 {
         bail!("resolution {w}x{h} is out of range (each side ≥ 1, at most 2^28 pixels)");
     }
     Ok(())
+}
+
+/// Flags that would do nothing, or something meaningless, in the chosen configuration.
+pub(super) fn check_flags(args: &RenderArgs) -> Result<()> {
+    let embree = args.accel == Backend::Embree;
+    if embree && args.bvh.is_some() {
+        bail!("--bvh chooses the native BVH's builder; it does nothing with --accel embree");
+    }
+    if args.embree_quality.is_some() && !Backend::Embree.available() {
+        bail!(
+            "--embree-quality: this build has no Embree backend (rebuild with --features embree)"
+        );
+    }
+    if args.embree_quality.is_some() && args.accel == Backend::Native {
+        bail!("--embree-quality applies only with --accel embree or auto");
+    }
+    if embree && args.shading == Shading::BvhCost {
+        bail!("--shading bvh-cost counts the native BVH's node and primitive tests, which Embree does not expose; use --accel native");
+    }
+    if let Some(c) = args.cost_scale {
+        if args.shading != Shading::BvhCost {
+            bail!("--cost-scale applies only with --shading bvh-cost");
+        }
+        if !(c.is_finite() && c > 0.0) {
+            bail!("--cost-scale: expected a positive count, got {c}");
+        }
+    }
+    Ok(())
+}
+
+/// Flags that ember accepts but reads differently than written.
+pub(super) fn flag_warnings(args: &RenderArgs) -> Vec<String> {
+    let mut w = Vec::new();
+    if args.light_samples == 0 {
+        w.push("-l 0 takes one light sample per area light, as -l 1 does".to_string());
+    }
+    w
 }
 
 pub(super) fn parse_adaptive(a: &Option<Vec<String>>) -> Result<Option<Adaptive>> {
@@ -75,9 +152,13 @@ pub(super) fn estimator(args: &RenderArgs) -> Option<Estimator> {
 }
 
 pub(super) fn settings_from(args: &RenderArgs) -> Result<RenderSettings> {
-    if args.spp == 0 {
-        bail!("-s: samples per pixel must be at least 1");
-    }
+    // With --time and no -s, the clock decides how many samples a pixel gets.
+    let spp = match (args.spp, args.time) {
+        (Some(0), _) => bail!("-s: samples per pixel must be at least 1"),
+        (Some(s), _) => s,
+        (None, Some(_)) => u32::MAX,
+        (None, None) => 1,
+    };
     if args.env_map.is_some() && estimator(args) == Some(Estimator::LightTracing) {
         bail!("-e: light tracing does not support environment maps; use path tracing (--integrator auto, light or mis)");
     }
@@ -86,15 +167,12 @@ pub(super) fn settings_from(args: &RenderArgs) -> Result<RenderSettings> {
         if adaptive.is_some() {
             bail!("--spp-offset cannot be used with adaptive sampling (-a): an adaptive pixel's sample count depends on all its samples, so its samples cannot be split into ranges; split by --shard instead");
         }
-        if offset.checked_add(args.spp).is_none() {
-            bail!(
-                "--spp-offset {offset} -s {}: the last sample index exceeds 2^32",
-                args.spp
-            );
+        if offset.checked_add(spp).is_none() {
+            bail!("--spp-offset {offset} -s {spp}: the last sample index exceeds 2^32");
         }
     }
     Ok(RenderSettings {
-        spp: args.spp,
+        spp,
         light_samples: args.light_samples.max(1),
         max_depth: args.max_depth,
         accumulate: args.accumulate == 1,
@@ -133,6 +211,9 @@ pub(super) fn part_plan(
     }
     if args.shading == Shading::BvhCost {
         bail!("--shading bvh-cost cannot be rendered in parts: its colour scale depends on every pixel");
+    }
+    if args.time.is_some() || args.checkpoint.is_some() {
+        bail!("--time/--checkpoint cannot be used with --shard/--spp-offset: a part must hold exactly its samples; split the samples with --spp-offset instead");
     }
     let Some(text) = &args.shard else {
         return Ok(Some((PixelRect::full(width, height), None)));

@@ -23,7 +23,7 @@ use crate::film::Image;
 use crate::geometry::{Frame, Ray};
 use crate::lights::Light;
 use crate::materials::{specular, Material};
-use crate::render::{PixelRect, RenderJob, RenderOutput, RenderSettings, Shading};
+use crate::render::{PixelRect, RenderJob, RenderOutput, RenderSettings, Shading, StopToken};
 use crate::sampling::Sampler;
 use crate::scene::{Scene, SurfaceInteraction};
 use crate::Color;
@@ -335,6 +335,7 @@ pub fn render(
     settings: &RenderSettings,
     rect: PixelRect,
     progress: &(dyn Fn(u64) + Sync),
+    stop: &StopToken,
 ) -> RenderOutput {
     let (scene, camera) = (&job.scene, &job.camera);
     let npix = camera.width as u64 * camera.height as u64;
@@ -352,7 +353,7 @@ pub fn render(
     let mut nonfinite = 0u64;
     let done = |c: u64| c * rect.area() / chunks.max(1);
     let mut group = 0;
-    while group < chunks {
+    while group < chunks && !stop.should_stop() {
         let end = (group + CHUNKS_PER_GROUP).min(chunks);
         let results: Vec<(Vec<Splat>, u32)> = (group..end)
             .into_par_iter()
@@ -377,11 +378,20 @@ pub fn render(
         }
         group = end;
     }
+    // A stopped render divides by the paths it traced (`spp · pixels` when complete),
+    // and sees emitters directly with as many camera samples.
+    let traced = (group * CHUNK_PATHS).min(total);
+    let per_pixel = traced as f64 / npix as f64;
+    let spp = per_pixel.ceil() as u32;
     let mut image = Image::new(rw, rh);
     for (p, s) in image.pixels.iter_mut().zip(&sum) {
-        *p = *s / spp as f32;
+        *p = if traced == 0 {
+            Color::ZERO
+        } else {
+            *s / per_pixel as f32
+        };
     }
-    if tracer.counts(0) && has_visible_emitters(scene) {
+    if spp > 0 && tracer.counts(0) && has_visible_emitters(scene) {
         let direct: Vec<Color> = (0..rect.area())
             .into_par_iter()
             .map(|i| {
@@ -402,6 +412,5 @@ pub fn render(
         image,
         samples: vec![spp; rect.area() as usize],
         nonfinite_samples: nonfinite,
-        cost_scale: None,
     }
 }

@@ -2,7 +2,7 @@
 //! resolution), rendered over a rectangle of pixels. The CLI, the benches and the tests all
 //! render through a `RenderJob`.
 
-use super::{render_warnings, RenderOutput, RenderSettings};
+use super::{render_warnings, RenderOutput, RenderSettings, StopToken};
 use crate::accel::{self, Accel, AccelError, AccelKind};
 use crate::camera::Camera;
 use crate::color::luminance;
@@ -89,7 +89,19 @@ impl RenderJob {
         rect: PixelRect,
         progress: &(dyn Fn(u64) + Sync),
     ) -> RenderOutput {
-        super::render_rect(self, s, rect, progress)
+        super::render_rect(self, s, rect, progress, &StopToken::never())
+    }
+
+    /// As [`RenderJob::render_rect`], leaving the pixels not yet started black (0
+    /// samples) once `stop` says so: the caller keeps what was rendered.
+    pub fn render_rect_until(
+        &self,
+        s: &RenderSettings,
+        rect: PixelRect,
+        progress: &(dyn Fn(u64) + Sync),
+        stop: &StopToken,
+    ) -> RenderOutput {
+        super::render_rect(self, s, rect, progress, stop)
     }
 
     /// Two renders of `s.spp / 2` samples with independent seeds derived from `s.seed`

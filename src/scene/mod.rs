@@ -55,6 +55,18 @@ impl Default for CameraDesc {
     }
 }
 
+/// One mesh instance of the file: which triangles it became, under which names.
+#[derive(Clone, Debug, PartialEq)]
+pub struct MeshInstance {
+    /// The scene node's name (or id), else the geometry's.
+    pub name: String,
+    /// Its triangles are `Scene::triangles[first..first + count]`.
+    pub first: u32,
+    pub count: u32,
+    /// Materials its triangles use (indices into `Scene::materials`).
+    pub materials: Vec<u32>,
+}
+
 #[derive(Clone, Debug, Default)]
 pub struct Scene {
     pub positions: Vec<Vec3>,
@@ -68,6 +80,11 @@ pub struct Scene {
     pub bounds: Aabb,
     /// Non-fatal problems found while loading (e.g. a missing material).
     pub warnings: Vec<String>,
+    /// The file's mesh instances, for `ember info` (the renderer never reads them).
+    pub meshes: Vec<MeshInstance>,
+    /// The file's name of each material (parallel to `materials`; may be shorter for
+    /// scenes built in code).
+    pub material_names: Vec<String>,
     /// Two-sided emission attached to primitives on top of their material, found only by
     /// BSDF sampling: the emitting, reflecting walls of the analytic furnace. Test builds
     /// only (feature `testing`); the loader has no such thing.
@@ -194,6 +211,10 @@ impl Scene {
         match self.materials.iter().position(|m| *m == Material::Black) {
             Some(i) => i as u32,
             None => {
+                // Keep the names aligned when the loader keeps them.
+                if self.material_names.len() == self.materials.len() {
+                    self.material_names.push("(area light surface)".into());
+                }
                 self.materials.push(Material::Black);
                 (self.materials.len() - 1) as u32
             }

@@ -10,7 +10,7 @@ use super::LoadError;
 use crate::geometry::Aabb;
 use crate::lights::Light;
 use crate::materials::Material;
-use crate::scene::{CameraDesc, Scene, Sphere, Triangle, NO_LIGHT};
+use crate::scene::{CameraDesc, MeshInstance, Scene, Sphere, Triangle, NO_LIGHT};
 use glam::{DMat4, DVec3, Vec3};
 use roxmltree::{Document, Node, NodeId};
 use std::collections::HashMap;
@@ -220,7 +220,7 @@ impl<'a, 'i> Builder<'a, 'i> {
             return Ok(i);
         }
         let m = read_material(&mut self.ctx, material)?;
-        let i = self.push_material(m);
+        let i = self.push_material(m, display_name(material));
         self.materials.insert(material.id(), i);
         Ok(i)
     }
@@ -233,15 +233,16 @@ impl<'a, 'i> Builder<'a, 'i> {
         match self.default_material {
             Some(i) => i,
             None => {
-                let i = self.push_material(Material::default());
+                let i = self.push_material(Material::default(), "(default)".into());
                 self.default_material = Some(i);
                 i
             }
         }
     }
 
-    fn push_material(&mut self, m: Material) -> u32 {
+    fn push_material(&mut self, m: Material, name: String) -> u32 {
         self.scene.materials.push(m);
+        self.scene.material_names.push(name);
         (self.scene.materials.len() - 1) as u32
     }
 
@@ -264,6 +265,15 @@ impl<'a, 'i> Builder<'a, 'i> {
             return Err(self.ctx.err(inst, msg));
         }
         let (base_p, base_n) = (s.positions.len() as u32, s.normals.len() as u32);
+        let mut used: Vec<u32> = materials.to_vec();
+        used.sort_unstable();
+        used.dedup();
+        s.meshes.push(MeshInstance {
+            name: inst.parent_element().map_or_else(String::new, display_name),
+            first: s.triangles.len() as u32,
+            count: mesh.triangles.len() as u32,
+            materials: used,
+        });
         for p in &mesh.positions {
             let q = point(world, p.as_dvec3()).as_vec3();
             if !q.is_finite() {
@@ -403,4 +413,10 @@ fn push_children<'a, 'i>(
             _ => {}
         }
     }
+}
+
+/// An element's `name`, else its `id`, clipped for display.
+fn display_name(n: Node) -> String {
+    let name = n.attribute("name").or(n.attribute("id")).unwrap_or("");
+    super::xml::clip(name)
 }
