@@ -225,6 +225,20 @@ fn cell_equals_the_full_render() {
 }
 
 #[test]
+fn cell_equals_the_full_render_under_light_tracing() {
+    // CBempty's point light makes auto choose light tracing, whose paths splat anywhere:
+    // a cell is still the crop of the full image, with a lens too.
+    let dir = tempfile::tempdir().unwrap();
+    let empty = "scenes/cs184/sky/CBempty.dae";
+    let lens = ["-b", "0.1", "-d", "3"];
+    let full = render(&with(&lens), &dir.path().join("full.exr"), empty);
+    let mut args = with(&lens);
+    args.extend(["-p", "7", "4", "9", "6"]);
+    let cell = render(&args, &dir.path().join("cell.exr"), empty);
+    assert_eq!(cell.pixels, crop(&full, 7, 20, 9, 6));
+}
+
+#[test]
 fn cells_outside_the_image_are_rejected() {
     let dir = tempfile::tempdir().unwrap();
     let out = dir.path().join("x.exr");
