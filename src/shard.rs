@@ -63,11 +63,13 @@ impl fmt::Display for Shard {
 }
 
 /// Metadata keys that differ between the parts of one render; every other key must agree.
-pub const PER_PART_KEYS: [&str; 8] = [
+pub const PER_PART_KEYS: [&str; 10] = [
     "ember.camera_file",
     "ember.command_line",
     "ember.cpu",
+    "ember.pixels_rendered",
     "ember.render_seconds",
+    "ember.samples_per_pixel",
     "ember.scene",
     "ember.shard",
     "ember.spp",
