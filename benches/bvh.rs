@@ -7,7 +7,7 @@
 use criterion::{black_box, criterion_group, criterion_main, Criterion, Throughput};
 use ember::accel::{Accel, Bvh, BvhBuilder};
 use ember::camera::Camera;
-use ember::geometry::{offset_ray_origin, Aabb, Ray};
+use ember::geometry::{Aabb, Ray};
 use ember::sampling::{uniform_sphere, Sampler};
 use ember::scene::{collada, Scene, Triangle, NO_LIGHT};
 use glam::{Vec2, Vec3};
@@ -82,10 +82,9 @@ fn workload(scene: &Scene, bvh: &Bvh) -> Workload {
         };
         let si = scene.interaction(ray, &hit);
         let w = uniform_sphere(rng.next_2d());
-        incoherent.push(Ray::new(offset_ray_origin(si.p, si.p_error, si.ng, w), w));
+        incoherent.push(si.spawn_ray(w));
         let target = top + 0.1 * scene.bounds.diagonal().length() * uniform_sphere(rng.next_2d());
-        let o = offset_ray_origin(si.p, si.p_error, si.ng, target - si.p);
-        shadow.push(Ray::segment(o, target - o, 1.0 - 1e-4));
+        shadow.push(si.spawn_segment(target, 1.0 - 1e-4));
     }
     Workload {
         camera,

@@ -39,7 +39,25 @@ struct ember_scene {
   RTCScene scene;
   uint32_t ntri;
   int flags;
+  /* The spheres (x, y, z, r), in the sphere geometry's own buffer, for the skip filter. */
+  const float *spheres;
 };
+
+#if RTC_VERSION_MAJOR >= 4
+typedef struct RTCRayQueryContext ember_rtc_context;
+#define EMBER_SCENE_FLAG_FILTER RTC_SCENE_FLAG_FILTER_FUNCTION_IN_ARGUMENTS
+#else
+typedef struct RTCIntersectContext ember_rtc_context;
+#define EMBER_SCENE_FLAG_FILTER RTC_SCENE_FLAG_CONTEXT_FILTER_FUNCTION
+#endif
+
+/* Embree's context, extended with what the skip filter needs: Embree hands the filter
+ * the context pointer it was given, so the filter can reach the fields after it. */
+typedef struct skip_context {
+  ember_rtc_context ctx;
+  const ember_scene *scene;
+  uint32_t skip;
+} skip_context;
 
 static void lock_device(ember_device *d) {
   while (atomic_flag_test_and_set_explicit(&d->lock, memory_order_acquire)) {
@@ -145,6 +163,16 @@ void ember_device_get_info(const ember_device *d, ember_device_info *info) {
       (int)rtcGetDeviceProperty(dev, RTC_DEVICE_PROPERTY_RAY_MASK_SUPPORTED);
 }
 
+/* Embree 4 runs a query's own filter (RTCIntersectArguments.filter) only on geometries
+ * that opt in; Embree 3 runs the context's filter on every geometry. */
+static void enable_query_filter(RTCGeometry g) {
+#if RTC_VERSION_MAJOR >= 4
+  rtcSetGeometryEnableFilterFunctionFromArguments(g, true);
+#else
+  (void)g;
+#endif
+}
+
 /* Copies into buffers Embree allocates, which it pads as its SIMD loads need. */
 static int attach_triangles(RTCDevice dev, RTCScene scene, const float *vertices,
                             size_t nvert, const uint32_t *indices, size_t ntri) {
@@ -160,13 +188,15 @@ static int attach_triangles(RTCDevice dev, RTCScene scene, const float *vertices
   }
   memcpy(vb, vertices, nvert * 3 * sizeof(float));
   memcpy(ib, indices, ntri * 3 * sizeof(uint32_t));
+  enable_query_filter(g);
   rtcCommitGeometry(g);
   rtcAttachGeometryByID(scene, g, EMBER_TRI_GEOM_ID);
   rtcReleaseGeometry(g);
   return 1;
 }
 
-static int attach_spheres(RTCDevice dev, RTCScene scene, const float *spheres, size_t nsph) {
+static int attach_spheres(RTCDevice dev, RTCScene scene, const float *spheres, size_t nsph,
+                          const float **kept) {
   RTCGeometry g = rtcNewGeometry(dev, RTC_GEOMETRY_TYPE_SPHERE_POINT);
   if (!g) return 0;
   float *vb = (float *)rtcSetNewGeometryBuffer(g, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT4,
@@ -176,6 +206,8 @@ static int attach_spheres(RTCDevice dev, RTCScene scene, const float *spheres, s
     return 0;
   }
   memcpy(vb, spheres, nsph * 4 * sizeof(float));
+  *kept = vb;
+  enable_query_filter(g);
   rtcCommitGeometry(g);
   rtcAttachGeometryByID(scene, g, EMBER_SPH_GEOM_ID);
   rtcReleaseGeometry(g);
@@ -201,11 +233,14 @@ ember_scene *ember_scene_new(ember_device *d, const float *vertices, size_t nver
   RTCScene scene = rtcNewScene(dev);
   if (!scene) return NULL;
   rtcSetSceneBuildQuality(scene, to_quality(quality));
-  enum RTCSceneFlags flags = robust ? RTC_SCENE_FLAG_ROBUST : RTC_SCENE_FLAG_NONE;
-  rtcSetSceneFlags(scene, flags);
+  /* The filter flag only lets a query's own filter run; queries without one (camera
+   * and other unspawned rays) trace as before. */
+  int flags = EMBER_SCENE_FLAG_FILTER | (robust ? RTC_SCENE_FLAG_ROBUST : RTC_SCENE_FLAG_NONE);
+  rtcSetSceneFlags(scene, (enum RTCSceneFlags)flags);
   int ok = 1;
+  const float *kept_spheres = NULL;
   if (ntri > 0 && nvert > 0) ok = ok && attach_triangles(dev, scene, vertices, nvert, indices, ntri);
-  if (nsph > 0) ok = ok && attach_spheres(dev, scene, spheres, nsph);
+  if (nsph > 0) ok = ok && attach_spheres(dev, scene, spheres, nsph, &kept_spheres);
   if (ok) rtcCommitScene(scene);
   if (!ok || rtcGetDeviceError(dev) != RTC_ERROR_NONE) {
     rtcReleaseScene(scene);
@@ -220,6 +255,7 @@ ember_scene *ember_scene_new(ember_device *d, const float *vertices, size_t nver
   s->scene = scene;
   s->ntri = (uint32_t)ntri;
   s->flags = (int)rtcGetSceneFlags(scene);
+  s->spheres = kept_spheres;
   return s;
 }
 
@@ -239,8 +275,8 @@ static void fill_ray(struct RTCRay *r, const ember_ray *in) {
   r->org_z = in->org[2];
   /* Embree requires tnear >= 0. A hit at exactly t = 0 means the origin lies on the
    * surface (a bounce ray off an axis-aligned plane at coordinate 0 gets no offset from
-   * its zero error bound); ember never means such a hit and the native test rejects it
-   * by its error bound, so the interval starts at the smallest positive float. */
+   * its zero error bound); ember never means such a hit, and the native test too starts
+   * the interval at the smallest positive normal float. */
   r->tnear = in->tnear > FLT_MIN ? in->tnear : FLT_MIN;
   r->dir_x = in->dir[0];
   r->dir_y = in->dir[1];
@@ -251,6 +287,52 @@ static void fill_ray(struct RTCRay *r, const ember_ray *in) {
   r->mask = 0xFFFFFFFFu;
   r->id = 0;
   r->flags = 0;
+}
+
+/* Field k of lane i of Embree's packets of runtime size n (rtcore_ray.h's RTCRayN_* and
+ * RTCHitN_* helpers exist only for C++): rays hold org xyz, tnear, dir xyz, time, tfar;
+ * hits Ng xyz, u, v, primID, geomID, in that order, each as n consecutive lanes. */
+#define EMBER_RAYN(ray, k, n, i) (((const float *)(ray))[(k) * (n) + (i)])
+#define EMBER_HITN_PRIM(hit, n, i) (((const unsigned *)(hit))[5 * (n) + (i)])
+#define EMBER_HITN_GEOM(hit, n, i) (((const unsigned *)(hit))[6 * (n) + (i)])
+
+/* Whether the candidate hit `i` of a ray spawned from sphere `sph` is its far side:
+ * the origin is not outside the sphere (beyond the rounding of c, as in the native
+ * test) and the hit lies past the middle of the chord. */
+static int far_side_of_own_sphere(const ember_scene *s, unsigned sph,
+                                  const struct RTCFilterFunctionNArguments *args, unsigned i) {
+  const float *c = s->spheres + 4 * (size_t)sph;
+  unsigned n = args->N;
+  float f[3], d[3];
+  for (int k = 0; k < 3; k++) {
+    f[k] = EMBER_RAYN(args->ray, k, n, i) - c[k];
+    d[k] = EMBER_RAYN(args->ray, 4 + k, n, i);
+  }
+  float ff = f[0] * f[0] + f[1] * f[1] + f[2] * f[2];
+  float r2 = c[3] * c[3];
+  /* gamma(8) of ember's native sphere test. */
+  const float g8 = 8.0f * (FLT_EPSILON * 0.5f) / (1.0f - 8.0f * (FLT_EPSILON * 0.5f));
+  if (ff - r2 > g8 * (ff + r2)) return 0;
+  float a = d[0] * d[0] + d[1] * d[1] + d[2] * d[2];
+  float b = f[0] * d[0] + f[1] * d[1] + f[2] * d[2];
+  return b < 0.0f && EMBER_RAYN(args->ray, 8, n, i) * a >= -b;
+}
+
+/* Rejects hits on the primitive a ray was spawned from (see ember_ray.skip). During
+ * the filter the ray's tfar holds the candidate hit's distance. */
+static void skip_filter(const struct RTCFilterFunctionNArguments *args) {
+  const skip_context *sc = (const skip_context *)args->context;
+  for (unsigned i = 0; i < args->N; i++) {
+    if (args->valid[i] != -1) continue;
+    unsigned geom = EMBER_HITN_GEOM(args->hit, args->N, i);
+    unsigned prim = EMBER_HITN_PRIM(args->hit, args->N, i);
+    if (geom == EMBER_TRI_GEOM_ID) {
+      if (prim == sc->skip) args->valid[i] = 0;
+    } else if (sc->scene->ntri + prim == sc->skip &&
+               !far_side_of_own_sphere(sc->scene, prim, args, i)) {
+      args->valid[i] = 0;
+    }
+  }
 }
 
 /* Embree fills a hit from its ray and hit records: shared by single rays and packets. */
@@ -286,14 +368,21 @@ int ember_intersect1(const ember_scene *s, const ember_ray *ray, ember_hit *hit)
   rhp->hit.geomID = RTC_INVALID_GEOMETRY_ID;
   rhp->hit.primID = RTC_INVALID_GEOMETRY_ID;
   rhp->hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
+  skip_context sc;
+  sc.scene = s;
+  sc.skip = ray->skip;
+  int filtered = ray->skip != EMBER_NO_PRIM;
 #if RTC_VERSION_MAJOR >= 4
+  rtcInitRayQueryContext(&sc.ctx);
   struct RTCIntersectArguments args;
   rtcInitIntersectArguments(&args);
+  args.context = &sc.ctx;
+  args.filter = filtered ? skip_filter : NULL;
   rtcIntersect1(s->scene, rhp, &args);
 #else
-  struct RTCIntersectContext ctx;
-  rtcInitIntersectContext(&ctx);
-  rtcIntersect1(s->scene, &ctx, rhp);
+  rtcInitIntersectContext(&sc.ctx);
+  sc.ctx.filter = filtered ? skip_filter : NULL;
+  rtcIntersect1(s->scene, &sc.ctx, rhp);
 #endif
   return fill_hit(s, rhp->hit.geomID, rhp->hit.primID, rhp->ray.tfar, rhp->hit.Ng_x,
                   rhp->hit.Ng_y, rhp->hit.Ng_z, rhp->hit.u, rhp->hit.v, hit);
@@ -374,14 +463,21 @@ int ember_intersect_packet(const ember_scene *s, int width, const ember_ray *ray
 int ember_occluded1(const ember_scene *s, const ember_ray *ray) {
   struct RTCRay r;
   fill_ray(&r, ray);
+  skip_context sc;
+  sc.scene = s;
+  sc.skip = ray->skip;
+  int filtered = ray->skip != EMBER_NO_PRIM;
 #if RTC_VERSION_MAJOR >= 4
+  rtcInitRayQueryContext(&sc.ctx);
   struct RTCOccludedArguments args;
   rtcInitOccludedArguments(&args);
+  args.context = &sc.ctx;
+  args.filter = filtered ? skip_filter : NULL;
   rtcOccluded1(s->scene, &r, &args);
 #else
-  struct RTCIntersectContext ctx;
-  rtcInitIntersectContext(&ctx);
-  rtcOccluded1(s->scene, &ctx, &r);
+  rtcInitIntersectContext(&sc.ctx);
+  sc.ctx.filter = filtered ? skip_filter : NULL;
+  rtcOccluded1(s->scene, &sc.ctx, &r);
 #endif
   /* A hit is reported by tfar = -inf; no hit data is filled. */
   return r.tfar == -INFINITY;

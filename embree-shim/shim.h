@@ -31,6 +31,11 @@ typedef struct ember_ray {
   float tnear;
   float dir[3];
   float tfar;
+  /* The primitive the ray was spawned from (ember id), or EMBER_NO_PRIM. A ray never
+   * hits that triangle; it hits that sphere only at its far side, when its origin lies
+   * inside (the spawn offset moved it to the side the ray heads to), as the native
+   * BVH does. Applied by a filter function (single rays; packets take no skip). */
+  uint32_t skip;
 } ember_ray;
 
 typedef struct ember_hit {

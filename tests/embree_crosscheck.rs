@@ -4,8 +4,9 @@
 //! Exact agreement cannot be demanded of two float implementations where rounding
 //! decides: a crossing within rounding distance of an edge or vertex, a grazing or
 //! tangent ray, an origin on the surface, a t that f32 cannot fix to 1e-4 (close to
-//! the origin, at grazing incidence, on slivers), two primitives at the same t, and
-//! the native test's deliberate rejection of hits closer than its error bound δt.
+//! the origin, at grazing incidence, on slivers), two primitives at the same t, and a
+//! contact so close to the origin that the native test finds it only from farther back.
+//! Spawned rays name the primitive they leave (`Ray::skip`); both backends skip it.
 //! Each case is recognised in f64 from the geometry (`Why`), counted, and its rate
 //! bounded; every other disagreement fails the test and is printed with the full ray,
 //! float bits included, so it can be replayed. `EMBER_CROSSCHECK_ONLY=<scene>` runs
@@ -18,7 +19,7 @@ use ember::accel::{Accel, BvhBuilder, EmbreeQuality};
 use ember::bench::meshes;
 use ember::camera::Camera;
 use ember::geometry::triangle::intersect_triangle;
-use ember::geometry::{offset_ray_origin, Ray};
+use ember::geometry::Ray;
 use ember::sampling::{uniform_sphere, Sampler};
 use ember::scene::{PrimHit, Scene};
 use glam::{DVec3, Vec3};
@@ -81,7 +82,13 @@ impl BruteForce<'_> {
         let (o, d) = (dv(ray.o), dv(ray.d));
         let (tmin, tmax) = (ray.t_min as f64, ray.t_max as f64);
         let ntri = self.scene.triangles.len();
+        // A ray spawned from a primitive never meets that triangle again, and meets
+        // that sphere only at its far side, when it left inward (`Ray::skip`).
+        let from_here = prim as u32 == ray.skip;
         if prim < ntri {
+            if from_here {
+                return None;
+            }
             let p = self.scene.triangle_positions(prim).map(dv);
             let (t, b1, b2) = tri_f64(o, d, p)?;
             let inside = b1 >= 0.0 && b2 >= 0.0 && b1 + b2 <= 1.0;
@@ -94,7 +101,15 @@ impl BruteForce<'_> {
         } else {
             let s = &self.scene.spheres[prim - ntri];
             let (t0, t1) = sphere_f64(o, d, dv(s.centre), s.radius as f64)?;
-            let t = [t0, t1].into_iter().find(|&t| t >= tmin && t <= tmax)?;
+            // The spawn offset put the origin on the side the ray heads to.
+            let r = s.radius as f64;
+            let left_outward = (o - dv(s.centre)).length_squared() > r * r;
+            let roots = match (from_here, left_outward) {
+                (false, _) => vec![t0, t1],
+                (true, false) => vec![t1],
+                (true, true) => vec![],
+            };
+            let t = roots.into_iter().find(|&t| t >= tmin && t <= tmax)?;
             Some(PrimHit {
                 t: t as f32,
                 prim: prim as u32,
@@ -155,10 +170,12 @@ enum Why {
     /// the crossing distance and by |cos θ|, so near the origin or at grazing
     /// incidence no f32 code can meet 1e-4 relative.
     IllConditionedT,
-    /// The native test missed a triangle closer than its own conservative bound δt on
-    /// the error of t (pbrt-v4's rule, which keeps a ray from re-hitting the surface it
-    /// leaves). δt grows with the triangle's extent over its projected area, so for long
-    /// slivers (keenan/building) it reaches 1e-3: contacts that close are given up.
+    /// The native test missed a triangle very close to the origin that it finds from
+    /// an origin backed off along the ray. It once rejected hits within its error bound
+    /// δt (pbrt-v4's rule against re-hitting the surface a ray leaves; δt reached 1e-3
+    /// on keenan/building's slivers, ~100 such rays per 1M). Spawned rays now skip
+    /// their primitive instead; what remains (1 per 1M on keenan/building) is rounding
+    /// of the shear for an origin nearly in a sliver's plane.
     NativeErrorBound,
 }
 
@@ -482,7 +499,8 @@ fn point_in(scene: &Scene, rng: &mut Sampler) -> Vec3 {
 
 /// Ray `i` of the mix: camera rays, random rays inside and outside the bounds (some
 /// with non-unit directions), and bounce rays and shadow segments spawned with
-/// `offset_ray_origin` from where `spawn_from` hits a primary ray.
+/// `SurfaceInteraction::spawn_ray`/`spawn_segment` (offset origin, the primitive
+/// left as `skip`) from where `spawn_from` hits a primary ray.
 fn make_ray(scene: &Scene, cam: &Camera, spawn_from: &dyn Accel, seed: u64, i: usize) -> Ray {
     let mut rng = Sampler::new(seed, i as u64, 0);
     let centre = scene.bounds.centre();
@@ -514,12 +532,9 @@ fn make_ray(scene: &Scene, cam: &Camera, spawn_from: &dyn Accel, seed: u64, i: u
     };
     let si = scene.interaction(&first, &hit);
     if kind == 3 {
-        let w = uniform_sphere(rng.next_2d());
-        Ray::new(offset_ray_origin(si.p, si.p_error, si.ng, w), w)
+        si.spawn_ray(uniform_sphere(rng.next_2d()))
     } else {
-        let target = point_in(scene, &mut rng);
-        let o = offset_ray_origin(si.p, si.p_error, si.ng, target - si.p);
-        Ray::segment(o, target - o, 1.0)
+        si.spawn_segment(point_in(scene, &mut rng), 1.0)
     }
 }
 
@@ -564,9 +579,10 @@ fn embree_matches_f64_brute_force_on_generated_meshes() {
 
 // ---------------------------------------------------------------- native BVH
 
-/// Bound on the rate of excused differences: ~1.5× the worst scene observed, so a
-/// change that makes boundary cases common fails.
-const MAX_EXCUSED_RATE: f64 = 1e-3;
+/// Bound on the rate of excused differences: ~1.5× the worst scene observed (5.6e-4,
+/// the sphere cluster and keenan/building), so a change that makes boundary cases
+/// common fails.
+const MAX_EXCUSED_RATE: f64 = 8.5e-4;
 
 /// Rays per scene against the native BVH.
 const NATIVE_RAYS: usize = 1_000_000;
@@ -611,11 +627,12 @@ fn course_scenes() -> Vec<std::path::PathBuf> {
 
 /// Every course scene and larger generated meshes, 1M rays each, against both native
 /// builders. No unexplained difference is allowed; excused ones must stay below
-/// `MAX_EXCUSED_RATE` per comparison in every scene. Observed per 1M rays and builder:
-/// meshes and Cornell boxes 5-30 (mostly ill-conditioned t of bounce rays), Cornell
-/// boxes with spheres ~100, the degenerate soup ~110, the sphere cluster ~560 (bounce
-/// rays leaving spheres at grazing angles), keenan/building ~660 (slivers of aspect
-/// 5000, whose f32 planes are uncertain by κ·ε, and the native δt rule).
+/// `MAX_EXCUSED_RATE` per comparison in every scene. Observed per 1M rays and builder
+/// (Embree 3.13.5), nearly all ill-conditioned t of close contacts: meshes and Cornell
+/// boxes 6-29, Cornell boxes with spheres 99, the degenerate soup 105, the sphere
+/// cluster 559 (Embree's sphere test is itself 8e-4 off the f64 reference there),
+/// keenan/building 557 (slivers of aspect 5000, whose f32 planes are uncertain by κ·ε;
+/// 660 while the native test still rejected hits within δt).
 #[test]
 fn embree_matches_native_bvh_on_course_and_generated_scenes() {
     let mut scenes: Vec<(String, Scene)> = course_scenes()

@@ -212,11 +212,22 @@ fn case5_scaled_and_translated_scenes_render_the_same_image() {
 #[test]
 fn case6_no_holes_at_edges_vertices_and_grazing_angles_no_nan_from_degenerates() {
     let c = robust::grid(&budget(160, 120, 4)).unwrap();
+    eprintln!(
+        "case 6: {} of {} rays missed at 3e-4..0.1 rad, {} of {} at 1e-5..1e-4 rad; max |y| {:e}, max rel dt {:e}",
+        c.holes, c.rays, c.extreme_holes, c.extreme_rays, c.max_abs_y, c.max_rel_t
+    );
     assert!(c.rays > 10_000);
     assert_eq!(
         c.holes, 0,
         "{} of {} rays through vertices/edges slipped through the grid",
         c.holes, c.rays
+    );
+    // Elevations 1e-5, 3e-5 and 1e-4 rad: no hit is given up at grazing angles.
+    assert!(c.extreme_rays > 2000);
+    assert_eq!(
+        c.extreme_holes, 0,
+        "{} of {} rays at 1e-5..1e-4 rad missed the grid",
+        c.extreme_holes, c.extreme_rays
     );
     assert!(
         c.max_abs_y < 1e-5 && c.max_rel_t < 1e-5,

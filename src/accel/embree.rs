@@ -336,6 +336,7 @@ fn to_ffi(ray: &Ray) -> ffi::ember_ray {
         tnear: ray.t_min,
         dir: ray.d.to_array(),
         tfar: ray.t_max,
+        skip: ray.skip,
     }
 }
 

@@ -2,7 +2,7 @@
 //! hittable primitives of a scene, in an order chosen by the structure, with the
 //! triangle corners copied next to each other so tests never chase scene indices.
 
-use crate::geometry::sphere::{intersect_sphere, sphere_is_hittable};
+use crate::geometry::sphere::{intersect_sphere, intersect_sphere_leaving, sphere_is_hittable};
 use crate::geometry::triangle::{triangle_is_hittable, PackedTriangle, Triangle4, TriangleRay};
 use crate::geometry::{Aabb, Ray};
 use crate::scene::{PrimHit, PrimId, Scene};
@@ -82,6 +82,9 @@ impl PrimStore {
         t_max: f32,
     ) -> Option<PrimHit> {
         if prim < self.spheres.num_triangles {
+            if prim == r.ray.skip {
+                return None;
+            }
             let h = tri.intersect(&r.tri, t_max)?;
             Some(PrimHit {
                 t: h.t,
@@ -125,11 +128,17 @@ impl SphereStore {
         self.spheres.capacity() * std::mem::size_of::<(Vec3, f32)>()
     }
 
+    /// Sphere `prim` on `ray`; a ray spawned from it (its `skip`) can only reach
+    /// its far side.
     #[inline(never)]
     fn intersect(&self, prim: PrimId, ray: &Ray, t_max: f32) -> Option<PrimHit> {
         let (centre, radius) = self.spheres[(prim - self.num_triangles) as usize];
         let ray = Ray { t_max, ..*ray };
-        let t = intersect_sphere(&ray, centre, radius)?;
+        let t = if prim == ray.skip {
+            intersect_sphere_leaving(&ray, centre, radius)?
+        } else {
+            intersect_sphere(&ray, centre, radius)?
+        };
         Some(PrimHit {
             t,
             prim,
@@ -172,7 +181,7 @@ impl TriBlock {
         r: &PrimRay,
         mut t_max: f32,
     ) -> Option<PrimHit> {
-        let h = self.tris.intersect(&r.tri, t_max, self.tri_lanes);
+        let h = self.tris.intersect(&r.tri, t_max, self.tri_lanes(r));
         let mut best = None;
         if self.sphere_lanes == 0 {
             let mut mask = h.mask;
@@ -203,7 +212,7 @@ impl TriBlock {
     /// Some hit with `t ≤ t_max`.
     #[inline(always)]
     pub fn intersect_any(&self, spheres: &SphereStore, r: &PrimRay, t_max: f32) -> Option<PrimHit> {
-        let h = self.tris.intersect(&r.tri, t_max, self.tri_lanes);
+        let h = self.tris.intersect(&r.tri, t_max, self.tri_lanes(r));
         if h.mask != 0 {
             return Some(self.hit(&h, h.mask.trailing_zeros() as usize));
         }
@@ -216,6 +225,14 @@ impl TriBlock {
             }
         }
         None
+    }
+
+    /// The triangle lanes to test: all but the triangle the ray left (`skip`).
+    #[inline(always)]
+    fn tri_lanes(&self, r: &PrimRay) -> u32 {
+        let skip = r.ray.skip;
+        let same = |lane: usize| u32::from(self.ids[lane] == skip) << lane;
+        self.tri_lanes & !(same(0) | same(1) | same(2) | same(3))
     }
 
     #[inline(always)]

@@ -6,7 +6,7 @@
 use super::median;
 use crate::accel::{Accel, AccelBuilder, AccelError, AccelKind, BvhBuilder, BvhStats};
 use crate::camera::Camera;
-use crate::geometry::{offset_ray_origin, Ray};
+use crate::geometry::Ray;
 use crate::sampling::{uniform_sphere, Sampler};
 use crate::scene::Scene;
 use glam::{Vec2, Vec3};
@@ -40,14 +40,12 @@ pub(crate) fn make_rays(scene: &Scene, width: u32, height: u32, rays: usize, see
     let shadow = incoherent
         .iter()
         .map(|r| {
-            let origin = match reference.intersect(r) {
-                Some(h) => {
-                    let si = scene.interaction(r, &h);
-                    offset_ray_origin(si.p, si.p_error, si.ng, -r.d)
-                }
-                None => r.o,
-            };
-            Ray::segment(origin, point_in_bounds(scene, &mut rng) - origin, 1.0)
+            let target = point_in_bounds(scene, &mut rng);
+            match reference.intersect(r) {
+                // Spawned like a render's shadow ray: off the surface, skipping it.
+                Some(h) => scene.interaction(r, &h).spawn_segment(target, 1.0),
+                None => Ray::segment(r.o, target - r.o, 1.0),
+            }
         })
         .collect();
     RaySets {

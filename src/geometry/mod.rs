@@ -8,4 +8,4 @@ pub mod triangle;
 
 pub use aabb::Aabb;
 pub use frame::Frame;
-pub use ray::{offset_ray_origin, Ray};
+pub use ray::{offset_ray_origin, Ray, NO_PRIM};

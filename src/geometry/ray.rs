@@ -4,13 +4,24 @@ use glam::Vec3;
 
 /// A ray `o + t·d` restricted to `t ∈ [t_min, t_max]`. `d` need not be unit length
 /// (shadow rays use `d = p_light − p` with `t_max < 1`).
+///
+/// `skip` names the primitive the ray was spawned from (a scene primitive id), or
+/// [`NO_PRIM`]. It is how rays leaving a surface avoid re-hitting it, instead of
+/// rejecting every hit closer than a rounding bound (which also drops real hits
+/// at grazing angles): a flat triangle cannot meet a ray that leaves it, so the
+/// triangle `skip` is never hit; a sphere can, but only on its far side, so the
+/// sphere `skip` is hit only at the far root of a ray heading inward.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Ray {
     pub o: Vec3,
     pub d: Vec3,
     pub t_min: f32,
     pub t_max: f32,
+    pub skip: u32,
 }
+
+/// `Ray::skip` of a ray that left no surface (camera rays, test rays).
+pub const NO_PRIM: u32 = u32::MAX;
 
 impl Ray {
     pub fn new(o: Vec3, d: Vec3) -> Self {
@@ -19,6 +30,7 @@ impl Ray {
             d,
             t_min: 0.0,
             t_max: f32::INFINITY,
+            skip: NO_PRIM,
         }
     }
 
@@ -28,6 +40,7 @@ impl Ray {
             d,
             t_min: 0.0,
             t_max,
+            skip: NO_PRIM,
         }
     }
 
@@ -41,6 +54,8 @@ impl Ray {
 /// the floating-point error of `p` (`p_error`, a conservative per-axis bound) cannot
 /// put the new origin behind the surface (pbrt-v4 `OffsetRayOrigin`). The offset
 /// scales with the magnitudes that produced `p`, so scenes at 1e-3 or 1e4 behave alike.
+/// Rays leaving a surface should also skip its primitive: spawn them with
+/// `SurfaceInteraction::spawn_ray` / `spawn_segment`, which do both.
 pub fn offset_ray_origin(p: Vec3, p_error: Vec3, ng: Vec3, w: Vec3) -> Vec3 {
     let d = ng.abs().dot(p_error);
     let mut offset = d * ng;

@@ -22,6 +22,11 @@ pub fn sphere_is_hittable(centre: Vec3, radius: f32) -> bool {
 
 /// Nearest `t ∈ [t_min, t_max]`, `t > 0`, where `ray` meets the sphere's surface.
 pub fn intersect_sphere(ray: &Ray, centre: Vec3, radius: f32) -> Option<f32> {
+    intersect(ray, centre, radius, false)
+}
+
+#[inline(always)]
+fn intersect(ray: &Ray, centre: Vec3, radius: f32, leaving: bool) -> Option<f32> {
     if !sphere_is_hittable(centre, radius) {
         return None;
     }
@@ -45,8 +50,8 @@ pub fn intersect_sphere(ray: &Ray, centre: Vec3, radius: f32) -> Option<f32> {
         return None;
     }
     let outside = c > 0.0;
-    if outside && b >= 0.0 {
-        // Outside and heading away: both roots are behind.
+    if outside && (leaving || b >= 0.0) {
+        // Outside and heading away, both roots behind; or left outward.
         return None;
     }
     let f_perp = f - (b / a) * d;
@@ -62,6 +67,17 @@ pub fn intersect_sphere(ray: &Ray, centre: Vec3, radius: f32) -> Option<f32> {
     }
     // From inside only the far root lies ahead.
     accept(far).then_some(far)
+}
+
+/// The hit of a ray spawned from this sphere's own surface (the sphere is the
+/// ray's `skip`). `offset_ray_origin` put its origin strictly on the side of the
+/// true surface the ray heads to: an origin found outside (beyond the rounding of
+/// `c`) left outward, and a convex sphere is never met again; otherwise the ray
+/// heads inward and [`intersect_sphere`] gives the far side. The plain test cannot
+/// tell: far from the world origin a grazing outward ray may clip a sliver of the
+/// sphere near its offset origin, a real crossing of the f32 sphere but a self-hit.
+pub fn intersect_sphere_leaving(ray: &Ray, centre: Vec3, radius: f32) -> Option<f32> {
+    intersect(ray, centre, radius, true)
 }
 
 #[cfg(test)]
@@ -103,6 +119,38 @@ mod tests {
         // Grazing ray at distance 0.999 from the centre still hits.
         let g = Ray::new(Vec3::new(0.999, 0.0, -1e4), Vec3::Z);
         assert!(intersect_sphere(&g, Vec3::ZERO, 1.0).is_some());
+    }
+
+    /// Rays spawned from the surface (offset as the integrators do) and treated as
+    /// leaving it: outward never a hit, inward the far side, even at grazing angles
+    /// and far from the origin, where the plain test's on-surface band is too narrow.
+    #[test]
+    fn rays_leaving_the_surface_reach_only_the_far_side() {
+        let mut rng = crate::sampling::Sampler::from_seed(3);
+        for (centre, radius) in [(Vec3::ZERO, 1.0), (Vec3::splat(1e4), 0.5)] {
+            for _ in 0..20000 {
+                let n = crate::sampling::uniform_sphere(rng.next_2d());
+                let p = centre + radius * n;
+                let p_error = gamma(5) * (centre.abs() + Vec3::splat(radius)) + gamma(5) * p.abs();
+                let mut w = crate::sampling::uniform_sphere(rng.next_2d());
+                if rng.next_f32() < 0.3 {
+                    // Grazing: within 1e-3 rad of the tangent plane.
+                    w = (w - w.dot(n) * n).normalize() + n * (rng.next_f32() - 0.5) * 2e-3;
+                }
+                let o = super::super::offset_ray_origin(p, p_error, n, w);
+                let t = intersect_sphere_leaving(&Ray::new(o, w), centre, radius);
+                let cos = w.normalize().dot(n);
+                if cos > 0.0 {
+                    assert_eq!(t, None, "outward from {p} along {w}");
+                } else if cos < -1e-3 {
+                    let chord = 2.0 * radius * -cos / w.length();
+                    let t = t.expect("inward ray must reach the far side");
+                    // Moving the origin δ along the normal moves the far side by ≤ δ/|cos|.
+                    let slack = 1e-3 * radius + (o - p).length() / -cos;
+                    assert!((t - chord).abs() <= slack, "{t} vs chord {chord}");
+                }
+            }
+        }
     }
 
     /// Points computed on a sphere near the origin (not offset) are within

@@ -12,7 +12,6 @@
 //! [`TriangleRay`], built once per ray; corners live transposed in
 //! [`PackedTriangle`] so that one SIMD lane handles one corner.
 
-use super::ray::gamma;
 use super::Ray;
 use glam::{Vec3, Vec4, Vec4Swizzles};
 
@@ -38,7 +37,9 @@ pub struct TriangleRay {
     sx: Vec4,
     sy: Vec4,
     sz: Vec4,
-    pub t_min: f32,
+    /// Lowest accepted `t`: `t_min`, but at least the smallest normal float, so a
+    /// hit at `t = 0` (the origin on the surface) never counts, as in Embree.
+    pub t_lo: f32,
 }
 
 impl TriangleRay {
@@ -69,7 +70,7 @@ impl TriangleRay {
             sx: Vec4::splat(-d[kx] / d[kz]),
             sy: Vec4::splat(-d[ky] / d[kz]),
             sz: Vec4::splat(1.0 / d[kz]),
-            t_min: ray.t_min,
+            t_lo: ray.t_min.max(f32::MIN_POSITIVE),
         }
     }
 }
@@ -103,11 +104,12 @@ impl PackedTriangle {
         ]
     }
 
-    /// The watertight test for `t ∈ [ray.t_min, t_max]`; hits closer than the
-    /// triangle's own rounding error (`t ≤ δt`, pbrt's conservative bound) are
-    /// rejected, so a ray spawned from this triangle by `offset_ray_origin` never
-    /// finds it again. Degenerate triangles must be filtered out beforehand
-    /// (see [`triangle_is_hittable`]).
+    /// The watertight test for `t ∈ [ray.t_min, t_max]`, `t > 0`. No hit is
+    /// rejected for lying within the rounding error of `t` (pbrt-v4's `t ≤ δt`):
+    /// that bound grows like 1/det and rejected real hits at grazing angles. Rays
+    /// spawned from a triangle skip it instead (`Ray::skip`, applied by the
+    /// callers). Degenerate triangles must be filtered out beforehand (see
+    /// [`triangle_is_hittable`]).
     #[inline(always)]
     pub fn intersect(&self, ray: &TriangleRay, t_max: f32) -> Option<TriangleHit> {
         let xk = self.rows[ray.kx] - ray.ox;
@@ -141,10 +143,7 @@ impl PackedTriangle {
         let inv_det = 1.0 / det;
         let t = t_scaled * inv_det;
         // Written so that NaN (a zero direction) fails.
-        if !(t >= ray.t_min && t <= t_max) {
-            return None;
-        }
-        if t <= conservative_t_bound(xt, yt, zt, e, inv_det) {
+        if !(t >= ray.t_lo && t <= t_max) {
             return None;
         }
         Some(TriangleHit {
@@ -235,12 +234,8 @@ impl Triangle4 {
             let t_scaled = e0 * z0 + e1 * z1 + e2 * z2;
             let inv_det = Vec4::ONE / det;
             let t = t_scaled * inv_det;
-            let in_range = t.cmpge(Vec4::splat(ray.t_min)) & t.cmple(Vec4::splat(t_max));
-            let max3 = |a: Vec4, b: Vec4, c: Vec4| a.abs().max(b.abs()).max(c.abs());
-            let (max_xt, max_yt, max_zt) = (max3(x0, x1, x2), max3(y0, y1, y2), max3(z0, z1, z2));
-            let max_e = max3(e0, e1, e2);
-            let bound = conservative_t_bound4(max_xt, max_yt, max_zt, max_e, inv_det);
-            let ok = in_range & det.cmpne(zero) & t.cmpgt(bound);
+            let in_range = t.cmpge(Vec4::splat(ray.t_lo)) & t.cmple(Vec4::splat(t_max));
+            let ok = in_range & det.cmpne(zero);
             out.mask = ok.bitmask() & lanes & !mixed & !rounded;
             out.t = t.to_array();
             out.b1 = (e1 * inv_det).to_array();
@@ -270,23 +265,6 @@ impl Triangle4 {
     }
 }
 
-/// [`conservative_t_bound`] on four lanes, with the same operation order.
-#[inline(always)]
-fn conservative_t_bound4(
-    max_xt: Vec4,
-    max_yt: Vec4,
-    max_zt: Vec4,
-    max_e: Vec4,
-    inv_det: Vec4,
-) -> Vec4 {
-    let s = Vec4::splat;
-    let delta_z = s(gamma(3)) * max_zt;
-    let delta_x = s(gamma(5)) * (max_xt + max_zt);
-    let delta_y = s(gamma(5)) * (max_yt + max_zt);
-    let delta_e = s(2.0) * (s(gamma(2)) * max_xt * max_yt + delta_y * max_xt + delta_x * max_yt);
-    s(3.0) * (s(gamma(3)) * max_e * max_zt + delta_e * max_zt + delta_z * max_e) * inv_det.abs()
-}
-
 /// Edge functions in `f64`, where products of two floats are exact: used when an
 /// f32 edge function rounded to zero, i.e. the ray passes (nearly) through an edge.
 #[cold]
@@ -296,25 +274,6 @@ fn exact_edge_functions(xt: Vec4, yt: Vec4) -> Vec4 {
     let y = yt.to_array().map(f64::from);
     let e = |i: usize, j: usize| (x[i] * y[j] - y[i] * x[j]) as f32;
     Vec4::new(e(1, 2), e(2, 0), e(0, 1), 0.0)
-}
-
-/// pbrt-v4's bound `δt` on the rounding error of `t`: a hit at `t ≤ δt` may lie
-/// behind the origin.
-#[inline(always)]
-fn conservative_t_bound(xt: Vec4, yt: Vec4, zt: Vec4, e: Vec4, inv_det: f32) -> f32 {
-    let max3 = |v: Vec4| {
-        let a = v.abs();
-        a.x.max(a.y).max(a.z)
-    };
-    let max_zt = max3(zt);
-    let max_xt = max3(xt);
-    let max_yt = max3(yt);
-    let max_e = max3(e);
-    let delta_z = gamma(3) * max_zt;
-    let delta_x = gamma(5) * (max_xt + max_zt);
-    let delta_y = gamma(5) * (max_yt + max_zt);
-    let delta_e = 2.0 * (gamma(2) * max_xt * max_yt + delta_y * max_xt + delta_x * max_yt);
-    3.0 * (gamma(3) * max_e * max_zt + delta_e * max_zt + delta_z * max_e) * inv_det.abs()
 }
 
 /// Whether a triangle can ever be hit: finite corners and a non-zero area, the
@@ -380,6 +339,47 @@ mod tests {
         assert!(intersect_triangle(&through, a, b, a + 2.0 * (b - a)).is_none());
         let zero_dir = Ray::new(Vec3::new(0.25, 0.25, 2.0), Vec3::ZERO);
         assert!(intersect_triangle(&zero_dir, a, b, c).is_none());
+    }
+
+    /// Rays from far away at 1e-5..1e-3 rad to the plane, through corners, edge
+    /// midpoints and the interior: each one hits (pbrt's `t ≤ δt` rejection, once
+    /// applied here, dropped such hits because δt grows like 1/det).
+    #[test]
+    fn grazing_rays_from_afar_hit() {
+        let [a, b, c] = tri();
+        let targets = [a, b, c, 0.5 * (a + b), 0.5 * (b + c), (a + b + c) / 3.0];
+        for p in targets {
+            for elevation in [1e-5f32, 1e-4, 1e-3] {
+                for horiz in [Vec3::X, -Vec3::Y, Vec3::new(1.0, 1.0, 0.0).normalize()] {
+                    let d = (horiz * elevation.cos() - Vec3::Z * elevation.sin()).normalize();
+                    let o = p - 30.0 * d;
+                    let ray = Ray::new(o, d);
+                    // Targets on the boundary may round to either side; interior ones must hit.
+                    let hit = intersect_triangle(&ray, a, b, c);
+                    if p == (a + b + c) / 3.0 {
+                        let (t, ..) = hit.unwrap_or_else(|| panic!("{ray:?} missed"));
+                        assert!((t - 30.0).abs() < 1e-3, "{t}");
+                    }
+                }
+            }
+        }
+        // Through every corner and edge midpoint the two triangles of a square
+        // sharing the diagonal leave no gap.
+        let d2 = Vec3::new(1.0, 1.0, 0.0);
+        let quad = [[a, b, d2], [a, d2, c]];
+        for p in [0.5 * d2, 0.25 * d2, 0.75 * d2] {
+            for elevation in [1e-5f32, 1e-4] {
+                let d = (Vec3::new(1.0, -1.0, 0.0).normalize() * elevation.cos()
+                    - Vec3::Z * elevation.sin())
+                .normalize();
+                let ray = Ray::new(p - 30.0 * d, d);
+                assert!(
+                    quad.iter()
+                        .any(|[x, y, z]| intersect_triangle(&ray, *x, *y, *z).is_some()),
+                    "{ray:?} slipped through the diagonal"
+                );
+            }
+        }
     }
 
     #[test]

@@ -20,7 +20,7 @@ use crate::accel::Accel;
 use crate::camera::Camera;
 use crate::color::is_finite;
 use crate::film::Image;
-use crate::geometry::{offset_ray_origin, Frame, Ray};
+use crate::geometry::{Frame, Ray};
 use crate::materials::{specular, Material};
 use crate::render::{PixelRect, RenderJob, RenderOutput, RenderSettings, Shading};
 use crate::sampling::Sampler;
@@ -162,7 +162,7 @@ impl<'a> LightTracer<'a> {
             if !is_finite(beta) || beta == Color::ZERO {
                 break;
             }
-            ray = Ray::new(offset_ray_origin(si.p, si.p_error, si.ng, w_next), w_next);
+            ray = si.spawn_ray(w_next);
         }
         nonfinite
     }
@@ -198,8 +198,7 @@ impl<'a> LightTracer<'a> {
         if value == Color::ZERO {
             return 0;
         }
-        let o = offset_ray_origin(si.p, si.p_error, si.ng, c.to_eye);
-        if self.accel.occluded(&Ray::segment(o, c.origin - o, 1.0)) {
+        if self.accel.occluded(&si.spawn_segment(c.origin, 1.0)) {
             return 0;
         }
         splats.push((c.x, c.y, value));

@@ -7,7 +7,7 @@
 use super::{DirectStrategy, Roulette};
 use crate::accel::Accel;
 use crate::color::is_finite;
-use crate::geometry::{offset_ray_origin, Frame, Ray};
+use crate::geometry::{Frame, Ray};
 use crate::lights::Light;
 use crate::materials::Material;
 use crate::sampling::{power_heuristic, uniform_hemisphere, uniform_hemisphere_pdf, Sampler};
@@ -126,10 +126,7 @@ impl<'a> PathIntegrator<'a> {
                 bsdf_pdf: bs.pdf,
                 delta: bs.delta,
             });
-            ray = Ray::new(
-                offset_ray_origin(si.p, si.p_error, si.ng, wi_world),
-                wi_world,
-            );
+            ray = si.spawn_ray(wi_world);
         }
         l
     }
@@ -256,11 +253,10 @@ impl<'a> PathIntegrator<'a> {
     }
 
     fn shadowed(&self, si: &SurfaceInteraction, ls: &crate::lights::LightSample) -> bool {
-        let o = offset_ray_origin(si.p, si.p_error, si.ng, ls.wi);
         let ray = if ls.dist.is_finite() {
-            Ray::segment(o, ls.p_light - o, 1.0 - SHADOW_EPSILON)
+            si.spawn_segment(ls.p_light, 1.0 - SHADOW_EPSILON)
         } else {
-            Ray::new(o, ls.wi)
+            si.spawn_ray(ls.wi)
         };
         self.accel.occluded(&ray)
     }
@@ -287,10 +283,7 @@ impl<'a> PathIntegrator<'a> {
             {
                 continue;
             }
-            let ray = Ray::new(
-                offset_ray_origin(si.p, si.p_error, si.ng, wi_world),
-                wi_world,
-            );
+            let ray = si.spawn_ray(wi_world);
             let le = match self.accel.intersect(&ray) {
                 Some(h) => self
                     .scene

@@ -3,7 +3,7 @@
 
 pub mod collada;
 
-use crate::geometry::{ray::gamma, Aabb, Ray};
+use crate::geometry::{offset_ray_origin, ray::gamma, Aabb, Ray};
 use crate::lights::{AreaLight, Light};
 use crate::materials::Material;
 use crate::Color;
@@ -104,6 +104,30 @@ pub struct SurfaceInteraction {
     pub prim: PrimId,
     pub material: u32,
     pub light: u32,
+}
+
+impl SurfaceInteraction {
+    /// A ray leaving this point in direction `w`: its origin moved off the surface
+    /// to `w`'s side by the point's error bound, and this primitive named as the
+    /// one to skip (see [`Ray::skip`]), so the ray neither starts behind the surface
+    /// nor finds it again at `t ≈ 0`.
+    pub fn spawn_ray(&self, w: Vec3) -> Ray {
+        Ray {
+            skip: self.prim,
+            ..Ray::new(offset_ray_origin(self.p, self.p_error, self.ng, w), w)
+        }
+    }
+
+    /// The segment from this point towards `target`, `o + t·(target − o)` for
+    /// `t ∈ [0, t_end]` (`t_end` just below 1 leaves out a surface at `target`),
+    /// spawned like [`spawn_ray`](Self::spawn_ray).
+    pub fn spawn_segment(&self, target: Vec3, t_end: f32) -> Ray {
+        let o = offset_ray_origin(self.p, self.p_error, self.ng, target - self.p);
+        Ray {
+            skip: self.prim,
+            ..Ray::segment(o, target - o, t_end)
+        }
+    }
 }
 
 impl Scene {

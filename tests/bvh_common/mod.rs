@@ -4,7 +4,7 @@
 #![allow(dead_code)]
 
 use ember::accel::{Accel, BruteForce, Bvh, BvhBuilder};
-use ember::geometry::sphere::intersect_sphere;
+use ember::geometry::sphere::{intersect_sphere, intersect_sphere_leaving};
 use ember::geometry::triangle::intersect_triangle;
 use ember::geometry::{Aabb, Ray};
 use ember::sampling::{uniform_sphere, Sampler};
@@ -15,7 +15,7 @@ use glam::{DVec3, Vec3};
 /// at the very end of the ray's interval that the other does not see.
 ///
 /// The BVH's box test is conservative against the exact hit point, but a
-/// reported `t` carries the triangle test's own rounding (pbrt's δt), which
+/// reported `t` carries the triangle test's own rounding (pbrt's bound δt), which
 /// scales with the coordinates involved (origin, corners), not with `t`: a hit
 /// at `t ≈ 1e-4` on a unit-sized triangle is only good to about 1e-4
 /// relative. Two primitives hit within that error of each other (shared edges
@@ -88,14 +88,27 @@ pub fn scene_from(positions: Vec<Vec3>, tris: Vec<[u32; 3]>, spheres: Vec<(Vec3,
 
 /// The primitive tested on its own.
 pub fn prim_alone(scene: &Scene, ray: &Ray, prim: u32) -> Option<f32> {
+    prim_hit(scene, ray, prim).map(|h| h.0)
+}
+
+/// `(t, b1, b2)` of the primitive tested on its own, honouring `ray.skip` as the
+/// accelerators do: the triangle a ray left is never hit, the sphere it left only
+/// at its far side.
+pub fn prim_hit(scene: &Scene, ray: &Ray, prim: u32) -> Option<(f32, f32, f32)> {
     let i = prim as usize;
     let ntri = scene.triangles.len();
+    let from_here = prim == ray.skip;
     if i < ntri {
         let [p0, p1, p2] = scene.triangle_positions(i);
-        intersect_triangle(ray, p0, p1, p2).map(|h| h.0)
+        (!from_here).then(|| intersect_triangle(ray, p0, p1, p2))?
     } else {
         let s = &scene.spheres[i - ntri];
-        intersect_sphere(ray, s.centre, s.radius)
+        let t = if from_here {
+            intersect_sphere_leaving(ray, s.centre, s.radius)
+        } else {
+            intersect_sphere(ray, s.centre, s.radius)
+        };
+        Some((t?, 0.0, 0.0))
     }
 }
 
@@ -412,14 +425,7 @@ impl<'a> SegmentOracle<'a> {
     }
 
     fn test(&self, i: usize, ray: &Ray) -> Option<PrimHit> {
-        let ntri = self.scene.triangles.len();
-        let (t, b1, b2) = if i < ntri {
-            let [a, b, c] = self.scene.triangle_positions(i);
-            intersect_triangle(ray, a, b, c)?
-        } else {
-            let s = &self.scene.spheres[i - ntri];
-            (intersect_sphere(ray, s.centre, s.radius)?, 0.0, 0.0)
-        };
+        let (t, b1, b2) = prim_hit(self.scene, ray, i as u32)?;
         Some(PrimHit {
             t,
             prim: i as u32,

@@ -10,7 +10,7 @@
 use super::node::BvhNode;
 use crate::geometry::Aabb;
 use crate::scene::PrimId;
-use glam::Vec3;
+use glam::Vec3A;
 use rayon::prelude::*;
 
 /// Subtrees with more primitives than this are built in parallel.
@@ -44,12 +44,6 @@ impl BuildPrim {
         BuildPrim { bounds, id }
     }
 
-    /// The centre of the bounds (the same value as `Aabb::centre`).
-    #[inline(always)]
-    pub fn centroid(&self) -> Vec3 {
-        self.bounds.centre()
-    }
-
     /// One coordinate of the centroid, without computing the other two.
     #[inline(always)]
     pub fn centroid_on(&self, axis: usize) -> f32 {
@@ -57,12 +51,84 @@ impl BuildPrim {
     }
 }
 
+/// The bounds of a node's primitives and of their centroids: what a split rule
+/// needs from a node, handed down by the parent's split when it has them.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub(crate) struct NodeBounds {
+    pub bounds: Aabb,
+    pub centroids: Aabb,
+}
+
+impl NodeBounds {
+    pub fn union(&self, o: &NodeBounds) -> NodeBounds {
+        NodeBounds {
+            bounds: self.bounds.union(&o.bounds),
+            centroids: self.centroids.union(&o.centroids),
+        }
+    }
+
+    /// Both bounds of `prims` in one pass (chunked in parallel for large inputs).
+    pub fn of(prims: &[BuildPrim]) -> NodeBounds {
+        let serial = |c: &[BuildPrim]| {
+            c.iter()
+                .fold(Accumulator::EMPTY, |mut b, p| {
+                    b.grow(p);
+                    b
+                })
+                .bounds()
+        };
+        reduce_chunks(prims, serial, |a, b| a.union(&b))
+    }
+}
+
+/// [`NodeBounds`] being gathered, in SIMD registers: the same min/max as
+/// `NodeBounds::grow` on finite input (all a build sees), and the centroid is
+/// `0.5·(min + max)` lane by lane, the same bits as `Aabb::centre` and
+/// `BuildPrim::centroid_on`.
+#[derive(Clone, Copy)]
+struct Accumulator {
+    lo: Vec3A,
+    hi: Vec3A,
+    c_lo: Vec3A,
+    c_hi: Vec3A,
+}
+
+impl Accumulator {
+    const EMPTY: Accumulator = Accumulator {
+        lo: Vec3A::INFINITY,
+        hi: Vec3A::NEG_INFINITY,
+        c_lo: Vec3A::INFINITY,
+        c_hi: Vec3A::NEG_INFINITY,
+    };
+
+    #[inline(always)]
+    fn grow(&mut self, p: &BuildPrim) {
+        let (lo, hi) = (Vec3A::from(p.bounds.min), Vec3A::from(p.bounds.max));
+        let c = (lo + hi) * 0.5;
+        self.lo = self.lo.min(lo);
+        self.hi = self.hi.max(hi);
+        self.c_lo = self.c_lo.min(c);
+        self.c_hi = self.c_hi.max(c);
+    }
+
+    fn bounds(&self) -> NodeBounds {
+        NodeBounds {
+            bounds: Aabb::new(self.lo.into(), self.hi.into()),
+            centroids: Aabb::new(self.c_lo.into(), self.c_hi.into()),
+        }
+    }
+}
+
 /// A split decision: the primitives are partitioned so that `[..mid]` goes to
 /// the first child, and `axis` is the split axis (for traversal order).
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+/// `children` are the two sides' bounds when the rule computed them while
+/// partitioning (else the skeleton computes them). Unions of boxes are exact,
+/// so either way they are the same bits.
+#[derive(Clone, Copy, Debug, PartialEq)]
 pub(crate) struct Split {
     pub axis: usize,
     pub mid: usize,
+    pub children: Option<[NodeBounds; 2]>,
 }
 
 /// How a builder splits a node.
@@ -73,14 +139,15 @@ pub(crate) trait SplitRule: Sync {
     /// Partitions `prims` and returns the split, or `None` for a leaf. A rule may
     /// also return `None` when it finds no split (e.g. all centroids equal); the
     /// skeleton then splits nodes above `max_leaf` in halves.
-    fn split(&self, prims: &mut [BuildPrim], bounds: &Aabb) -> Option<Split>;
+    fn split(&self, prims: &mut [BuildPrim], node: &NodeBounds) -> Option<Split>;
 }
 
 /// Builds the flat node array over `prims`, reordering them into leaf order.
 pub(crate) fn build_nodes<R: SplitRule>(rule: &R, prims: &mut [BuildPrim]) -> Vec<BvhNode> {
     let mut nodes = Vec::with_capacity(2 * prims.len() / rule.max_leaf().max(1) + 1);
     if !prims.is_empty() {
-        build_into(rule, prims, 0, 0, &mut nodes);
+        let root = NodeBounds::of(prims);
+        build_into(rule, prims, &root, 0, 0, &mut nodes);
     }
     nodes
 }
@@ -88,47 +155,49 @@ pub(crate) fn build_nodes<R: SplitRule>(rule: &R, prims: &mut [BuildPrim]) -> Ve
 fn build_into<R: SplitRule>(
     rule: &R,
     prims: &mut [BuildPrim],
+    node: &NodeBounds,
     first: u32,
     depth: u32,
     out: &mut Vec<BvhNode>,
 ) {
-    let bounds = reduce_chunks(
-        prims,
-        |c| c.iter().fold(Aabb::EMPTY, |b, p| b.union(&p.bounds)),
-        |a, b| a.union(&b),
-    );
-    let split = choose_split(rule, prims, &bounds, depth);
-    let Some(Split { axis, mid }) = split else {
-        out.push(BvhNode::leaf(&bounds, first, prims.len() as u32));
+    let split = choose_split(rule, prims, node, depth);
+    let Some(Split {
+        axis,
+        mid,
+        children,
+    }) = split
+    else {
+        out.push(BvhNode::leaf(&node.bounds, first, prims.len() as u32));
         return;
     };
     let me = out.len();
     out.push(BvhNode::default());
     let n = prims.len();
     let (left, right) = prims.split_at_mut(mid);
+    let [lb, rb] = children.unwrap_or_else(|| [NodeBounds::of(left), NodeBounds::of(right)]);
     let right_first = first + mid as u32;
     let second = if n > PARALLEL_THRESHOLD {
         let (l, r) = rayon::join(
-            || subtree(rule, left, first, depth + 1),
-            || subtree(rule, right, right_first, depth + 1),
+            || subtree(rule, left, &lb, first, depth + 1),
+            || subtree(rule, right, &rb, right_first, depth + 1),
         );
         append_shifted(out, l);
         let second = out.len();
         append_shifted(out, r);
         second
     } else {
-        build_into(rule, left, first, depth + 1, out);
+        build_into(rule, left, &lb, first, depth + 1, out);
         let second = out.len();
-        build_into(rule, right, right_first, depth + 1, out);
+        build_into(rule, right, &rb, right_first, depth + 1, out);
         second
     };
-    out[me] = BvhNode::inner(&bounds, second as u32, axis);
+    out[me] = BvhNode::inner(&node.bounds, second as u32, axis);
 }
 
 fn choose_split<R: SplitRule>(
     rule: &R,
     prims: &mut [BuildPrim],
-    bounds: &Aabb,
+    node: &NodeBounds,
     depth: u32,
 ) -> Option<Split> {
     let n = prims.len();
@@ -136,11 +205,11 @@ fn choose_split<R: SplitRule>(
         return None;
     }
     if depth >= MEDIAN_DEPTH && n > rule.max_leaf() {
-        return Some(median_split(prims));
+        return Some(median_split(prims, &node.centroids));
     }
-    match rule.split(prims, bounds) {
+    match rule.split(prims, node) {
         Some(s) if s.mid > 0 && s.mid < n => Some(s),
-        _ if n > rule.max_leaf() => Some(median_split(prims)),
+        _ if n > rule.max_leaf() => Some(median_split(prims, &node.centroids)),
         _ => None,
     }
 }
@@ -149,11 +218,12 @@ fn choose_split<R: SplitRule>(
 fn subtree<R: SplitRule>(
     rule: &R,
     prims: &mut [BuildPrim],
+    node: &NodeBounds,
     first: u32,
     depth: u32,
 ) -> Vec<BvhNode> {
-    let mut v = Vec::new();
-    build_into(rule, prims, first, depth, &mut v);
+    let mut v = Vec::with_capacity(prims.len() / 2);
+    build_into(rule, prims, node, first, depth, &mut v);
     v
 }
 
@@ -167,25 +237,20 @@ fn append_shifted(out: &mut Vec<BvhNode>, sub: Vec<BvhNode>) {
     }));
 }
 
-/// Object median along the longest centroid axis: always halves the node (also
-/// when all centroids coincide), which bounds the depth.
-pub(crate) fn median_split(prims: &mut [BuildPrim]) -> Split {
-    let axis = centroid_bounds(prims).max_axis();
+/// Object median along the longest axis of `centroids` (the centroid bounds of
+/// `prims`): always halves the node (also when all centroids coincide), which
+/// bounds the depth.
+pub(crate) fn median_split(prims: &mut [BuildPrim], centroids: &Aabb) -> Split {
+    let axis = centroids.max_axis();
     let mid = prims.len() / 2;
     prims.select_nth_unstable_by(mid, |a, b| {
         a.centroid_on(axis).total_cmp(&b.centroid_on(axis))
     });
-    Split { axis, mid }
-}
-
-pub(crate) fn centroid_bounds(prims: &[BuildPrim]) -> Aabb {
-    let serial = |c: &[BuildPrim]| {
-        c.iter().fold(Aabb::EMPTY, |mut b, p| {
-            b.grow(p.centroid());
-            b
-        })
-    };
-    reduce_chunks(prims, serial, |a, b| a.union(&b))
+    Split {
+        axis,
+        mid,
+        children: None,
+    }
 }
 
 /// `serial(prims)` for small inputs; for large ones `serial` of each chunk in
@@ -206,17 +271,24 @@ pub(crate) fn reduce_chunks<T: Send>(
 }
 
 /// Moves the primitives satisfying `left` to the front (deterministic, not
-/// stable) and returns how many there are.
-pub(crate) fn partition(prims: &mut [BuildPrim], left: impl Fn(&BuildPrim) -> bool) -> usize {
+/// stable); returns how many there are and the bounds of both sides, gathered on
+/// the way.
+pub(crate) fn partition_bounded(
+    prims: &mut [BuildPrim],
+    left: impl Fn(&BuildPrim) -> bool,
+) -> (usize, [NodeBounds; 2]) {
+    let mut sides = [Accumulator::EMPTY; 2];
     let mut i = 0;
     let mut j = prims.len();
     while i < j {
         if left(&prims[i]) {
+            sides[0].grow(&prims[i]);
             i += 1;
         } else {
             j -= 1;
+            sides[1].grow(&prims[i]);
             prims.swap(i, j);
         }
     }
-    i
+    (i, sides.map(|a| a.bounds()))
 }

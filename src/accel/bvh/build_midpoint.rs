@@ -1,7 +1,6 @@
 //! The course's split: the midpoint of the centroid bounds along their longest axis.
 
-use super::build::{centroid_bounds, median_split, partition, BuildPrim, Split, SplitRule};
-use crate::geometry::Aabb;
+use super::build::{median_split, partition_bounded, BuildPrim, NodeBounds, Split, SplitRule};
 
 #[derive(Clone, Copy, Debug)]
 pub(crate) struct MidpointBuilder {
@@ -20,11 +19,11 @@ impl SplitRule for MidpointBuilder {
         self.max_leaf
     }
 
-    fn split(&self, prims: &mut [BuildPrim], _bounds: &Aabb) -> Option<Split> {
+    fn split(&self, prims: &mut [BuildPrim], node: &NodeBounds) -> Option<Split> {
         if prims.len() <= self.max_leaf {
             return None;
         }
-        let cb = centroid_bounds(prims);
+        let cb = node.centroids;
         let axis = cb.max_axis();
         let extent = cb.max[axis] - cb.min[axis];
         if extent.is_nan() || extent <= 0.0 {
@@ -32,11 +31,15 @@ impl SplitRule for MidpointBuilder {
             return None;
         }
         let mid_value = 0.5 * (cb.min[axis] + cb.max[axis]);
-        let mid = partition(prims, |p| p.centroid_on(axis) < mid_value);
+        let (mid, children) = partition_bounded(prims, |p| p.centroid_on(axis) < mid_value);
         if mid == 0 || mid == prims.len() {
             // Bounds one float apart: the midpoint rounds onto an end.
-            return Some(median_split(prims));
+            return Some(median_split(prims, &cb));
         }
-        Some(Split { axis, mid })
+        Some(Split {
+            axis,
+            mid,
+            children: Some(children),
+        })
     }
 }

@@ -3,8 +3,9 @@
 //! boundaries is taken, or a leaf when that is cheaper still. Leaves are tested a
 //! block of four primitives at a time, so the cost counts blocks, not primitives.
 
-use super::build::{centroid_bounds, partition, reduce_chunks, BuildPrim, Split, SplitRule};
+use super::build::{partition_bounded, reduce_chunks, BuildPrim, NodeBounds, Split, SplitRule};
 use crate::geometry::Aabb;
+use glam::Vec3A;
 
 pub(crate) const BINS: usize = 32;
 
@@ -28,27 +29,33 @@ impl Default for SahBinnedBuilder {
     }
 }
 
+/// A bin's box in SIMD registers (`Vec3A`; the same min/max as `Aabb::union` on
+/// finite input, which is all a build sees) and its primitive count.
 #[derive(Clone, Copy)]
 struct Bin {
-    bounds: Aabb,
+    min: Vec3A,
+    max: Vec3A,
     count: u32,
 }
 
 impl Bin {
     const EMPTY: Bin = Bin {
-        bounds: Aabb::EMPTY,
+        min: Vec3A::splat(f32::INFINITY),
+        max: Vec3A::splat(f32::NEG_INFINITY),
         count: 0,
     };
 
+    #[inline(always)]
     fn union(&self, o: &Bin) -> Bin {
         Bin {
-            bounds: self.bounds.union(&o.bounds),
+            min: self.min.min(o.min),
+            max: self.max.max(o.max),
             count: self.count + o.count,
         }
     }
 
     fn area_blocks(&self) -> f32 {
-        self.bounds.surface_area() * blocks(self.count)
+        Aabb::new(self.min.into(), self.max.into()).surface_area() * blocks(self.count)
     }
 }
 
@@ -77,20 +84,23 @@ impl Binning {
     }
 }
 
-type Bins = [[Bin; BINS]; 3];
+/// The bins of all three axes, `N ≥ Binning::count` of them per axis (those past
+/// `count` stay empty): small nodes, which are most nodes, get small arrays, as
+/// clearing 3·32 bins would cost more than binning their few primitives.
+type Bins<const N: usize> = [[Bin; N]; 3];
 
 impl SplitRule for SahBinnedBuilder {
     fn max_leaf(&self) -> usize {
         self.max_leaf
     }
 
-    fn split(&self, prims: &mut [BuildPrim], bounds: &Aabb) -> Option<Split> {
+    fn split(&self, prims: &mut [BuildPrim], node: &NodeBounds) -> Option<Split> {
         let leaf_cost = INTERSECTION_COST * blocks(prims.len() as u32);
         if prims.len() <= 4 {
             // One block: no split can cost less than the leaf's single block test.
             return None;
         }
-        let cb = centroid_bounds(prims);
+        let (bounds, cb) = (&node.bounds, node.centroids);
         let extent = cb.max - cb.min;
         let count = (prims.len() / 2).clamp(8, BINS);
         let binning = Binning {
@@ -104,43 +114,69 @@ impl SplitRule for SahBinnedBuilder {
             }),
             count,
         };
-        // One pass over the primitives fills the bins of all three axes.
-        let bins = reduce_chunks(prims, |c| fill_bins(c, binning), merge_bins);
-        let mut best: Option<(f32, usize, usize)> = None;
-        for (axis, axis_bins) in bins.iter().enumerate() {
-            if binning.scale[axis] == 0.0 {
-                continue;
-            }
-            if let Some((cost, boundary)) = best_boundary(&axis_bins[..count]) {
-                if best.is_none_or(|(c, _, _)| cost < c) {
-                    best = Some((cost, axis, boundary));
-                }
-            }
-        }
-        let (cost, axis, boundary) = best?;
+        let (cost, axis, boundary) = match count {
+            ..=8 => best_split::<8>(prims, binning),
+            9..=16 => best_split::<16>(prims, binning),
+            _ => best_split::<BINS>(prims, binning),
+        }?;
         // Relative to the parent's area; the traversal step into this node is paid either way.
         let split_cost = TRAVERSAL_COST + cost / bounds.surface_area();
         if prims.len() <= self.max_leaf && leaf_cost <= split_cost {
             return None;
         }
-        let mid = partition(prims, |p| binning.bin(p, axis) < boundary);
-        Some(Split { axis, mid })
+        let (mid, children) = partition_bounded(prims, |p| binning.bin(p, axis) < boundary);
+        Some(Split {
+            axis,
+            mid,
+            children: Some(children),
+        })
     }
 }
 
-fn fill_bins(prims: &[BuildPrim], binning: Binning) -> Bins {
-    let mut bins = [[Bin::EMPTY; BINS]; 3];
+/// The cheapest bin boundary over the three axes, as `(cost, axis, boundary)`.
+fn best_split<const N: usize>(
+    prims: &[BuildPrim],
+    binning: Binning,
+) -> Option<(f32, usize, usize)> {
+    // One pass over the primitives fills the bins of all three axes.
+    let bins = reduce_chunks(prims, |c| fill_bins::<N>(c, binning), merge_bins);
+    let mut best: Option<(f32, usize, usize)> = None;
+    for (axis, axis_bins) in bins.iter().enumerate() {
+        if binning.scale[axis] == 0.0 {
+            continue;
+        }
+        if let Some((cost, boundary)) = best_boundary(&axis_bins[..binning.count]) {
+            if best.is_none_or(|(c, _, _)| cost < c) {
+                best = Some((cost, axis, boundary));
+            }
+        }
+    }
+    best
+}
+
+/// Bins every primitive on all three axes. The bin indices are computed for the
+/// three axes at once with the same operations as [`Binning::bin`] (lane by lane,
+/// the same bits), so partitioning sees the same bins.
+fn fill_bins<const N: usize>(prims: &[BuildPrim], binning: Binning) -> Bins<N> {
+    let mut bins = [[Bin::EMPTY; N]; 3];
+    let origin = Vec3A::from_array(binning.min);
+    let scale = Vec3A::from_array(binning.scale);
+    let last = binning.count - 1;
     for p in prims {
+        let (lo, hi) = (Vec3A::from(p.bounds.min), Vec3A::from(p.bounds.max));
+        let k = ((lo + hi) * 0.5 - origin) * scale;
         for (axis, axis_bins) in bins.iter_mut().enumerate() {
-            let b = &mut axis_bins[binning.bin(p, axis)];
-            b.bounds = b.bounds.union(&p.bounds);
+            // `as usize` saturates (NaN → 0), as in `Binning::bin`.
+            let b = &mut axis_bins[(k[axis] as usize).min(last)];
+            b.min = b.min.min(lo);
+            b.max = b.max.max(hi);
             b.count += 1;
         }
     }
     bins
 }
 
-fn merge_bins(mut a: Bins, b: Bins) -> Bins {
+fn merge_bins<const N: usize>(mut a: Bins<N>, b: Bins<N>) -> Bins<N> {
     for (xa, ya) in a.iter_mut().zip(&b) {
         for (x, y) in xa.iter_mut().zip(ya) {
             *x = x.union(y);
@@ -151,21 +187,22 @@ fn merge_bins(mut a: Bins, b: Bins) -> Bins {
 
 /// Cheapest boundary `k` (bins `< k` go left) as `(Σ area·blocks·C_isect, k)`.
 fn best_boundary(bins: &[Bin]) -> Option<(f32, usize)> {
-    // right[k]: the union of bins k.. (k ≥ 1).
-    let mut right = [Bin::EMPTY; BINS];
+    // right[k]: count and area·blocks of the union of bins k.. (k ≥ 1).
+    let mut right = [(0u32, 0.0f32); BINS];
     let mut acc = Bin::EMPTY;
     for k in (1..bins.len()).rev() {
         acc = acc.union(&bins[k]);
-        right[k] = acc;
+        right[k] = (acc.count, acc.area_blocks());
     }
     let mut left = Bin::EMPTY;
     let mut best: Option<(f32, usize)> = None;
     for k in 1..bins.len() {
         left = left.union(&bins[k - 1]);
-        if left.count == 0 || right[k].count == 0 {
+        let (right_count, right_cost) = right[k];
+        if left.count == 0 || right_count == 0 {
             continue;
         }
-        let cost = INTERSECTION_COST * (left.area_blocks() + right[k].area_blocks());
+        let cost = INTERSECTION_COST * (left.area_blocks() + right_cost);
         if best.is_none_or(|(c, _)| cost < c) {
             best = Some((cost, k));
         }
@@ -200,17 +237,26 @@ mod tests {
             scale: [BINS as f32 / 2.0; 3],
             count: BINS,
         };
-        let serial = fill_bins(&prims, binning);
+        let serial = fill_bins::<BINS>(&prims, binning);
         for threads in [1, 3] {
             let pool = rayon::ThreadPoolBuilder::new()
                 .num_threads(threads)
                 .build()
                 .unwrap();
-            let bins =
-                pool.install(|| reduce_chunks(&prims, |c| fill_bins(c, binning), merge_bins));
+            let bins = pool
+                .install(|| reduce_chunks(&prims, |c| fill_bins::<BINS>(c, binning), merge_bins));
             for (p, s) in bins.iter().flatten().zip(serial.iter().flatten()) {
                 assert_eq!(p.count, s.count);
-                assert_eq!(p.bounds, s.bounds);
+                assert_eq!((p.min, p.max), (s.min, s.max));
+            }
+        }
+        // The SIMD bin indices are `Binning::bin`'s.
+        for p in prims.iter().take(2000) {
+            for (axis, axis_bins) in fill_bins::<BINS>(std::slice::from_ref(p), binning)
+                .iter()
+                .enumerate()
+            {
+                assert_eq!(axis_bins[binning.bin(p, axis)].count, 1);
             }
         }
         for axis_bins in &serial {

@@ -3,12 +3,13 @@
 //! pushes the others with their entry distances, farthest first; a popped child
 //! whose entry lies beyond the closest hit found since is skipped without touching
 //! its memory. Shadow rays (any hit) skip the ordering: the first occluder ends
-//! the search wherever it is.
+//! the search wherever it is. Pushed children are prefetched: on large meshes
+//! incoherent rays mostly wait for node and leaf memory.
 
 use super::build::MAX_DEPTH;
-use super::wide::{BoxTest, ChildRef, WideRay, EXIT_SLACK, WIDTH};
+use super::wide::{BoxTest, ChildRef, WideNode, WideRay, EXIT_SLACK, WIDTH};
 use super::Bvh;
-use crate::accel::prims::PrimRay;
+use crate::accel::prims::{PrimRay, TriBlock};
 use crate::accel::TraversalStats;
 use crate::geometry::Ray;
 use crate::scene::PrimHit;
@@ -50,6 +51,31 @@ impl Bvh {
         self.traverse_with::<super::wide::Avx2Boxes, ANY, COUNT>(ray, stats)
     }
 
+    /// Asks the cache for every line of child `c` (a wide node or a leaf block).
+    /// Incoherent rays on large meshes spend most of their time waiting for these.
+    #[inline(always)]
+    fn prefetch(&self, c: ChildRef) {
+        #[cfg(target_arch = "x86_64")]
+        {
+            use std::arch::x86_64::{_mm_prefetch, _MM_HINT_T0};
+            let (p, bytes) = if c.is_leaf() {
+                let p = self.blocks.as_ptr().wrapping_add(c.index as usize);
+                (p.cast::<i8>(), std::mem::size_of::<TriBlock>())
+            } else {
+                let p = self.nodes.as_ptr().wrapping_add(c.index as usize);
+                (p.cast::<i8>(), std::mem::size_of::<WideNode>())
+            };
+            // Blocks are 16-byte aligned, so the last byte may sit one line further.
+            for offset in (0..bytes).step_by(64).chain([bytes - 1]) {
+                // SAFETY: a prefetch never faults, and `wrapping_add` keeps the
+                // address computation defined even past the end.
+                unsafe { _mm_prefetch::<_MM_HINT_T0>(p.wrapping_add(offset)) };
+            }
+        }
+        #[cfg(not(target_arch = "x86_64"))]
+        let _ = c;
+    }
+
     /// The one traversal loop. `ANY` stops at the first hit (shadow rays);
     /// `COUNT` records the work done into `stats` (compiled out otherwise).
     #[inline(always)]
@@ -77,6 +103,15 @@ impl Bvh {
                     stats.nodes += 1;
                 }
                 let mut mask = B::hits(&boxes, node, t_max, &mut entry);
+                // Request every entered child's memory now, so the misses of the
+                // children visited later overlap with the work on the nearest one.
+                // (Prefetching only the children left on the stack measured
+                // slightly slower: 0.69 vs 0.72 of Embree, incoherent, 1M mesh.)
+                let mut ahead = mask;
+                while ahead != 0 {
+                    self.prefetch(node.children[ahead.trailing_zeros() as usize]);
+                    ahead &= ahead - 1;
+                }
                 if mask != 0 {
                     let first = mask.trailing_zeros() as usize;
                     mask &= mask - 1;

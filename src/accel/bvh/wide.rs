@@ -4,8 +4,15 @@
 //! The builder's binary tree is collapsed into this layout after the build; each
 //! binary leaf (at most 4 primitives) becomes one [`TriBlock`].
 //!
-//! 8 wide with AVX2 was measured against 4 wide with SSE on this machine (see the
-//! BVH report of issue 8); the width is this one constant plus the SIMD test.
+//! Why 8 wide: against 4 wide (SSE box test, `WIDTH = 4`; both builds otherwise
+//! equal), interleaved runs on this machine (AMD EPYC, CPU time, 1 thread, native
+//! over Embree robust) gave on the 998k-triangle mesh incoherent 0.71-0.73 vs
+//! 0.66-0.69, shadow 0.71-0.74 vs 0.62-0.68, camera 1.13-1.15 vs 0.98-1.00, and on
+//! CBbunny incoherent 1.05-1.20 vs 0.91-0.93, shadow 1.00-1.24 vs 0.79-0.93. With
+//! 4 wide the tree has 1.7× the nodes (131k vs 79k) and a higher SAH cost (24.0 vs
+//! 16.9), so rays visit more nodes; 8 wide wastes lanes (4.3 children per node on
+//! average) but one AVX2 pass costs about what an SSE pass does. The width is this
+//! one constant plus the SIMD test (both widths are kept compiling).
 
 use super::node::BvhNode;
 use crate::accel::prims::TriBlock;
@@ -219,7 +226,10 @@ impl BoxTest for Avx2Boxes {
     #[inline(always)]
     fn hits(ray: &WideRay, node: &WideNode, t_max: f32, entry: &mut [f32; WIDTH]) -> u32 {
         use std::arch::x86_64::*;
-        const _: () = assert!(WIDTH == 8);
+        const _: () = assert!(WIDTH == 8 || WIDTH == 4);
+        if WIDTH == 4 {
+            return hits4(ray, node, t_max, entry);
+        }
         // SAFETY: only reached from functions compiled with `avx2` after runtime
         // detection (see `simd_available`); WideNode is 32-byte aligned and each
         // row is 32 bytes, so the aligned loads are in bounds.
@@ -244,6 +254,35 @@ impl BoxTest for Avx2Boxes {
             _mm256_storeu_ps(entry.as_mut_ptr(), t0);
             _mm256_movemask_ps(inside) as u32
         }
+    }
+}
+
+/// The SSE version for 4-wide nodes (the same operations on four lanes).
+#[cfg(target_arch = "x86_64")]
+#[inline(always)]
+fn hits4(ray: &WideRay, node: &WideNode, t_max: f32, entry: &mut [f32; WIDTH]) -> u32 {
+    use std::arch::x86_64::*;
+    // SAFETY: SSE is part of x86-64; each row holds WIDTH = 4 floats at a 16-byte
+    // aligned offset of the 32-byte aligned node.
+    unsafe {
+        let mut t0 = _mm_set1_ps(ray.t_min);
+        let mut t1 = _mm_set1_ps(t_max);
+        for a in 0..3 {
+            let (near, far) = if ray.neg[a] {
+                (&node.hi[a], &node.lo[a])
+            } else {
+                (&node.lo[a], &node.hi[a])
+            };
+            let o = _mm_set1_ps(ray.o[a]);
+            let inv = _mm_set1_ps(ray.inv[a]);
+            let tn = _mm_mul_ps(_mm_sub_ps(_mm_load_ps(near.as_ptr()), o), inv);
+            let tf = _mm_mul_ps(_mm_sub_ps(_mm_load_ps(far.as_ptr()), o), inv);
+            t0 = _mm_max_ps(tn, t0);
+            t1 = _mm_min_ps(tf, t1);
+        }
+        let inside = _mm_cmple_ps(t0, _mm_mul_ps(t1, _mm_set1_ps(EXIT_SLACK)));
+        _mm_storeu_ps(entry.as_mut_ptr(), t0);
+        _mm_movemask_ps(inside) as u32
     }
 }
 
