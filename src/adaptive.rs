@@ -12,8 +12,9 @@
 //! `min_samples_if_constant`; any other pixel follows the course's rule after every
 //! batch, up to the `-s` cap.
 //!
-//! The pilot is deterministic (each pixel's own stream), so images still depend on
-//! the seed only.
+//! Sample `i` of a pixel draws from its own stream (`Sampler::for_sample`), as without
+//! `-a`, so the pilot batch is the first samples of the fixed-count render and images
+//! depend on the seed only.
 
 use crate::color::{is_finite, luminance};
 use crate::film::Image;
@@ -25,8 +26,6 @@ use rayon::prelude::*;
 
 /// Pixels (Chebyshev distance) whose pilot batch must be constant for a constant pixel to stop.
 pub const QUIET_RADIUS: u32 = 5;
-/// Sampler pass of the samples after the pilot batch (the pilot uses pass 0, as without `-a`).
-const CONTINUATION_PASS: u64 = 1;
 
 /// A pixel's running sums.
 #[derive(Clone, Copy, Debug, Default)]
@@ -129,8 +128,13 @@ pub fn render(
         job.accel.as_ref(),
         settings.path_settings(&job.scene),
     );
-    let sample = |x: u32, y: u32, s: &mut Sampler| integrator.li(camera.sample_ray(x, y, s), s);
-    let stream = |x: u32, y: u32| y as u64 * w as u64 + x as u64;
+    // Sample `p.n` of pixel (x, y), added to `p`.
+    let sample = |x: u32, y: u32, p: &mut PixelStats| {
+        let pixel = y as u64 * w as u64 + x as u64;
+        let index = settings.spp_offset as u64 + p.n as u64;
+        let mut s = Sampler::for_sample(settings.seed, pixel, index);
+        p.add(integrator.li(camera.sample_ray(x, y, &mut s), &mut s));
+    };
     let r = QUIET_RADIUS;
     let halo = PixelRect {
         x0: rect.x0.saturating_sub(r),
@@ -143,10 +147,9 @@ pub fn render(
         .into_par_iter()
         .map(|i| {
             let (x, y) = (halo.x0 + i as u32 % hw, halo.y0 + i as u32 / hw);
-            let mut s = Sampler::new(settings.seed, stream(x, y), 0);
             let mut p = PixelStats::default();
             for _ in 0..a.batch.min(spp) {
-                p.add(sample(x, y, &mut s));
+                sample(x, y, &mut p);
             }
             p
         })
@@ -159,10 +162,9 @@ pub fn render(
                 .map(|x| {
                     let i = ((y - halo.y0) * hw + (x - halo.x0)) as usize;
                     let mut p = pilot[i];
-                    let mut s = Sampler::new(settings.seed, stream(x, y), CONTINUATION_PASS);
                     while p.n < spp && !may_stop(&p, quiet[i], a) {
                         for _ in 0..a.batch.min(spp - p.n) {
-                            p.add(sample(x, y, &mut s));
+                            sample(x, y, &mut p);
                         }
                     }
                     p

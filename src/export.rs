@@ -312,7 +312,36 @@ fn light_xml(
                 "  <emitter type=\"envmap\">\n    <string name=\"filename\" value=\"{name}\"/>\n  </emitter>\n"
             )
         }
+        Light::Environment(ref env) => {
+            let name = format!("{stem}_env.exr");
+            let path = dir.join(&name);
+            write_image(&mitsuba_env_map(env), &path)?;
+            summary.files.push(path);
+            format!(
+                "  <emitter type=\"envmap\">\n    <string name=\"filename\" value=\"{name}\"/>\n  </emitter>\n"
+            )
+        }
     })
+}
+
+/// Texels of the exported environment map per ember texel (each side), so that
+/// Mitsuba's bilinear lookup blurs only a thin seam between ember's constant texels.
+const ENV_UPSAMPLE_MAX: u32 = 8;
+const ENV_COLUMNS_MAX: u32 = 4096;
+
+/// The environment map in Mitsuba's latitude-longitude convention. Rows agree (+Y on
+/// top); Mitsuba's column coordinate `u_m = atan2(x, −z)/2π` runs the other way round
+/// +Y from ember's (the course's), and `u = (¾ − u_m) mod 1` maps one to the other.
+fn mitsuba_env_map(env: &crate::lights::EnvironmentMap) -> Image {
+    let k = (ENV_COLUMNS_MAX / env.width()).clamp(1, ENV_UPSAMPLE_MAX);
+    let (w, h) = (env.width() * k, env.height() * k);
+    let mut img = Image::new(w, h);
+    for (i, p) in img.pixels.iter_mut().enumerate() {
+        let u_m = ((i as u32 % w) as f32 + 0.5) / w as f32;
+        let v = ((i as u32 / w) as f32 + 0.5) / h as f32;
+        *p = env.texel(glam::Vec2::new((0.75 - u_m).rem_euclid(1.0), v));
+    }
+    img
 }
 
 /// The hemisphere light as a latitude-longitude map: Mitsuba's rows run from

@@ -4,6 +4,8 @@
 
 use crate::film::Image;
 use crate::image_metadata::ImageMetadata;
+use crate::render::PixelRect;
+use crate::shard::Part;
 use std::fs::{File, OpenOptions};
 use std::io::{BufWriter, Write};
 use std::path::{Path, PathBuf};
@@ -129,13 +131,28 @@ impl PendingImage {
 
     /// As [`PendingImage::write`], recording `meta` in the file (EXR attributes, PNG text).
     pub fn write_with_metadata(
-        mut self,
+        self,
         img: &Image,
         meta: &ImageMetadata,
     ) -> Result<(), ImageIoError> {
+        self.write_image(ImageData::Whole(img), meta)
+    }
+
+    /// Writes a part of a sharded render (an EXR, see [`write_part_exr`]).
+    pub fn write_part(self, part: &Part) -> Result<(), ImageIoError> {
+        if self.format != OutputFormat::Exr {
+            return Err(ImageIoError::Encode {
+                path: self.path.display().to_string(),
+                msg: "a part of a sharded render (--shard, --spp-offset) must be an .exr".into(),
+            });
+        }
+        self.write_image(ImageData::Part(part), &part.meta)
+    }
+
+    fn write_image(mut self, data: ImageData, meta: &ImageMetadata) -> Result<(), ImageIoError> {
         let display = self.path.display().to_string();
         let file = self.file.take().expect("a pending image is written once");
-        write_to_file(img, meta, file, self.format, &display)?;
+        write_to_file(data, meta, file, self.format, &display)?;
         std::fs::rename(&self.tmp, &self.path).map_err(|source| ImageIoError::Write {
             path: display,
             source,
@@ -161,8 +178,15 @@ fn temp_sibling(path: &Path) -> PathBuf {
     path.with_file_name(format!(".{name}.{}.tmp", std::process::id()))
 }
 
+/// What a file holds: a whole image, or a part of a sharded render.
+#[derive(Clone, Copy)]
+enum ImageData<'a> {
+    Whole(&'a Image),
+    Part(&'a Part),
+}
+
 fn write_to_file(
-    img: &Image,
+    data: ImageData,
     meta: &ImageMetadata,
     file: File,
     format: OutputFormat,
@@ -177,15 +201,24 @@ fn write_to_file(
         msg,
     };
     let mut out = BufWriter::new(file);
-    match format {
-        OutputFormat::Png => write_png(img, meta, &mut out).map_err(|e| match e {
-            png::EncodingError::IoError(io) => werr(io),
-            e => enc(e.to_string()),
-        })?,
-        OutputFormat::Exr => write_exr(img, meta, &mut out).map_err(|e| match e {
-            exr::error::Error::Io(io) => werr(io),
-            e => enc(e.to_string()),
-        })?,
+    let exr_err = |e| match e {
+        exr::error::Error::Io(io) => werr(io),
+        e => enc(e.to_string()),
+    };
+    match (format, data) {
+        (OutputFormat::Png, ImageData::Whole(img)) => {
+            write_png(img, meta, &mut out).map_err(|e| match e {
+                png::EncodingError::IoError(io) => werr(io),
+                e => enc(e.to_string()),
+            })?
+        }
+        (OutputFormat::Exr, ImageData::Whole(img)) => {
+            write_exr(img, meta, &mut out).map_err(exr_err)?
+        }
+        (OutputFormat::Exr, ImageData::Part(p)) => write_part_exr(p, &mut out).map_err(exr_err)?,
+        (OutputFormat::Png, ImageData::Part(_)) => {
+            return Err(enc("a part must be an .exr".into()))
+        }
     }
     out.flush().map_err(werr)?;
     let file = out.into_inner().map_err(|e| werr(e.into_error()))?;
@@ -214,12 +247,7 @@ fn write_png(
     writer.finish()
 }
 
-/// Linear 32-bit float RGB EXR with one string attribute per metadata entry.
-fn write_exr(
-    img: &Image,
-    meta: &ImageMetadata,
-    out: &mut (impl Write + std::io::Seek),
-) -> exr::error::Result<()> {
+fn exr_attributes(meta: &ImageMetadata) -> exr::prelude::LayerAttributes {
     use exr::prelude::*;
     let mut attributes = LayerAttributes::default();
     for (k, v) in &meta.entries {
@@ -228,6 +256,125 @@ fn write_exr(
             AttributeValue::Text(Text::from_slice_unchecked(v.as_bytes())),
         );
     }
+    attributes
+}
+
+/// A part of a sharded render: the display window is the whole image, the data window
+/// the part's pixels; linear f32 `R`, `G`, `B` and a u32 `samples` channel (each
+/// pixel's sample count, the merge weights); the header as string attributes.
+fn write_part_exr(part: &Part, out: &mut (impl Write + std::io::Seek)) -> exr::error::Result<()> {
+    use exr::prelude::*;
+    let px = &part.image.pixels;
+    let channel = |name: &str, f: fn(&crate::Color) -> f32| {
+        AnyChannel::new(name, FlatSamples::F32(px.iter().map(f).collect()))
+    };
+    let channels = AnyChannels::sort(SmallVec::from_vec(vec![
+        channel("R", |c| c.x),
+        channel("G", |c| c.y),
+        channel("B", |c| c.z),
+        AnyChannel::new("samples", FlatSamples::U32(part.samples.clone())),
+    ]));
+    let r = part.rect;
+    let mut attributes = exr_attributes(&part.meta);
+    attributes.layer_position = Vec2(r.x0 as i32, r.y0 as i32);
+    let layer = Layer::new(
+        (r.width() as usize, r.height() as usize),
+        attributes,
+        Encoding::SMALL_LOSSLESS,
+        channels,
+    );
+    let frame = Vec2(part.frame.0 as usize, part.frame.1 as usize);
+    let image = exr::image::Image::new(
+        ImageAttributes::new(IntegerBounds::from_dimensions(frame)),
+        layer,
+    );
+    image.write().to_buffered(out)
+}
+
+/// Reads a part written by [`PendingImage::write_part`].
+pub fn read_part(path: &Path) -> Result<Part, ImageIoError> {
+    use exr::prelude::*;
+    let name = path.display().to_string();
+    let err = |msg: String| ImageIoError::Read {
+        path: name.clone(),
+        msg,
+    };
+    if OutputFormat::from_path(path)? != OutputFormat::Exr {
+        return Err(err("a part of a sharded render is an .exr".into()));
+    }
+    let image = read()
+        .no_deep_data()
+        .largest_resolution_level()
+        .all_channels()
+        .first_valid_layer()
+        .all_attributes()
+        .from_file(path)
+        .map_err(|e| err(e.to_string()))?;
+    let layer = &image.layer_data;
+    let channel = |n: &str| {
+        layer
+            .channel_data
+            .list
+            .iter()
+            .find(|c| c.name.eq(n))
+            .map(|c| &c.sample_data)
+            .ok_or_else(|| err(format!("no {n} channel: not a part of a sharded render (render it with --shard or --spp-offset)")))
+    };
+    let f32s = |n: &str| -> std::result::Result<Vec<f32>, ImageIoError> {
+        Ok(channel(n)?.values_as_f32().collect())
+    };
+    let (r, g, b) = (f32s("R")?, f32s("G")?, f32s("B")?);
+    let samples = match channel("samples")? {
+        FlatSamples::U32(v) => v.clone(),
+        _ => return Err(err("the samples channel is not u32".into())),
+    };
+    let pos = layer.attributes.layer_position;
+    let window = image.attributes.display_window;
+    if pos.x() < 0 || pos.y() < 0 || window.position != Vec2(0, 0) {
+        return Err(err("its data window lies outside the image".into()));
+    }
+    let (w, h) = (layer.size.width() as u32, layer.size.height() as u32);
+    let rect = PixelRect {
+        x0: pos.x() as u32,
+        y0: pos.y() as u32,
+        x1: pos.x() as u32 + w,
+        y1: pos.y() as u32 + h,
+    };
+    let pixels = (0..r.len())
+        .map(|i| crate::Color::new(r[i], g[i], b[i]))
+        .collect();
+    let mut meta = ImageMetadata::default();
+    for (k, v) in &layer.attributes.other {
+        if let AttributeValue::Text(t) = v {
+            meta.push(
+                String::from_utf8_lossy(k.bytes()).into_owned(),
+                String::from_utf8_lossy(t.bytes()).into_owned(),
+            );
+        }
+    }
+    meta.entries.sort();
+    Ok(Part {
+        name,
+        meta,
+        frame: (window.size.width() as u32, window.size.height() as u32),
+        rect,
+        image: crate::film::Image {
+            width: w,
+            height: h,
+            pixels,
+        },
+        samples,
+    })
+}
+
+/// Linear 32-bit float RGB EXR with one string attribute per metadata entry.
+fn write_exr(
+    img: &Image,
+    meta: &ImageMetadata,
+    out: &mut (impl Write + std::io::Seek),
+) -> exr::error::Result<()> {
+    use exr::prelude::*;
+    let attributes = exr_attributes(meta);
     let width = img.width as usize;
     let channels = SpecificChannels::rgb(|Vec2(x, y): Vec2<usize>| {
         let p = img.pixels[y * width + x];

@@ -46,6 +46,7 @@ impl ImageMetadata {
         m.push("ember.adaptive", format!("{:?}", s.adaptive));
         m.push("ember.shading", s.shading);
         m.push("ember.seed", s.seed);
+        m.push("ember.spp_offset", s.spp_offset);
         let lens = job.camera.lens;
         if !lens.is_pinhole() {
             m.push(

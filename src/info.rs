@@ -96,5 +96,11 @@ fn describe_light(l: &Light) -> String {
         Light::Ambient { radiance } => {
             format!("ambient (upper hemisphere): radiance {}", v(radiance))
         }
+        Light::Environment(ref env) => format!(
+            "environment map: {} ({}x{} latitude-longitude)",
+            env.source,
+            env.width(),
+            env.height()
+        ),
     }
 }

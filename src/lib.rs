@@ -9,6 +9,7 @@ pub mod adaptive;
 pub mod bench;
 pub mod camera;
 pub mod color;
+pub mod distribution;
 pub mod export;
 pub mod film;
 pub mod geometry;
@@ -23,6 +24,7 @@ pub mod output;
 pub mod render;
 pub mod sampling;
 pub mod scene;
+pub mod shard;
 
 pub use color::Color;
 pub use glam::{Vec2, Vec3};

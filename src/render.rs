@@ -96,6 +96,10 @@ pub struct RenderSettings {
     pub adaptive: Option<Adaptive>,
     pub shading: Shading,
     pub seed: u64,
+    /// Index of the first sample of every pixel: a render takes samples
+    /// `spp_offset .. spp_offset + spp`, so renders of disjoint sample ranges (sample
+    /// shards, `--spp-offset`) merge into one render of all of them. Not with `adaptive`.
+    pub spp_offset: u32,
 }
 
 impl RenderSettings {
@@ -134,6 +138,7 @@ impl Default for RenderSettings {
             adaptive: None,
             shading: Shading::Radiance,
             seed: 0,
+            spp_offset: 0,
         }
     }
 }
@@ -256,7 +261,8 @@ fn render_pixel(
     let batch = s.adaptive.map_or(s.spp.max(1), |a| a.batch);
     while n < s.spp.max(1) {
         for _ in 0..batch.min(s.spp.max(1) - n) {
-            let mut sampler = Sampler::for_sample(s.seed, pixel, n as u64);
+            let index = s.spp_offset as u64 + n as u64;
+            let mut sampler = Sampler::for_sample(s.seed, pixel, index);
             let ray = camera.sample_ray(x, y, &mut sampler);
             let mut v = match s.shading {
                 Shading::Radiance => integrator.li(ray, &mut sampler),

@@ -175,7 +175,22 @@ fn case4_caustic_exists_and_glass_transmits_what_fresnel_predicts() {
 
 #[test]
 fn case5_scaled_and_translated_scenes_render_the_same_image() {
-    let c = robust::scale(&budget(64, 48, 16)).unwrap();
+    // The report's own budget: the surface mean's paired s.e. is ~0.2 % at 1e4, small
+    // enough to see the +0.8…1.6 % that offset ray origins used to add there.
+    let c = robust::scale(&budget(160, 120, 64)).unwrap();
+    for r in &c.runs {
+        eprintln!(
+            "{}: mean {:+.3}% ± {:.3}%, surfaces {:+.3}% ± {:.3}%, {:.2}% beyond 4σ, worst surface block {:.1}σ, {:.1}% changed",
+            r.name,
+            100.0 * (r.mean / c.base_mean - 1.0),
+            100.0 * r.diff_se / c.base_mean,
+            100.0 * r.surface_rel_diff,
+            100.0 * r.surface_rel_se,
+            100.0 * r.frac_beyond_noise,
+            r.max_block_z,
+            100.0 * r.frac_changed
+        );
+    }
     for r in &c.runs {
         assert_eq!(r.nonfinite, 0, "{}", r.name);
         if r.offset == 0.0 {
@@ -188,17 +203,28 @@ fn case5_scaled_and_translated_scenes_render_the_same_image() {
             );
             assert_eq!(r.frac_beyond_noise, 0.0, "{}", r.name);
         } else {
-            // Far from the origin the f32 grid is ~1e-3 of the box (translation 1e4, box 2):
-            // paths diverge, but surfaces must not darken (acne) or brighten (leaks)
-            // beyond the paired standard error plus 1% for the quantized geometry, and
-            // few pixels may differ by more than 4 σ (two independent renders: ~0.5%).
+            // Far from the origin paths diverge (the f32 grid is 1e-3 at 1e4, 8e-3 at 1e5),
+            // but surfaces must not darken (acne) or brighten (rays seeing the scene from
+            // their offset origins) beyond the paired standard error, plus 0.2 % for the
+            // geometry itself, which moves by up to half that grid (the light's 1 cm gap
+            // under the ceiling becomes 0.8 or 1.6 cm at 1e5).
             assert!(
-                r.surface_rel_diff.abs() <= Z_MAX * r.surface_rel_se + 0.01,
+                r.surface_rel_diff.abs() <= Z_MAX * r.surface_rel_se + 0.002,
                 "{}: surfaces {:+.3}% ± {:.3}%",
                 r.name,
                 100.0 * r.surface_rel_diff,
                 100.0 * r.surface_rel_se
             );
+            // No region either: every 8×8 surface block within 5 of its own noise σ
+            // (≤ 300 blocks; 64 pixels estimate each block's noise). Not yet at 1e5: see
+            // case5_translate_1e5_has_no_outlying_block (ignored, a known limitation).
+            assert!(
+                r.offset > 1e4 || r.max_block_z <= 5.0,
+                "{}: worst surface block {:.1} σ",
+                r.name,
+                r.max_block_z
+            );
+            // Few pixels may differ by more than 4 σ: light edges move with the geometry.
             assert!(
                 r.frac_beyond_noise <= 0.02,
                 "{}: {:.2}% of pixels beyond 4σ",
@@ -207,6 +233,24 @@ fn case5_scaled_and_translated_scenes_render_the_same_image() {
             );
         }
     }
+}
+
+/// Known limitation, kept visible: at 1e5 the offsets of spawned rays (~2 ulps = 2e-2)
+/// still exceed the gap between the floor and a sphere near their contact point, so the
+/// floor there is traced from inside the sphere. Measured (seed 20240611, 160×120, 64
+/// spp): the floor block under the mirror ball +12.6 % (5.9 σ), one beside the glass
+/// ball −7 % (3.4 σ), while the surface mean agrees (−0.75 % ± 0.35 %). Needs smaller
+/// offsets (e.g. skipping the spawning primitive instead), not a wider tolerance.
+#[test]
+#[ignore]
+fn case5_translate_1e5_has_no_outlying_block() {
+    let c = robust::scale(&budget(160, 120, 64)).unwrap();
+    let r = c.runs.iter().find(|r| r.name == "translate 1e5").unwrap();
+    assert!(
+        r.max_block_z <= 5.0,
+        "worst surface block {:.1} σ",
+        r.max_block_z
+    );
 }
 
 #[test]

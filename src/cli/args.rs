@@ -23,6 +23,16 @@ pub struct Cli {
 
 #[derive(Subcommand, Debug)]
 pub enum Command {
+    /// Assemble the parts of a render made on many machines (`--shard`, `--spp-offset`):
+    /// bands are copied, sample ranges averaged by their sample counts. Refuses parts of
+    /// different renders, gaps, overlaps and duplicates.
+    Merge {
+        /// The merged image; .png or .exr.
+        out: PathBuf,
+        /// The parts (.exr files written with --shard K/N and/or --spp-offset S).
+        #[arg(required = true)]
+        parts: Vec<PathBuf>,
+    },
     /// Print what a scene contains (geometry, lights, materials, camera, bounds) and the backends of this build.
     Info {
         /// The .dae scene file.
@@ -94,6 +104,9 @@ pub struct ExportArgs {
     /// Output folder (created if missing); files are named after the scene.
     #[arg(long = "out", default_value = ".")]
     pub out: PathBuf,
+    /// Environment map replacing the scene's ambient light, as the renderer's -e (exported in Mitsuba's orientation).
+    #[arg(short = 'e', value_name = "FILE.exr")]
+    pub env_map: Option<PathBuf>,
 }
 
 #[derive(Clone, Copy, Debug, ValueEnum)]
@@ -257,6 +270,10 @@ pub struct RenderArgs {
     #[arg(short = 'H')]
     pub hemisphere: bool,
 
+    /// Environment light: a latitude-longitude .exr map (row 0 = +Y, u = 0 at -X, u = 1/4 at +Z, as the course's) around the scene, importance-sampled by luminance x sin(theta). Replaces the scene's ambient light.
+    #[arg(short = 'e', value_name = "FILE.exr")]
+    pub env_map: Option<PathBuf>,
+
     /// Output image; .png (8-bit sRGB) or .exr (linear float). Default: <scene stem>.png.
     #[arg(short = 'f', value_name = "FILE")]
     pub output: Option<PathBuf>,
@@ -302,7 +319,7 @@ pub struct RenderArgs {
     #[arg(long, value_parser = named::<Shading>(), default_value_t = Shading::Radiance)]
     pub shading: Shading,
 
-    /// Estimator. auto: light tracing when every light is a point light and nothing is specular or self-emitting (CBempty: see BENCHMARKS.md, stability case 9); otherwise path tracing with MIS (light + BSDF sampling) when the scene has glossy surfaces or an ambient light, light sampling otherwise. A direct-lighting strategy name means path tracing with it. -H forces hemisphere.
+    /// Estimator. auto: light tracing when every light is a point light and nothing is specular or self-emitting (CBempty: see BENCHMARKS.md, stability case 9); otherwise path tracing with MIS (light + BSDF sampling) when the scene has glossy surfaces or an ambient or environment (-e) light, light sampling otherwise. A direct-lighting strategy name means path tracing with it. -H forces hemisphere.
     #[arg(long, value_parser = integrator(), default_value = AUTO)]
     pub integrator: IntegratorChoice,
 
@@ -317,6 +334,16 @@ pub struct RenderArgs {
     /// Random seed; the same seed gives the same image whatever -t is.
     #[arg(long, default_value_t = 0)]
     pub seed: u64,
+
+    /// Render only band K of N bands of rows (floor(K·H/N) to floor((K+1)·H/N)) into an
+    /// .exr part for `ember merge`; the bands merge into exactly the whole render.
+    #[arg(long, value_name = "K/N")]
+    pub shard: Option<String>,
+
+    /// Render samples S..S+SPP of every pixel (with -s SPP) into an .exr part for
+    /// `ember merge`, which averages sample ranges into a render of more samples. Not with -a.
+    #[arg(long, value_name = "S")]
+    pub spp_offset: Option<u32>,
 
     /// No progress bar and no summary.
     #[arg(short = 'q', long)]

@@ -2,13 +2,14 @@
 
 use super::args::{CameraArgs, ExportArgs, ExportFormat, RenderArgs};
 use super::convert::{
-    self, adopt_scene_from_adaptive, cell_rect, check_lens, check_resolution, output_path,
-    settings_from,
+    self, adopt_scene_from_adaptive, apply_env_map, cell_rect, check_lens, check_resolution,
+    output_path, part_plan, settings_from,
 };
 use anyhow::{bail, Result};
 use ember::accel;
 use ember::camera::course_file::CourseCameraFile;
 use ember::image_metadata::ImageMetadata;
+use ember::integrators::Estimator;
 use ember::render::{PixelRect, RenderJob, RenderSettings};
 use ember::scene::{collada, Scene};
 use indicatif::{ProgressBar, ProgressStyle};
@@ -36,14 +37,18 @@ pub(super) fn render(mut args: RenderArgs) -> Result<()> {
         .map(|c| cell_rect(c, width, height))
         .transpose()?;
     let out = output_path(&args, &scene_path)?;
+    let part = part_plan(&args, &out, width, height)?;
     // Claim the outputs before loading, so a bad path fails at once and no partial file appears.
-    let pending = ember::image_io::PendingImage::claim(&out, &[&scene_path])?;
-    let pending_rate = match settings.adaptive {
-        Some(_) => Some(ember::image_io::PendingImage::claim(
+    let inputs: Vec<&Path> = std::iter::once(scene_path.as_path())
+        .chain(args.env_map.as_deref())
+        .collect();
+    let pending = ember::image_io::PendingImage::claim(&out, &inputs)?;
+    let pending_rate = match (settings.adaptive, part) {
+        (Some(_), None) => Some(ember::image_io::PendingImage::claim(
             &rate_path(&out),
-            &[&scene_path],
+            &inputs,
         )?),
-        None => None,
+        _ => None,
     };
     let kind = match accel::AccelKind::new(args.accel, args.bvh, args.embree_quality) {
         // The BVH-cost heat map counts the native tree's traversal steps, which
@@ -57,8 +62,12 @@ pub(super) fn render(mut args: RenderArgs) -> Result<()> {
     };
     let pool = thread_pool(args.threads)?;
     let t0 = Instant::now();
-    let scene = load_scene(&scene_path)?;
+    let mut scene = load_scene(&scene_path)?;
+    apply_env_map(args.env_map.as_deref(), &mut scene)?;
     let t_load = t0.elapsed();
+    if part.is_some() && settings.estimator_for(&scene) == Estimator::LightTracing {
+        bail!("--shard/--spp-offset cannot be used with light tracing (the estimator for {}): its light paths splat anywhere in the image, so every band would trace all of them, and its paths are not numbered by sample; use --integrator path", scene_path.display());
+    }
     let (camera, camera_warning) =
         convert::camera(&scene, camera_file.as_ref(), &args.lens, (width, height))?;
     if let (Some(w), Some(file)) = (camera_warning, &args.camera_file) {
@@ -73,7 +82,11 @@ pub(super) fn render(mut args: RenderArgs) -> Result<()> {
     if cell.is_some() && settings.shading == ember::render::Shading::BvhCost {
         ember::errln!("ember: warning: -p: the bvh-cost heat map is scaled to the cell's own pixels, not the full image's");
     }
-    let rect = cell.unwrap_or_else(|| job.full_frame());
+    let rect = match (part, cell) {
+        (Some((band, _)), _) => band,
+        (None, Some(cell)) => cell,
+        (None, None) => job.full_frame(),
+    };
     let pb = progress_bar(rect.area(), args.quiet);
     let t2 = Instant::now();
     let mut output = pool.install(|| job.render_rect(&settings, rect, &|n| pb.inc(n)));
@@ -82,7 +95,7 @@ pub(super) fn render(mut args: RenderArgs) -> Result<()> {
     if args.full_frame {
         output = output.into_frame(rect, width, height);
     }
-    let meta = render_metadata(
+    let mut meta = render_metadata(
         &scene_path,
         &args,
         &job,
@@ -90,7 +103,22 @@ pub(super) fn render(mut args: RenderArgs) -> Result<()> {
         cell,
         t_render.as_secs_f64(),
     );
-    pending.write_with_metadata(&output.image, &meta)?;
+    match part {
+        None => pending.write_with_metadata(&output.image, &meta)?,
+        Some((rect, shard)) => {
+            if let Some(shard) = shard {
+                meta.push("ember.shard", shard);
+            }
+            pending.write_part(&ember::shard::Part {
+                name: out.display().to_string(),
+                meta: meta.clone(),
+                frame: (width, height),
+                rect,
+                image: output.image.clone(),
+                samples: output.samples.clone(),
+            })?
+        }
+    }
     if let Some(pending_rate) = pending_rate {
         let rate = pending_rate.path().to_path_buf();
         pending_rate.write_with_metadata(&output.rate_image(settings.spp), &meta)?;
@@ -124,6 +152,27 @@ pub(super) fn render(mut args: RenderArgs) -> Result<()> {
     Ok(())
 }
 
+/// `ember merge OUT PARTS...`: the parts of a sharded render assembled into one image.
+pub(super) fn merge(out: &Path, parts: &[PathBuf]) -> Result<()> {
+    let inputs: Vec<&Path> = parts.iter().map(PathBuf::as_path).collect();
+    let pending = ember::image_io::PendingImage::claim(out, &inputs)?;
+    let parts = parts
+        .iter()
+        .map(|p| ember::image_io::read_part(p))
+        .collect::<Result<Vec<_>, _>>()?;
+    let merged = ember::shard::merge(&parts)?;
+    pending.write_with_metadata(&merged.image, &merged.meta)?;
+    ember::errln!(
+        "ember: merged {} parts ({}x{}, {} spp) into {}",
+        parts.len(),
+        merged.image.width,
+        merged.image.height,
+        merged.meta.get("ember.spp").unwrap_or("?"),
+        out.display()
+    );
+    Ok(())
+}
+
 /// What the image records: the render's settings, and the camera file and cell if given.
 fn render_metadata(
     scene: &Path,
@@ -136,6 +185,9 @@ fn render_metadata(
     let mut meta = ImageMetadata::for_render(scene, job, settings, seconds);
     if let Some(file) = &args.camera_file {
         meta.push_file("ember.camera_file", file);
+    }
+    if let Some(file) = &args.env_map {
+        meta.push_file("ember.env_map", file);
     }
     if let (Some(c), Some(r)) = (&args.cell, cell) {
         meta.push(
@@ -253,7 +305,8 @@ pub(super) fn export(a: ExportArgs) -> Result<()> {
     if a.spp == 0 {
         bail!("-s must be at least 1");
     }
-    let scene = load_scene(&a.scene)?;
+    let mut scene = load_scene(&a.scene)?;
+    apply_env_map(a.env_map.as_deref(), &mut scene)?;
     let camera = ember::camera::Camera::new(&scene.camera, &scene.bounds, w, h);
     std::fs::create_dir_all(&a.out)
         .map_err(|e| anyhow::anyhow!("{}: cannot create folder: {e}", a.out.display()))?;

@@ -5,8 +5,9 @@ use anyhow::{bail, Context, Result};
 use ember::camera::course_file::CourseCameraFile;
 use ember::camera::Camera;
 use ember::integrators::{DirectStrategy, Estimator, Roulette};
-use ember::render::{Adaptive, PixelRect, RenderSettings};
+use ember::render::{Adaptive, PixelRect, RenderSettings, Shading};
 use ember::scene::Scene;
+use ember::shard::Shard;
 use std::path::{Path, PathBuf};
 
 pub(super) fn check_resolution(w: u32, h: u32) -> Result<()> {
@@ -77,6 +78,21 @@ pub(super) fn settings_from(args: &RenderArgs) -> Result<RenderSettings> {
     if args.spp == 0 {
         bail!("-s: samples per pixel must be at least 1");
     }
+    if args.env_map.is_some() && estimator(args) == Some(Estimator::LightTracing) {
+        bail!("-e: light tracing does not support environment maps; use path tracing (--integrator auto, light or mis)");
+    }
+    let adaptive = parse_adaptive(&args.adaptive)?;
+    if let Some(offset) = args.spp_offset {
+        if adaptive.is_some() {
+            bail!("--spp-offset cannot be used with adaptive sampling (-a): an adaptive pixel's sample count depends on all its samples, so its samples cannot be split into ranges; split by --shard instead");
+        }
+        if offset.checked_add(args.spp).is_none() {
+            bail!(
+                "--spp-offset {offset} -s {}: the last sample index exceeds 2^32",
+                args.spp
+            );
+        }
+    }
     Ok(RenderSettings {
         spp: args.spp,
         light_samples: args.light_samples.max(1),
@@ -85,10 +101,50 @@ pub(super) fn settings_from(args: &RenderArgs) -> Result<RenderSettings> {
         estimator: estimator(args),
         strategy: strategy(args),
         roulette: parse_roulette(&args.rr, args.rr_start)?,
-        adaptive: parse_adaptive(&args.adaptive)?,
+        adaptive,
         shading: args.shading,
         seed: args.seed,
+        spp_offset: args.spp_offset.unwrap_or(0),
     })
+}
+
+/// The pixels a part (`--shard`, `--spp-offset`) renders and its shard; `None` for a
+/// whole render. Parts are .exr files; a BVH-cost heat map is scaled by its own
+/// pixels, so it cannot be split.
+pub(super) fn part_plan(
+    args: &RenderArgs,
+    out: &Path,
+    width: u32,
+    height: u32,
+) -> Result<Option<(PixelRect, Option<Shard>)>> {
+    if args.shard.is_none() && args.spp_offset.is_none() {
+        return Ok(None);
+    }
+    if ember::image_io::OutputFormat::from_path(out)? != ember::image_io::OutputFormat::Exr {
+        bail!(
+            "{}: a part (--shard, --spp-offset) is written as .exr for ember merge",
+            out.display()
+        );
+    }
+    if args.cell.is_some() {
+        bail!(
+            "-p cannot be used with --shard/--spp-offset: a part covers a band of the whole image"
+        );
+    }
+    if args.shading == Shading::BvhCost {
+        bail!("--shading bvh-cost cannot be rendered in parts: its colour scale depends on every pixel");
+    }
+    let Some(text) = &args.shard else {
+        return Ok(Some((PixelRect::full(width, height), None)));
+    };
+    let shard = Shard::parse(text).map_err(anyhow::Error::msg)?;
+    if shard.count > height {
+        bail!(
+            "--shard {shard}: {} bands but the image has {height} rows",
+            shard.count
+        );
+    }
+    Ok(Some((shard.rect(width, height), Some(shard))))
 }
 
 pub(super) fn output_path(args: &RenderArgs, scene: &Path) -> Result<PathBuf> {
@@ -124,6 +180,14 @@ pub(super) fn threads_invalid(t: &[usize]) -> bool {
     t.is_empty() || t.contains(&0)
 }
 
+/// `-e FILE.exr`: the scene lit by that environment map instead of its ambient light.
+pub(super) fn apply_env_map(env_map: Option<&Path>, scene: &mut ember::scene::Scene) -> Result<()> {
+    if let Some(path) = env_map {
+        let env = ember::lights::EnvironmentMap::load(path)?;
+        scene.set_environment(std::sync::Arc::new(env));
+    }
+    Ok(())
+}
 /// `-b` and `-d` on their own: a radius of at least 0, a positive distance.
 pub(super) fn check_lens(lens: &LensArgs) -> Result<()> {
     if let Some(b) = lens.lens_radius {

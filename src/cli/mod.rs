@@ -17,6 +17,7 @@ pub fn run(cli: Cli) -> anyhow::Result<()> {
             commands::info(&scene, resolution[0], resolution[1])
         }
         Some(Command::Export(args)) => commands::export(args),
+        Some(Command::Merge { out, parts }) => commands::merge(&out, &parts),
         Some(Command::Camera(args)) => commands::camera(args),
         #[cfg(feature = "bench")]
         Some(Command::Bench { which }) => bench::run(which),

@@ -21,6 +21,7 @@ use crate::camera::Camera;
 use crate::color::is_finite;
 use crate::film::Image;
 use crate::geometry::{Frame, Ray};
+use crate::lights::Light;
 use crate::materials::{specular, Material};
 use crate::render::{PixelRect, RenderJob, RenderOutput, RenderSettings, Shading};
 use crate::sampling::Sampler;
@@ -119,10 +120,15 @@ impl<'a> LightTracer<'a> {
             return 0;
         }
         let mut ray = Ray::new(es.origin, es.dir);
+        // Where the current ray's line starts, when its origin was moved off a surface.
+        let mut from = es.on_surface;
         let mut bounces = 0u32;
         let mut nonfinite = 0;
         while let Some(hit) = self.accel.intersect(&ray) {
-            let si = self.scene.interaction(&ray, &hit);
+            let mut si = self.scene.interaction(&ray, &hit);
+            if let Some(from) = from {
+                si = self.scene.on_line(&si, from, ray.d.normalize());
+            }
             let material = &self.scene.materials[si.material as usize];
             if material.is_black() || bounces >= self.max_depth {
                 break;
@@ -163,6 +169,7 @@ impl<'a> LightTracer<'a> {
                 break;
             }
             ray = si.spawn_ray(w_next);
+            from = Some(si.p);
         }
         nonfinite
     }
@@ -297,6 +304,18 @@ pub fn warnings(scene: &Scene, s: &RenderSettings) -> Vec<String> {
         w.push(
             "light tracing starts paths on lights only: light that emissive surfaces \
              (not lights) cast on the scene is missing; use path tracing"
+                .into(),
+        );
+    }
+    if s.max_depth > 0
+        && scene
+            .lights
+            .iter()
+            .any(|l| matches!(l, Light::Environment(_)))
+    {
+        w.push(
+            "light tracing starts no paths on environment maps: the light they cast \
+             on the scene is missing; use path tracing"
                 .into(),
         );
     }

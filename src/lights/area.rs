@@ -5,7 +5,7 @@
 
 use super::emit::EmissionSample;
 use super::LightSample;
-use crate::geometry::{offset_ray_origin, Frame};
+use crate::geometry::{offset_ray_origin, ray::gamma, Frame};
 use crate::sampling::{cosine_hemisphere, uniform_parallelogram};
 use crate::Color;
 use glam::{Vec2, Vec3};
@@ -52,9 +52,14 @@ impl AreaLight {
         }
     }
 
+    /// A point uniform by area, as seen from `p`. The vector to it is computed relative to
+    /// the light (`(centre − p) + s·ex + t·ey`, the first difference exact for nearby
+    /// points however far from the origin), not as the difference of two rounded
+    /// absolute positions.
     pub fn sample_li(&self, p: Vec3, u: Vec2) -> Option<LightSample> {
-        let p_light = uniform_parallelogram(u, self.centre, self.ex, self.ey);
-        let to_light = p_light - p;
+        let local = uniform_parallelogram(u, Vec3::ZERO, self.ex, self.ey);
+        let p_light = self.centre + local;
+        let to_light = (self.centre - p) + local;
         let dist2 = to_light.length_squared();
         let dist = dist2.sqrt();
         if !(dist > 0.0 && dist.is_finite()) {
@@ -74,16 +79,18 @@ impl AreaLight {
 
     /// Emitted light leaving the surface (`Light::sample_le`): a point uniform by area
     /// (`pdf_pos = 1/area`), a direction by the cosine (`pdf_dir = cos/π`), so
-    /// `β = L·cos/(pdf_pos·pdf_dir) = L·π·area`.
+    /// `β = L·cos/(pdf_pos·pdf_dir) = L·π·area`. The ray's origin is moved off the
+    /// surface by the point's rounding error; `on_surface` keeps the point itself.
     pub fn sample_le(&self, u_pos: Vec2, u_dir: Vec2) -> EmissionSample {
-        let p = uniform_parallelogram(u_pos, self.centre, self.ex, self.ey);
+        let p = self.centre + uniform_parallelogram(u_pos, Vec3::ZERO, self.ex, self.ey);
         let dir = Frame::from_normal(self.normal)
             .to_world(cosine_hemisphere(u_dir))
             .normalize();
-        let p_error =
-            (self.centre.abs() + 0.5 * (self.ex.abs() + self.ey.abs())) * (4.0 * f32::EPSILON);
+        // `centre ⊕ local`: one rounding of the sum plus that of `local`.
+        let p_error = gamma(2) * p.abs() + gamma(3) * (0.5 * (self.ex.abs() + self.ey.abs()));
         EmissionSample {
             origin: offset_ray_origin(p, p_error, self.normal, dir),
+            on_surface: Some(p),
             dir,
             beta: self.radiance * (PI * self.area()),
         }
@@ -103,23 +110,24 @@ impl AreaLight {
         if denom.is_nan() || denom >= 0.0 {
             return None;
         }
-        let dist = (self.centre - p).dot(self.normal) / denom;
+        let to_centre = self.centre - p;
+        let dist = to_centre.dot(self.normal) / denom;
         if !(dist > 0.0 && dist.is_finite()) {
             return None;
         }
-        let (s, t) = self.plane_coords(p + dist * wi)?;
+        // The hit relative to the centre, without rounding it to an absolute position.
+        let (s, t) = self.plane_coords(dist * wi - to_centre)?;
         (s.abs() <= 0.5 && t.abs() <= 0.5).then_some(dist)
     }
 
-    /// `(s, t)` with `q = centre + s·ex + t·ey` for `q` in the light's plane
-    /// (dual basis, so sheared edges work too).
-    fn plane_coords(&self, q: Vec3) -> Option<(f32, f32)> {
+    /// `(s, t)` with `d = s·ex + t·ey` for `d` (relative to the centre) in the light's
+    /// plane (dual basis, so sheared edges work too).
+    fn plane_coords(&self, d: Vec3) -> Option<(f32, f32)> {
         let m = self.ex.cross(self.ey);
         let m2 = m.length_squared();
         if m2.is_nan() || m2 <= 0.0 {
             return None;
         }
-        let d = q - self.centre;
         Some((d.cross(self.ey).dot(m) / m2, self.ex.cross(d).dot(m) / m2))
     }
 

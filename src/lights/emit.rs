@@ -14,8 +14,11 @@ use std::f32::consts::PI;
 /// A ray of emitted light drawn by `Light::sample_le`.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct EmissionSample {
-    /// Ray origin (already off the light's own surface for area lights).
+    /// Ray origin (moved off the light's own surface for area lights).
     pub origin: Vec3,
+    /// The sampled point on an area light's surface, which `origin` was moved off:
+    /// where the ray's line starts (see `Scene::on_line`).
+    pub on_surface: Option<Vec3>,
     /// Unit direction of travel.
     pub dir: Vec3,
     /// `Le·|cos θ| / (pdf_pos·pdf_dir)`; the light's selection probability is not included.
@@ -28,12 +31,16 @@ impl Light {
     /// direction of travel, just outside that sphere. `None` for degenerate lights.
     pub fn sample_le(&self, bounds: &Aabb, u_pos: Vec2, u_dir: Vec2) -> Option<EmissionSample> {
         let s = match *self {
+            // Environment maps do not start light paths (yet): the CLI refuses
+            // light tracing with -e and `light_tracing::warnings` says so.
+            Light::Environment(_) => return None,
             Light::Area(a) => a.sample_le(u_pos, u_dir),
             Light::Point {
                 position,
                 intensity,
             } => EmissionSample {
                 origin: position,
+                on_surface: None,
                 dir: uniform_sphere(u_dir),
                 beta: intensity / uniform_sphere_pdf(),
             },
@@ -75,6 +82,7 @@ fn disk_emission(
     let d = concentric_disk(u) * r;
     EmissionSample {
         origin: c - 1.01 * r * dir + frame.s * d.x + frame.t * d.y,
+        on_surface: None,
         dir,
         beta: value * (PI * r * r * dir_weight),
     }
@@ -100,7 +108,7 @@ mod tests {
             .sample_le(&b, Vec2::new(0.3, 0.7), Vec2::new(0.2, 0.9))
             .unwrap();
         assert!((s.beta.x - PI * 3.0).abs() < 1e-4);
-        assert!(s.dir.y < 0.0 && s.origin.y < 1.0);
+        assert!(s.dir.y < 0.0 && s.origin.y < 1.0 && s.on_surface.unwrap().y == 1.0);
         let point = Light::Point {
             position: Vec3::ZERO,
             intensity: Color::splat(2.0),

@@ -5,15 +5,18 @@ pub mod ambient;
 pub mod area;
 pub mod directional;
 pub mod emit;
+pub mod environment;
 pub mod point;
 
 use crate::color::luminance;
 use crate::Color;
 pub use area::AreaLight;
+pub use environment::EnvironmentMap;
 use glam::{Vec2, Vec3};
 use std::f32::consts::PI;
+use std::sync::Arc;
 
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Debug, PartialEq)]
 pub enum Light {
     /// One-sided parallelogram owning its surface and its radiance.
     Area(AreaLight),
@@ -23,6 +26,8 @@ pub enum Light {
     Directional { direction: Vec3, irradiance: Color },
     /// Constant radiance from the upper hemisphere (world +Y).
     Ambient { radiance: Color },
+    /// Radiance from every direction, read from a latitude-longitude map (`-e`).
+    Environment(Arc<EnvironmentMap>),
 }
 
 /// Incident light drawn by `Light::sample_li`.
@@ -47,10 +52,11 @@ impl Light {
         matches!(self, Light::Point { .. } | Light::Directional { .. })
     }
 
-    /// True for a light that surrounds the scene (ambient), whose
-    /// cosine-about-+Y sampling is poor near the horizon.
+    /// True for a light that surrounds the scene (ambient, environment map), which
+    /// light sampling alone covers poorly (near the horizon, or between a map's
+    /// bright spots), so MIS is the better default.
     pub fn is_environment(&self) -> bool {
-        matches!(self, Light::Ambient { .. })
+        matches!(self, Light::Ambient { .. } | Light::Environment(_))
     }
 
     /// Draws a direction toward the light from `p`; `None` when `p` receives
@@ -67,6 +73,7 @@ impl Light {
                 irradiance,
             } => directional::sample_li(direction, irradiance),
             Light::Ambient { radiance } => ambient::sample_li(radiance, u),
+            Light::Environment(ref env) => env.sample_li(u),
         }
     }
 
@@ -75,6 +82,7 @@ impl Light {
         match *self {
             Light::Area(a) => a.pdf_li(p, wi),
             Light::Ambient { .. } => ambient::pdf_li(wi),
+            Light::Environment(ref env) => env.pdf_li(wi),
             Light::Point { .. } | Light::Directional { .. } => 0.0,
         }
     }
@@ -83,6 +91,19 @@ impl Light {
     /// (`None` for a miss, a hit from behind, or another kind of light).
     pub fn intersect_area(&self, p: Vec3, wi: Vec3) -> Option<f32> {
         self.as_area()?.intersect(p, wi)
+    }
+
+    /// Whether the line from surface point `p` along unit `w` meets this light (always,
+    /// for lights without a shape). A ray spawned at `p` starts off the surface, by `p`'s
+    /// rounding error (pbrt's `OffsetRayOrigin`: a few ulps of the coordinates), on a
+    /// parallel line that much closer to what it finds: an area light seen from there
+    /// covers more directions than from `p` (stability case 5). A light found by such a
+    /// ray counts only if this test, relative to the light, says `p` sees it too.
+    pub fn seen_along(&self, p: Vec3, w: Vec3) -> bool {
+        match self {
+            Light::Area(a) => a.intersect(p, w).is_some(),
+            _ => true,
+        }
     }
 
     /// Approximate emitted power (luminance), for choosing lights in proportion to
@@ -96,6 +117,7 @@ impl Light {
             Light::Directional { irradiance, .. } => disk * luminance(irradiance),
             // Half of pbrt's uniform-sphere 4π·πr²·L.
             Light::Ambient { radiance } => 2.0 * PI * disk * luminance(radiance),
+            Light::Environment(ref env) => disk * env.luminance_integral(),
         };
         if value.is_finite() {
             value.max(0.0)
@@ -104,10 +126,12 @@ impl Light {
         }
     }
 
-    /// Radiance an escaping ray in direction `w` receives from this light (ambient only).
+    /// Radiance an escaping ray in unit direction `w` receives from this light
+    /// (ambient and environment lights only).
     pub fn le_escaped(&self, w: Vec3) -> Color {
         match self {
             Light::Ambient { radiance } if w.y > 0.0 => *radiance,
+            Light::Environment(env) => env.le(w),
             _ => Color::ZERO,
         }
     }

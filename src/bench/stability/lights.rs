@@ -47,7 +47,11 @@ pub struct StrategyRun {
 }
 
 impl StrategyRun {
-    fn from_halves(strategy: DirectStrategy, h: &Halves, warnings: Vec<String>) -> StrategyRun {
+    pub(super) fn from_halves(
+        strategy: DirectStrategy,
+        h: &Halves,
+        warnings: Vec<String>,
+    ) -> StrategyRun {
         let (mean, se) = h.mean_and_se(None);
         let avg = h.average();
         let max_pixel = avg

@@ -45,7 +45,7 @@ pub fn transformed(scene: &Scene, scale: f32, offset: Vec3) -> Scene {
                 a.ey *= scale;
             }
             Light::Point { position, .. } => *position = map(*position),
-            Light::Directional { .. } | Light::Ambient { .. } => {}
+            Light::Directional { .. } | Light::Ambient { .. } | Light::Environment(_) => {}
         }
     }
     let mut b = Aabb::from_point(map(scene.bounds.min));
