@@ -223,12 +223,7 @@ pub fn rows_from_table(t: &Table) -> Result<Vec<EmbreeModeRow>, String> {
     t.rows
         .iter()
         .map(|c| {
-            let quality = match c[2].as_str() {
-                "low" => EmbreeQuality::Low,
-                "medium" => EmbreeQuality::Medium,
-                "high" => EmbreeQuality::High,
-                q => return Err(format!("unknown quality {q:?}")),
-            };
+            let quality: EmbreeQuality = c[2].parse().map_err(|e| format!("{e}"))?;
             let query = match c[4].strip_prefix("rtcIntersect").map(str::parse) {
                 Some(Ok(1)) => RayQuery::Single,
                 Some(Ok(n @ (4 | 8 | 16))) => RayQuery::Packet(n),
