@@ -543,7 +543,8 @@ fn options_that_do_nothing_are_refused() {
     for args in [
         &["--shading", "bvh-cost", "--accel", "embree"][..],
         &["--bvh", "midpoint", "--accel", "embree"],
-        &["--embree-quality", "high"],
+        // Refused in every build: no Embree, or Embree not in use.
+        &["--embree-quality", "high", "--accel", "native"],
         &["--cost-scale", "10"],
         &["--shading", "bvh-cost", "--cost-scale", "0"],
     ] {
