@@ -158,13 +158,10 @@ impl<'a> LightTracer<'a> {
                 break;
             }
             beta *= bs.weight * adjoint_factor(material, &si, wl, bs.wi, w_light, w_next);
-            let q = self.roulette.continue_prob(bounces, beta / beta0);
-            if q < 1.0 {
-                if sampler.next_f32() >= q {
-                    break;
-                }
-                beta /= q;
-            }
+            let Some(q) = self.roulette.play(bounces, beta / beta0, sampler) else {
+                break;
+            };
+            beta /= q;
             if !is_finite(beta) || beta == Color::ZERO {
                 break;
             }

@@ -9,6 +9,7 @@ pub mod path;
 pub use path::{PathIntegrator, PathSettings};
 
 use crate::names::{display_from_table, Named};
+use crate::sampling::Sampler;
 
 /// How light arriving directly from emitters is estimated at each scattering vertex.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -157,5 +158,16 @@ impl Roulette {
             Roulette::Fixed { start, prob } if bounces >= start => prob.clamp(1e-6, 1.0),
             _ => 1.0,
         }
+    }
+
+    /// Plays roulette for a path with throughput `beta` (relative to its start):
+    /// `None` ends the path; `Some(q)` is the survival probability to divide the
+    /// throughput by (1 when no roulette is played, and then nothing is drawn).
+    pub fn play(&self, bounces: u32, beta: crate::Color, sampler: &mut Sampler) -> Option<f32> {
+        let q = self.continue_prob(bounces, beta);
+        if q < 1.0 && sampler.next_f32() >= q {
+            return None;
+        }
+        Some(q)
     }
 }

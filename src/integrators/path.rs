@@ -123,13 +123,10 @@ impl<'a> PathIntegrator<'a> {
                 break;
             }
             beta *= bs.weight;
-            let q = self.roulette.continue_prob(bounces, beta);
-            if q < 1.0 {
-                if sampler.next_f32() >= q {
-                    break;
-                }
-                beta /= q;
-            }
+            let Some(q) = self.roulette.play(bounces, beta, sampler) else {
+                break;
+            };
+            beta /= q;
             if !is_finite(beta) || beta == Color::ZERO {
                 break;
             }
