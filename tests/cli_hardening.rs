@@ -268,13 +268,11 @@ fn metadata_round_trips_through_info() {
 fn a_repeated_flag_takes_its_last_value() {
     let dir = tempfile::tempdir().unwrap();
     let out = dir.path().join("r.exr");
-    let o = ember()
-        .args(["-s", "1", "-s", "2", "-r", "4", "3", "-r", "8", "6", "-f"])
-        .arg(&out)
-        .arg(scene())
-        .output()
-        .unwrap();
-    assert!(o.status.success(), "{}", stderr(&o));
+    render_ok(
+        &["-s", "1", "-s", "2", "-r", "4", "3", "-r", "8", "6"],
+        &out,
+        &scene(),
+    );
     let meta = ember::image_io::read_metadata(&out).unwrap();
     assert_eq!(meta.get("ember.spp"), Some("2"));
     assert_eq!(meta.get("ember.resolution"), Some("8x6"));
@@ -414,13 +412,11 @@ fn time_budget_stops_and_writes() {
 fn a_capped_time_budget_ends_at_the_cap_like_a_pass_render() {
     let dir = tempfile::tempdir().unwrap();
     let out = dir.path().join("c.exr");
-    let o = ember()
-        .args(["-s", "6", "-r", "16", "12", "--time", "600", "-f"])
-        .arg(&out)
-        .arg(scene())
-        .output()
-        .unwrap();
-    assert!(o.status.success(), "{}", stderr(&o));
+    render_ok(
+        &["-s", "6", "-r", "16", "12", "--time", "600"],
+        &out,
+        &scene(),
+    );
     let meta = ember::image_io::read_metadata(&out).unwrap();
     assert_eq!(meta.get("ember.stopped"), Some("complete"));
     assert_eq!(
