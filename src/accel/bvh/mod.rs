@@ -6,6 +6,7 @@
 mod build;
 mod build_midpoint;
 mod build_sah;
+mod collapse;
 mod node;
 mod traverse;
 mod wide;
@@ -17,7 +18,8 @@ use crate::scene::{PrimHit, PrimId, Scene};
 use build::{build_nodes, BuildPrim};
 use build_midpoint::MidpointBuilder;
 use build_sah::SahBinnedBuilder;
-use wide::{collapse, ChildRef, WideNode, WIDTH};
+use collapse::collapse;
+use wide::{ChildRef, WideNode, WIDTH};
 
 /// Shape and quality of a built tree (the wide traversal layout), for `ember
 /// info` and benchmarks.
