@@ -1,19 +1,12 @@
 //! The course's camera flags end to end: `-c` camera settings files (and `ember camera
 //! --save`), `-p` cells, `-b`/`-d` thin lens. Images are compared as linear EXR, bit for bit.
 
+mod common;
+
+use common::{ember, shared};
 use ember::film::Image;
-use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
-
-fn ember() -> Command {
-    Command::new(env!("CARGO_BIN_EXE_ember"))
-}
-
-fn shared(rel: &str) -> PathBuf {
-    PathBuf::from(env!("CARGO_MANIFEST_DIR"))
-        .join("../shared")
-        .join(rel)
-}
+use std::path::Path;
+use std::process::Output;
 
 const SPHERES: &str = "scenes/cs184/sky/CBspheres_lambertian.dae";
 const BUNNY: &str = "scenes/cs184/sky/CBbunny.dae";

@@ -1,17 +1,8 @@
 //! The command line end to end: flags, errors, and never a partial output file.
 
-use std::path::PathBuf;
-use std::process::Command;
+mod common;
 
-fn ember() -> Command {
-    Command::new(env!("CARGO_BIN_EXE_ember"))
-}
-
-fn shared(rel: &str) -> PathBuf {
-    PathBuf::from(env!("CARGO_MANIFEST_DIR"))
-        .join("../shared")
-        .join(rel)
-}
+use common::{ember, shared};
 
 #[test]
 fn cs184_command_line_is_accepted_verbatim() {

@@ -1,19 +1,12 @@
 //! The command line under hostile plumbing: closed pipes, full disks, bad output
 //! paths, and error messages that say each cause once.
 
+mod common;
+
+use common::{ember, shared, stderr};
 use std::path::PathBuf;
 use std::process::{Command, Output, Stdio};
 use std::time::{Duration, Instant};
-
-fn ember() -> Command {
-    Command::new(env!("CARGO_BIN_EXE_ember"))
-}
-
-fn shared(rel: &str) -> PathBuf {
-    PathBuf::from(env!("CARGO_MANIFEST_DIR"))
-        .join("../shared")
-        .join(rel)
-}
 
 fn scene() -> PathBuf {
     shared("scenes/cs184/sky/CBempty.dae")
@@ -26,10 +19,6 @@ fn dev_full() -> Stdio {
             .open("/dev/full")
             .unwrap(),
     )
-}
-
-fn stderr(o: &Output) -> String {
-    String::from_utf8_lossy(&o.stderr).into_owned()
 }
 
 /// Not a panic: exit code 101 is Rust's panic exit, and the panic message names itself.

@@ -4,7 +4,7 @@
 
 mod common;
 
-use common::{chi2_p_value, integrate_bins, mean_and_stderr, sidak_significance};
+use common::{chi2_p_value, ember, integrate_bins, mean_and_stderr, sidak_significance};
 use ember::accel::{AccelKind, BvhBuilder};
 use ember::camera::Camera;
 use ember::film::Image;
@@ -18,7 +18,6 @@ use ember::sampling::Sampler;
 use ember::scene::{CameraDesc, Scene, Triangle, NO_LIGHT};
 use ember::{Color, Vec3};
 use std::path::{Path, PathBuf};
-use std::process::Command;
 use std::sync::Arc;
 
 /// The committed test map (`ember::bench::stability::environment::sun_sky_map`).
@@ -348,10 +347,6 @@ fn set_environment_replaces_the_ambient_light() {
     for t in lit {
         assert!(scene.lights[t.light as usize].as_area().is_some());
     }
-}
-
-fn ember() -> Command {
-    Command::new(env!("CARGO_BIN_EXE_ember"))
 }
 
 #[test]

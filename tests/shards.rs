@@ -4,14 +4,13 @@
 
 mod common;
 
-use common::{job, load, shared};
+use common::{ember, job, load, shared};
 use ember::accel::{AccelKind, BvhBuilder};
 use ember::film::Image;
 use ember::image_metadata::ImageMetadata;
 use ember::render::{Adaptive, PixelRect, RenderJob, RenderSettings};
 use ember::shard::{merge, MergeError, Part, Shard};
 use std::path::Path;
-use std::process::Command;
 
 const SCENE: &str = "scenes/cs184/sky/CBspheres_lambertian.dae";
 const SIZE: (u32, u32) = (40, 30);
@@ -227,10 +226,6 @@ fn bad_merges_are_refused_naming_the_file() {
         matches!(&e, MergeError::NotAPart { file, .. } if file == "top2.exr"),
         "{e}"
     );
-}
-
-fn ember() -> Command {
-    Command::new(env!("CARGO_BIN_EXE_ember"))
 }
 
 fn run(args: &[&str], dir: &Path) -> (bool, String) {
