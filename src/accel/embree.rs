@@ -182,15 +182,6 @@ impl EmbreeAccel {
     /// Builds on a fresh device with as many build threads as the current rayon pool.
     pub fn build(scene: &Scene, quality: EmbreeQuality) -> Result<EmbreeAccel, AccelError> {
         let device = Arc::new(EmbreeDevice::new(rayon::current_num_threads())?);
-        EmbreeAccel::build_on(device, scene, quality)
-    }
-
-    /// Builds robustly on `device`; see [`EmbreeAccel::build_mode`].
-    pub fn build_on(
-        device: Arc<EmbreeDevice>,
-        scene: &Scene,
-        quality: EmbreeQuality,
-    ) -> Result<EmbreeAccel, AccelError> {
         EmbreeAccel::build_mode(device, scene, EmbreeMode::robust(quality))
     }
 
@@ -255,7 +246,10 @@ impl EmbreeAccel {
         self.mode
     }
 
-    /// The scene flags Embree reports for this scene, by name ("ROBUST" or "NONE").
+    /// The scene flags Embree reports for this scene that tell the modes apart, by name
+    /// ("ROBUST" or "NONE"). The shim also sets the filter-function flag on every scene
+    /// (its filter skips the primitive a ray was spawned from); being the same in every
+    /// mode, it is left out of the name.
     pub fn scene_flags(&self) -> &'static str {
         // SAFETY: the scene is live.
         let flags = unsafe { ffi::ember_scene_flags(self.scene.as_ptr()) };
