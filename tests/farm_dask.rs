@@ -2,6 +2,8 @@
 //! scheduler and two workers on 127.0.0.1, `scripts/farm` submits 8 shards, one
 //! worker's process group is killed while it renders a shard, the shard is rerun on
 //! the other worker, and the merged image is bit-identical to a single-machine render.
+//! The render names an environment map relative to the farm's directory, so the
+//! workers (started elsewhere) read it only if the farm ships it.
 //!
 //! Needs the farm's virtual environment (`scripts/farm --setup`, or
 //! `EMBER_FARM_PYTHON`), so it is ignored by a plain `cargo test`; scripts/test runs it
@@ -191,10 +193,21 @@ fn dask_farm_survives_a_killed_worker_and_merges_bit_identically() {
         worker_pid.push(pid);
     }
 
+    // An environment map named relative to the farm's directory, which the workers
+    // (started elsewhere) can only read if the farm ships it with the tasks.
+    fs::copy(
+        Path::new(ROOT).join("scenes/env_sun.exr"),
+        d.join("sun.exr"),
+    )
+    .unwrap();
+    let env = ["-e", "sun.exr"];
+
     // The single-machine render.
     let single = d.join("single.exr");
     let st = Command::new(ember)
+        .current_dir(d)
         .args(RENDER)
+        .args(env)
         .arg("-f")
         .arg(&single)
         .arg(&scene)
@@ -207,6 +220,7 @@ fn dask_farm_survives_a_killed_worker_and_merges_bit_identically() {
     procs.spawn(
         "farm",
         Command::new(&py)
+            .current_dir(d)
             .arg(Path::new(ROOT).join("scripts/farm"))
             .args([
                 "--scheduler",
@@ -218,6 +232,7 @@ fn dask_farm_survives_a_killed_worker_and_merges_bit_identically() {
             ])
             .args(["--timeout", "60", "--ember", ember, "--"])
             .args(RENDER)
+            .args(env)
             .arg("-f")
             .arg(&merged)
             .arg(&scene),
