@@ -22,106 +22,46 @@ use indicatif::{ProgressBar, ProgressStyle};
 use std::io::IsTerminal;
 use std::path::{Path, PathBuf};
 use std::sync::atomic::Ordering;
-use std::time::Instant;
+use std::time::{Duration, Instant};
 
 /// `ember [OPTIONS] SCENE`: one render to an image file.
 pub(super) fn render(mut args: RenderArgs) -> Result<()> {
     adopt_scene_from_adaptive(&mut args);
-    check_flags(&args)?;
-    if !args.accel.available() {
-        bail!("{}", accel::AccelError::EmbreeUnavailable);
-    }
-    let Some(scene_path) = args.scene.clone() else {
-        bail!("no scene given; usage: ember [OPTIONS] SCENE.dae (see ember --help)");
-    };
-    let (width, height) = (args.resolution[0], args.resolution[1]);
-    check_resolution(width, height)?;
-    let settings = settings_from(&args)?;
-    for w in flag_warnings(&args) {
-        ember::errln!("ember: warning: {w}");
-    }
-    let plan = run_plan(&args, &settings)?;
-    check_lens(&args.lens)?;
-    let camera_file = (args.camera_file.as_deref())
-        .map(CourseCameraFile::read)
-        .transpose()?;
-    let cell = (args.cell.as_deref())
-        .map(|c| cell_rect(c, width, height))
-        .transpose()?;
-    let out = output_path(&args, &scene_path)?;
-    let part = part_plan(&args, &out, width, height)?;
+    let req = RenderRequest::new(&args)?;
     // Claim the outputs before loading, so a bad path fails at once and no partial file appears.
-    let inputs: Vec<&Path> = std::iter::once(scene_path.as_path())
+    let inputs: Vec<&Path> = std::iter::once(req.scene_path.as_path())
         .chain(args.env_map.as_deref())
         .collect();
-    let mut pending = PendingImage::claim(&out, &inputs)?;
-    let pending_rate = match (settings.adaptive, &part) {
-        (Some(_), None) => Some(PendingImage::claim(&rate_path(&out), &inputs)?),
+    let mut pending = PendingImage::claim(&req.out, &inputs)?;
+    let pending_rate = match (req.settings.adaptive, &req.part) {
+        (Some(_), None) => Some(PendingImage::claim(&rate_path(&req.out), &inputs)?),
         _ => None,
     };
     let interrupt = interrupt::install()?;
-    let kind = match accel::AccelKind::new(
-        args.accel,
-        args.bvh.unwrap_or_default(),
-        args.embree_quality.unwrap_or_default(),
-    ) {
-        // The BVH-cost heat map counts the native tree's traversal steps, which
-        // Embree does not expose: auto keeps the native tree for it.
-        accel::AccelKind::Auto { bvh, .. }
-            if settings.shading == ember::render::Shading::BvhCost =>
-        {
-            accel::AccelKind::Native(bvh)
-        }
-        kind => kind,
-    };
     let pool = thread_pool(args.threads)?;
-    // The buffers are the cell's, unless the cell is written in a full frame.
-    let (mw, mh) = match (cell, args.full_frame) {
-        (Some(r), false) => (r.width(), r.height()),
-        _ => (width, height),
-    };
-    check_memory(mw, mh, plan)?;
-    let t0 = Instant::now();
-    let mut scene = load_scene(&scene_path)?;
-    apply_env_map(args.env_map.as_deref(), &mut scene)?;
-    let t_load = t0.elapsed();
-    if part.is_some() && settings.estimator_for(&scene) == Estimator::LightTracing {
-        bail!("--shard/--spp-offset cannot be used with light tracing (the estimator for {}): its light paths splat anywhere in the image, so every band would trace all of them, and its paths are not numbered by sample; use --integrator path", scene_path.display());
-    }
-    let (camera, camera_warning) =
-        convert::camera(&scene, camera_file.as_ref(), &args.lens, (width, height))?;
-    if let (Some(w), Some(file)) = (camera_warning, &args.camera_file) {
-        ember::errln!("ember: warning: {}: {w}", file.display());
-    }
-    let t1 = Instant::now();
-    let job = pool.install(|| RenderJob::with_camera(scene, kind, camera))?;
-    let t_build = t1.elapsed();
+    req.check_memory()?;
+    let (job, t_load, t_build) = req.build_job(&args, &pool)?;
     // Again now that the scene and its BVH hold their share.
-    check_memory(mw, mh, plan)?;
+    req.check_memory()?;
     if interrupt.load(Ordering::Relaxed) {
         return Err(Interrupted("interrupted before rendering; nothing written".into()).into());
     }
-    for w in job.warnings(&settings) {
-        ember::errln!("ember: warning: {w}");
-    }
-    if cell.is_some() && settings.shading == Shading::BvhCost && args.cost_scale.is_none() {
-        ember::errln!("ember: warning: -p: the bvh-cost heat map is scaled to the cell's own pixels, not the full image's; --cost-scale fixes the scale");
-    }
+    req.warn_before_rendering(&args, &job);
     let t2 = Instant::now();
     let mut stop = StopToken::never().with_flag(interrupt);
-    if let Some(t) = plan.time {
+    if let Some(t) = req.plan.time {
         stop = stop.with_deadline(t2 + t);
     }
     let run = RenderRun {
-        scene_path: &scene_path,
-        out: &out,
+        scene_path: &req.scene_path,
+        out: &req.out,
         args: &args,
         job: &job,
-        settings: &settings,
-        cell,
-        part,
+        settings: &req.settings,
+        cell: req.cell,
+        part: req.part,
     };
-    let done = pool.install(|| run.execute(plan, &stop, &mut pending))?;
+    let done = pool.install(|| run.execute(req.plan, &stop, &mut pending))?;
     let t_render = t2.elapsed();
     let cost_scale = run.write(&done, pending, pending_rate, t_render.as_secs_f64())?;
     if done.output.nonfinite_samples > 0 {
@@ -134,7 +74,7 @@ pub(super) fn render(mut args: RenderArgs) -> Result<()> {
         let samples = done.output.total_samples();
         ember::errln!(
             "ember: {}: loaded in {:.1} ms, {} built in {:.1} ms, {} samples in {:.3} s ({:.2} M samples/s); {}; wrote {}",
-            scene_path.display(),
+            req.scene_path.display(),
             t_load.as_secs_f64() * 1e3,
             job.accel.name(),
             t_build.as_secs_f64() * 1e3,
@@ -142,10 +82,130 @@ pub(super) fn render(mut args: RenderArgs) -> Result<()> {
             t_render.as_secs_f64(),
             samples as f64 / t_render.as_secs_f64() / 1e6,
             run.settings_summary(&done, pool.current_num_threads()),
-            out.display()
+            req.out.display()
         );
     }
     run.outcome(&done, cost_scale)
+}
+
+/// A render's flags checked and converted, before anything is loaded.
+struct RenderRequest {
+    scene_path: PathBuf,
+    width: u32,
+    height: u32,
+    settings: RenderSettings,
+    plan: RunPlan,
+    camera_file: Option<CourseCameraFile>,
+    /// `-p`: the cell rendered instead of the whole image.
+    cell: Option<PixelRect>,
+    out: PathBuf,
+    part: Option<(PixelRect, Option<Shard>)>,
+    full_frame: bool,
+}
+
+impl RenderRequest {
+    fn new(args: &RenderArgs) -> Result<RenderRequest> {
+        check_flags(args)?;
+        if !args.accel.available() {
+            bail!("{}", accel::AccelError::EmbreeUnavailable);
+        }
+        let Some(scene_path) = args.scene.clone() else {
+            bail!("no scene given; usage: ember [OPTIONS] SCENE.dae (see ember --help)");
+        };
+        let (width, height) = (args.resolution[0], args.resolution[1]);
+        check_resolution(width, height)?;
+        let settings = settings_from(args)?;
+        for w in flag_warnings(args) {
+            ember::errln!("ember: warning: {w}");
+        }
+        let plan = run_plan(args, &settings)?;
+        check_lens(&args.lens)?;
+        let camera_file = (args.camera_file.as_deref())
+            .map(CourseCameraFile::read)
+            .transpose()?;
+        let cell = (args.cell.as_deref())
+            .map(|c| cell_rect(c, width, height))
+            .transpose()?;
+        let out = output_path(args, &scene_path)?;
+        let part = part_plan(args, &out, width, height)?;
+        Ok(RenderRequest {
+            scene_path,
+            width,
+            height,
+            settings,
+            plan,
+            camera_file,
+            cell,
+            out,
+            part,
+            full_frame: args.full_frame,
+        })
+    }
+
+    /// The buffers are the cell's, unless the cell is written in a full frame.
+    fn check_memory(&self) -> Result<()> {
+        let (w, h) = match (self.cell, self.full_frame) {
+            (Some(r), false) => (r.width(), r.height()),
+            _ => (self.width, self.height),
+        };
+        check_memory(w, h, self.plan)
+    }
+
+    /// The backend `--accel` asks for. The BVH-cost heat map counts the native tree's
+    /// traversal steps, which Embree does not expose: auto keeps the native tree for it.
+    fn accel_kind(&self, args: &RenderArgs) -> accel::AccelKind {
+        match accel::AccelKind::new(
+            args.accel,
+            args.bvh.unwrap_or_default(),
+            args.embree_quality.unwrap_or_default(),
+        ) {
+            accel::AccelKind::Auto { bvh, .. } if self.settings.shading == Shading::BvhCost => {
+                accel::AccelKind::Native(bvh)
+            }
+            kind => kind,
+        }
+    }
+
+    /// Loads the scene (and `-e` map), places the camera and builds the accelerator;
+    /// returns the job with the load and build times.
+    fn build_job(
+        &self,
+        args: &RenderArgs,
+        pool: &rayon::ThreadPool,
+    ) -> Result<(RenderJob, Duration, Duration)> {
+        let t0 = Instant::now();
+        let mut scene = load_scene(&self.scene_path)?;
+        apply_env_map(args.env_map.as_deref(), &mut scene)?;
+        let t_load = t0.elapsed();
+        if self.part.is_some() && self.settings.estimator_for(&scene) == Estimator::LightTracing {
+            bail!("--shard/--spp-offset cannot be used with light tracing (the estimator for {}): its light paths splat anywhere in the image, so every band would trace all of them, and its paths are not numbered by sample; use --integrator path", self.scene_path.display());
+        }
+        let (camera, camera_warning) = convert::camera(
+            &scene,
+            self.camera_file.as_ref(),
+            &args.lens,
+            (self.width, self.height),
+        )?;
+        if let (Some(w), Some(file)) = (camera_warning, &args.camera_file) {
+            ember::errln!("ember: warning: {}: {w}", file.display());
+        }
+        let kind = self.accel_kind(args);
+        let t1 = Instant::now();
+        let job = pool.install(|| RenderJob::with_camera(scene, kind, camera))?;
+        Ok((job, t_load, t1.elapsed()))
+    }
+
+    fn warn_before_rendering(&self, args: &RenderArgs, job: &RenderJob) {
+        for w in job.warnings(&self.settings) {
+            ember::errln!("ember: warning: {w}");
+        }
+        if self.cell.is_some()
+            && self.settings.shading == Shading::BvhCost
+            && args.cost_scale.is_none()
+        {
+            ember::errln!("ember: warning: -p: the bvh-cost heat map is scaled to the cell's own pixels, not the full image's; --cost-scale fixes the scale");
+        }
+    }
 }
 
 /// The bvh-cost image: raw counts in an EXR, a heat map (blue 0, red `scale`) in a PNG.
