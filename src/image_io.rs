@@ -104,6 +104,7 @@ impl PendingImage {
         }
         let tmp = temp_sibling(path);
         let file = create_temp(&tmp, path)?;
+        temporaries::register(&tmp);
         Ok(PendingImage {
             path: path.to_path_buf(),
             tmp,
@@ -192,6 +193,49 @@ impl Drop for PendingImage {
     fn drop(&mut self) {
         if self.file.is_some() {
             let _ = std::fs::remove_file(&self.tmp);
+        }
+    }
+}
+
+/// Removes the temporaries of every output claimed and not yet written, for an exit
+/// that runs no destructors (a second Ctrl-C). Async-signal-safe: it only reads
+/// atomics and calls `unlink`, so a signal handler may call it.
+pub fn remove_claimed_temporaries() {
+    temporaries::remove_all();
+}
+
+/// The paths of claimed temporaries, readable from a signal handler: fixed slots of
+/// pointers to NUL-terminated paths. A path's allocation is never freed (a few bytes
+/// per output per process), so a handler never reads freed memory; a temporary that
+/// was already renamed or removed makes `unlink` fail harmlessly.
+mod temporaries {
+    use std::ffi::{c_char, CString};
+    use std::os::unix::ffi::OsStrExt;
+    use std::path::Path;
+    use std::sync::atomic::{AtomicPtr, Ordering};
+
+    const SLOTS: usize = 16;
+    static CLAIMED: [AtomicPtr<c_char>; SLOTS] =
+        [const { AtomicPtr::new(std::ptr::null_mut()) }; SLOTS];
+
+    pub(super) fn register(tmp: &Path) {
+        let Ok(c) = CString::new(tmp.as_os_str().as_bytes()) else {
+            return;
+        };
+        let raw = c.into_raw();
+        // Slots are reused round robin once full: only the latest outputs matter.
+        static NEXT: std::sync::atomic::AtomicUsize = std::sync::atomic::AtomicUsize::new(0);
+        let slot = NEXT.fetch_add(1, Ordering::Relaxed) % SLOTS;
+        CLAIMED[slot].store(raw, Ordering::SeqCst);
+    }
+
+    pub(super) fn remove_all() {
+        for slot in &CLAIMED {
+            let p = slot.load(Ordering::SeqCst);
+            if !p.is_null() {
+                // SAFETY: `p` is a NUL-terminated string that is never freed.
+                unsafe { libc::unlink(p) };
+            }
         }
     }
 }

@@ -355,6 +355,37 @@ fn sigint_writes_what_was_rendered_and_no_partial_file() {
     }
 }
 
+/// A second Ctrl-C while the first one's image is being written ends ember at once:
+/// status 130, and no temporary is left (the output is there only if it was complete).
+#[test]
+fn second_sigint_exits_at_once_and_leaves_no_temporary() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("big.png");
+    let child = ember()
+        .args(["-t", "1", "-s", "100000", "-m", "5", "-r", "1600", "1200"])
+        .arg("-f")
+        .arg(&out)
+        .arg(shared("scenes/cs184/sky/CBspheres_lambertian.dae"))
+        .stdout(Stdio::null())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    wait_for(|| !leftovers(dir.path(), &[]).is_empty());
+    std::thread::sleep(Duration::from_millis(1500));
+    send_sigint(&child);
+    // Separate deliveries (pending signals of one kind coalesce), while the 1600x1200
+    // PNG of the first is still being encoded.
+    std::thread::sleep(Duration::from_millis(30));
+    send_sigint(&child);
+    let o = child.wait_with_output().unwrap();
+    assert_no_panic(&o);
+    assert_eq!(o.status.code(), Some(130), "{}", stderr(&o));
+    assert_eq!(leftovers(dir.path(), &["big.png"]), Vec::<String>::new());
+    if out.exists() {
+        assert_eq!(ember::image_io::read_image(&out).unwrap().width, 1600);
+    }
+}
+
 #[test]
 fn checkpoints_hold_whole_images_while_rendering() {
     let dir = tempfile::tempdir().unwrap();

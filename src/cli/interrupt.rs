@@ -1,10 +1,11 @@
 //! Ctrl-C and SIGTERM during a render: the first sets a flag that the render loop
 //! reads (it stops, and ember writes what was rendered); a second ends ember at once
-//! with status 130, leaving any earlier output untouched.
+//! with status 130, removing the temporaries of unwritten outputs and leaving any
+//! earlier output untouched.
 
 use anyhow::{Context, Result};
 use signal_hook::consts::{SIGINT, SIGTERM};
-use std::sync::atomic::AtomicBool;
+use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::Arc;
 
 /// Exit status after an interrupt (128 + SIGINT), as shells report it.
@@ -15,12 +16,17 @@ pub(super) fn install() -> Result<Arc<AtomicBool>> {
     let flag = Arc::new(AtomicBool::new(false));
     for sig in [SIGINT, SIGTERM] {
         // Registered first, so it sees the flag as the previous signal left it.
-        signal_hook::flag::register_conditional_shutdown(
-            sig,
-            EXIT_INTERRUPTED as i32,
-            flag.clone(),
-        )
-        .context("cannot install the Ctrl-C handler")?;
+        let seen = flag.clone();
+        let second = move || {
+            if seen.load(Ordering::SeqCst) {
+                ember::image_io::remove_claimed_temporaries();
+                signal_hook::low_level::exit(EXIT_INTERRUPTED as i32);
+            }
+        };
+        // SAFETY: the action only loads an atomic, unlinks files and calls `_exit`,
+        // all async-signal-safe.
+        unsafe { signal_hook::low_level::register(sig, second) }
+            .context("cannot install the Ctrl-C handler")?;
         signal_hook::flag::register(sig, flag.clone())
             .context("cannot install the Ctrl-C handler")?;
     }
