@@ -63,10 +63,13 @@ impl fmt::Display for Shard {
 }
 
 /// Metadata keys that differ between the parts of one render; every other key must agree.
-pub const PER_PART_KEYS: [&str; 10] = [
+/// Input files (camera file, environment map) may sit at another path on each machine;
+/// their hashes (`KEY.fnv1a64`) are not per part, so their contents must agree.
+pub const PER_PART_KEYS: [&str; 11] = [
     "ember.camera_file",
     "ember.command_line",
     "ember.cpu",
+    "ember.env_map",
     "ember.pixels_rendered",
     "ember.render_seconds",
     "ember.samples_per_pixel",
