@@ -307,6 +307,12 @@ impl Scene {
         }
     }
 
+    /// The axes on which triangle `i`'s three corners have the same coordinate.
+    fn exact_axes(&self, i: usize) -> glam::BVec3 {
+        let [p0, p1, p2] = self.triangle_positions(i);
+        p0.cmpeq(p1) & p0.cmpeq(p2)
+    }
+
     fn triangle_interaction(&self, i: usize, h: &PrimHit) -> SurfaceInteraction {
         let tri = &self.triangles[i];
         let [p0, p1, p2] = self.triangle_positions(i);
@@ -320,6 +326,11 @@ impl Scene {
         let local = h.b1 * e1 + h.b2 * e2;
         let p = p0 + local;
         let p_error = gamma(2) * p.abs() + gamma(4) * ((h.b1 * e1).abs() + (h.b2 * e2).abs());
+        // On an axis where the three corners agree (a wall, floor or ceiling), both edge
+        // terms are exact zeros and `p` is corner 0's own coordinate: no error there, so
+        // rays leave such a plane from on it, as they do from a plane through 0. Else a
+        // floor at 1e5 sends them ~2e-2 up, inside a ball resting on it (case 5).
+        let p_error = Vec3::select(self.exact_axes(i), Vec3::ZERO, p_error);
         let mut ng = (p1 - p0).cross(p2 - p0).normalize_or_zero();
         let mut ns = ng;
         if let Some(n) = tri.n {
@@ -413,10 +424,17 @@ impl Scene {
         let p = from + s * w;
         let i = si.prim as usize;
         let mut out = *si;
+        // The found point's error (the plane's), plus the rounding of `from + s·w`.
+        let mut p_error = si.p_error + gamma(1) * p.abs() + gamma(5) * (s * w).abs();
+        let mut p = p;
         if i < self.triangles.len() {
             if !self.triangle_contains(i, p) {
                 return *si;
             }
+            // On an axis where the corners agree the plane's coordinate is exact: keep it.
+            let exact = self.exact_axes(i);
+            p = Vec3::select(exact, si.p, p);
+            p_error = Vec3::select(exact, Vec3::ZERO, p_error);
         } else {
             // Relative to the centre, as in `sphere_interaction`.
             let sp = &self.spheres[i - self.triangles.len()];
@@ -426,8 +444,7 @@ impl Scene {
             }
             (out.ng, out.ns) = (n, n);
         }
-        // The found point's error (the plane's), plus the rounding of `from + s·w`.
-        out.p_error = si.p_error + gamma(1) * p.abs() + gamma(5) * (s * w).abs();
+        out.p_error = p_error;
         out.p = p;
         out
     }
