@@ -17,7 +17,7 @@ use crate::integrators::{
     debug, light_tracing, DirectStrategy, Estimator, PathIntegrator, PathSettings, Roulette,
 };
 use crate::names::{display_from_table, Named};
-use crate::sampling::Sampler;
+use crate::sampling::PixelStreams;
 use crate::scene::Scene;
 use crate::Color;
 use rayon::prelude::*;
@@ -340,10 +340,11 @@ fn render_pixel(
     let (mut sum, mut s1, mut s2) = (Color::ZERO, 0f64, 0f64);
     let (mut n, mut nonfinite) = (0u32, 0u32);
     let batch = s.adaptive.map_or(s.spp.max(1), |a| a.batch);
+    let streams = PixelStreams::new(s.seed, pixel);
     while n < s.spp.max(1) {
         for _ in 0..batch.min(s.spp.max(1) - n) {
             let index = s.spp_offset as u64 + n as u64;
-            let mut sampler = Sampler::for_sample(s.seed, pixel, index);
+            let mut sampler = streams.sample(index);
             let ray = camera.sample_ray(x, y, &mut sampler);
             let mut v = match s.shading {
                 Shading::Radiance => integrator.li(ray, &mut sampler),

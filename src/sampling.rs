@@ -18,11 +18,7 @@ impl Sampler {
     /// `0..N` or only `S..S+M` (`--spp-offset`), and shards of samples merge into the
     /// render of all of them.
     pub fn for_sample(seed: u64, pixel: u64, sample: u64) -> Self {
-        let key = splitmix64(splitmix64(splitmix64(seed) ^ pixel) ^ sample);
-        let stream = splitmix64(key ^ 0xD1B5_4A32_D192_ED03);
-        Sampler {
-            rng: Pcg32::new(key, stream),
-        }
+        PixelStreams::new(seed, pixel).sample(sample)
     }
 
     pub fn new(seed: u64, pixel: u64, pass: u64) -> Self {
@@ -52,6 +48,32 @@ impl Sampler {
     }
 }
 
+/// The streams of one pixel's samples (`Sampler::for_sample`), with the hash of (seed,
+/// pixel) done once: a render's inner loop then hashes only the sample index.
+#[derive(Clone, Copy, Debug)]
+pub struct PixelStreams {
+    key: u64,
+}
+
+impl PixelStreams {
+    pub fn new(seed: u64, pixel: u64) -> Self {
+        PixelStreams {
+            key: splitmix64(splitmix64(seed) ^ pixel),
+        }
+    }
+
+    /// The stream of sample `sample`: the same as `Sampler::for_sample(seed, pixel, sample)`.
+    #[inline]
+    pub fn sample(&self, sample: u64) -> Sampler {
+        let key = splitmix64(self.key ^ sample);
+        let stream = splitmix64(key ^ 0xD1B5_4A32_D192_ED03);
+        Sampler {
+            rng: Pcg32::new(key, stream),
+        }
+    }
+}
+
+#[inline]
 fn splitmix64(mut z: u64) -> u64 {
     z = z.wrapping_add(0x9E37_79B9_7F4A_7C15);
     z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);

@@ -79,8 +79,10 @@ impl<'a> PathIntegrator<'a> {
         let mut bounces = 0u32;
         loop {
             let hit = self.accel.intersect(&ray);
+            // The unit direction, once: emission, the line test and `wo` all use it.
+            let w = ray.d.normalize();
             if let Some(v) = prev {
-                if let Some(le) = self.area_light_on_line(v, &ray, hit.as_ref()) {
+                if let Some(le) = self.area_light_on_line(v, &ray, w, hit.as_ref()) {
                     if self.counts(bounces) {
                         l += beta * le;
                     }
@@ -89,15 +91,15 @@ impl<'a> PathIntegrator<'a> {
             }
             let Some(hit) = hit else {
                 if self.counts(bounces) {
-                    l += beta * self.escaped(&ray, prev);
+                    l += beta * self.escaped(w, prev);
                 }
                 break;
             };
             let mut si = self.scene.interaction(&ray, &hit);
             if let Some(v) = prev {
-                si = self.scene.on_line(&si, v.p, ray.d.normalize());
+                si = self.scene.on_line(&si, v.p, w);
             }
-            let wo_world = -ray.d.normalize();
+            let wo_world = -w;
             let material = &self.scene.materials[si.material as usize];
             if self.counts(bounces) {
                 l += beta * self.emitted(&si, wo_world, prev);
@@ -185,8 +187,15 @@ impl<'a> PathIntegrator<'a> {
     /// reaches is decided analytically from `v.p`, relative to each light (`AreaLight::
     /// intersect`); the traced ray only says what lies in front of it. The path ends at
     /// the light, as it would on its surface (lights do not reflect).
-    fn area_light_on_line(&self, v: PrevVertex, ray: &Ray, hit: Option<&PrimHit>) -> Option<Color> {
-        let w = ray.d.normalize();
+    ///
+    /// `w` is `ray.d` normalised.
+    fn area_light_on_line(
+        &self,
+        v: PrevVertex,
+        ray: &Ray,
+        w: Vec3,
+        hit: Option<&PrimHit>,
+    ) -> Option<Color> {
         // How far along the line from v.p the traced ray's hit lies (∞ for a miss).
         let t_hit = hit.map_or(f32::INFINITY, |h| (ray.at(h.t) - v.p).dot(w));
         // Primitives past the triangles are spheres, never lights.
@@ -223,8 +232,8 @@ impl<'a> PathIntegrator<'a> {
         le * self.bsdf_hit_weight(prev, light, -wo)
     }
 
-    fn escaped(&self, ray: &Ray, prev: Option<PrevVertex>) -> Color {
-        let d = ray.d.normalize();
+    /// Light reaching a ray that left the scene in unit direction `d`.
+    fn escaped(&self, d: Vec3, prev: Option<PrevVertex>) -> Color {
         let mut l = Color::ZERO;
         for light in &self.scene.lights {
             let le = light.le_escaped(d);
