@@ -7,6 +7,7 @@ use crate::geometry::triangle::{triangle_is_hittable, PackedTriangle, Triangle4,
 use crate::geometry::{Aabb, Ray};
 use crate::scene::{PrimHit, PrimId, Scene};
 use glam::Vec3;
+use rayon::prelude::*;
 
 /// One ray's per-ray setup for every primitive test.
 pub(crate) struct PrimRay<'a> {
@@ -250,8 +251,18 @@ impl TriBlock {
 /// their bounds. Both the BVH and the brute-force oracle start from this list,
 /// so they agree on what exists.
 pub(crate) fn hittable_prims(scene: &Scene) -> Vec<(PrimId, Aabb)> {
+    hittable_prims_as(scene, |id, bounds| (id, bounds))
+}
+
+/// [`hittable_prims`] made into records by `record(id, bounds)` on the way (no
+/// list in between); checked in parallel, the list is in id order.
+pub(crate) fn hittable_prims_as<T: Send>(
+    scene: &Scene,
+    record: impl Fn(PrimId, Aabb) -> T + Sync,
+) -> Vec<T> {
     let ntri = scene.triangles.len();
     (0..scene.num_prims())
+        .into_par_iter()
         .filter(|&i| {
             if i < ntri {
                 let in_range = scene.triangles[i]
@@ -268,6 +279,6 @@ pub(crate) fn hittable_prims(scene: &Scene) -> Vec<(PrimId, Aabb)> {
                 sphere_is_hittable(s.centre, s.radius)
             }
         })
-        .map(|i| (i as PrimId, scene.prim_bounds(i as PrimId)))
+        .map(|i| record(i as PrimId, scene.prim_bounds(i as PrimId)))
         .collect()
 }
