@@ -2,8 +2,9 @@
 //! binary leaf (at most 4 primitives) becomes one [`TriBlock`].
 //!
 //! The top wide levels convert their subtrees in parallel, each into its own
-//! [`WideTree`] appended in slot order with its indices shifted, so the layout
-//! is exactly the serial depth-first one whatever the thread count.
+//! [`Shape`] appended in slot order with its indices shifted, so the layout is
+//! exactly the serial depth-first one whatever the thread count; the leaf
+//! blocks are then made in parallel, in that order.
 
 use super::node::BvhNode;
 use super::wide::{ChildRef, WideNode, WIDTH};
@@ -12,8 +13,8 @@ use crate::scene::Scene;
 use rayon::prelude::*;
 
 /// Wide levels above this depth convert their inner children in parallel
-/// (at most `WIDTH³` tasks).
-const PARALLEL_DEPTH: u32 = 3;
+/// (at most `WIDTH²` tasks).
+const PARALLEL_DEPTH: u32 = 2;
 
 /// The collapsed tree: nodes (root at 0 unless the root is a leaf), leaf blocks,
 /// and the reference traversal starts from.
@@ -23,13 +24,21 @@ pub(crate) struct WideTree {
     pub root: ChildRef,
 }
 
-/// What every step of the collapse reads.
-#[derive(Clone, Copy)]
-struct Source<'a> {
-    nodes: &'a [BvhNode],
-    scene: &'a Scene,
-    /// `order[slot]` is the primitive id in leaf slot `slot`.
-    order: &'a [u32],
+/// The wide tree before its leaf blocks are made: each leaf as the range
+/// `(first, count)` of primitive slots its block will hold. Blocks are 20 times
+/// bigger; they are made afterwards in parallel, straight into their vector.
+struct Shape {
+    nodes: Vec<WideNode>,
+    leaves: Vec<(u32, u32)>,
+}
+
+impl Shape {
+    fn new() -> Self {
+        Shape {
+            nodes: Vec::new(),
+            leaves: Vec::new(),
+        }
+    }
 }
 
 /// Collapses the builder's depth-first binary nodes into wide nodes: each wide
@@ -37,39 +46,43 @@ struct Source<'a> {
 /// (by surface area) until it has [`WIDTH`] children. `order[slot]` is the
 /// primitive id in leaf slot `slot`.
 pub(crate) fn collapse(nodes: &[BvhNode], scene: &Scene, order: &[u32]) -> WideTree {
-    // Guesses from the primitive count: leaves hold about 3.8 primitives on
-    // meshes, wide nodes about 4 children.
-    let mut tree = WideTree {
-        nodes: Vec::with_capacity(order.len() / 8 + 1),
-        blocks: Vec::with_capacity(order.len() / 3 + 1),
-        root: ChildRef::default(),
-    };
+    let mut shape = Shape::new();
     let Some(root) = nodes.first() else {
-        return tree;
+        return WideTree {
+            nodes: Vec::new(),
+            blocks: Vec::new(),
+            root: ChildRef::default(),
+        };
     };
-    let src = Source {
-        nodes,
-        scene,
-        order,
-    };
-    tree.root = if root.count() > 0 {
-        leaf_ref(root, src, &mut tree.blocks)
+    let root = if root.count() > 0 {
+        leaf_ref(root, &mut shape.leaves)
     } else {
         ChildRef {
-            index: convert(src, 0, 0, &mut tree),
+            index: convert(nodes, 0, 0, &mut shape),
             count: 0,
         }
     };
-    tree
+    let blocks = shape
+        .leaves
+        .par_iter()
+        .map(|&(first, count)| {
+            let (first, count) = (first as usize, count as usize);
+            TriBlock::new(scene, &order[first..first + count])
+        })
+        .collect();
+    WideTree {
+        nodes: shape.nodes,
+        blocks,
+        root,
+    }
 }
 
-fn leaf_ref(leaf: &BvhNode, src: Source, blocks: &mut Vec<TriBlock>) -> ChildRef {
-    let (first, count) = (leaf.offset as usize, leaf.count() as usize);
-    debug_assert!(count <= 4, "leaves hold at most one block");
-    blocks.push(TriBlock::new(src.scene, &src.order[first..first + count]));
+fn leaf_ref(leaf: &BvhNode, leaves: &mut Vec<(u32, u32)>) -> ChildRef {
+    debug_assert!(leaf.count() <= 4, "leaves hold at most one block");
+    leaves.push((leaf.offset, leaf.count()));
     ChildRef {
-        index: (blocks.len() - 1) as u32,
-        count: count as u32,
+        index: (leaves.len() - 1) as u32,
+        count: leaf.count(),
     }
 }
 
@@ -114,38 +127,38 @@ fn wide_children(nodes: &[BvhNode], i: usize) -> ([usize; WIDTH], usize) {
 
 /// Emits inner node `i` (as a wide node at wide depth `depth`) and its
 /// descendants; returns its index.
-fn convert(src: Source, i: usize, depth: u32, tree: &mut WideTree) -> u32 {
-    let (kids, len) = wide_children(src.nodes, i);
+fn convert(nodes: &[BvhNode], i: usize, depth: u32, tree: &mut Shape) -> u32 {
+    let (kids, len) = wide_children(nodes, i);
     let kids = &kids[..len];
     let me = tree.nodes.len();
     tree.nodes.push(WideNode::default());
     let mut node = WideNode::default();
     for (slot, &k) in kids.iter().enumerate() {
-        let child = &src.nodes[k];
+        let child = &nodes[k];
         for axis in 0..3 {
             node.lo[axis][slot] = child.min[axis];
             node.hi[axis][slot] = child.max[axis];
         }
     }
     if depth < PARALLEL_DEPTH {
-        let subtrees: Vec<Option<WideTree>> = kids
+        let subtrees: Vec<Option<Shape>> = kids
             .par_iter()
-            .map(|&k| (src.nodes[k].count() == 0).then(|| subtree(src, k, depth + 1)))
+            .map(|&k| (nodes[k].count() == 0).then(|| subtree(nodes, k, depth + 1)))
             .collect();
         for (slot, (&k, sub)) in kids.iter().zip(subtrees).enumerate() {
             node.children[slot] = match sub {
                 Some(sub) => append_shifted(tree, sub),
-                None => leaf_ref(&src.nodes[k], src, &mut tree.blocks),
+                None => leaf_ref(&nodes[k], &mut tree.leaves),
             };
         }
     } else {
         for (slot, &k) in kids.iter().enumerate() {
-            let child = &src.nodes[k];
+            let child = &nodes[k];
             node.children[slot] = if child.count() > 0 {
-                leaf_ref(child, src, &mut tree.blocks)
+                leaf_ref(child, &mut tree.leaves)
             } else {
                 ChildRef {
-                    index: convert(src, k, depth + 1, tree),
+                    index: convert(nodes, k, depth + 1, tree),
                     count: 0,
                 }
             };
@@ -156,21 +169,17 @@ fn convert(src: Source, i: usize, depth: u32, tree: &mut WideTree) -> u32 {
 }
 
 /// Inner node `i` and its descendants as a tree of their own (indices from 0).
-fn subtree(src: Source, i: usize, depth: u32) -> WideTree {
-    let mut tree = WideTree {
-        nodes: Vec::new(),
-        blocks: Vec::new(),
-        root: ChildRef::default(),
-    };
-    convert(src, i, depth, &mut tree);
+fn subtree(nodes: &[BvhNode], i: usize, depth: u32) -> Shape {
+    let mut tree = Shape::new();
+    convert(nodes, i, depth, &mut tree);
     tree
 }
 
 /// Appends `sub` (converted on its own) to `tree`, shifting its node and block
 /// indices; returns the reference to its root.
-fn append_shifted(tree: &mut WideTree, sub: WideTree) -> ChildRef {
+fn append_shifted(tree: &mut Shape, sub: Shape) -> ChildRef {
     let node_shift = tree.nodes.len() as u32;
-    let block_shift = tree.blocks.len() as u32;
+    let block_shift = tree.leaves.len() as u32;
     tree.nodes.extend(sub.nodes.into_iter().map(|mut node| {
         for c in &mut node.children {
             if c.is_leaf() {
@@ -181,7 +190,7 @@ fn append_shifted(tree: &mut WideTree, sub: WideTree) -> ChildRef {
         }
         node
     }));
-    tree.blocks.extend(sub.blocks);
+    tree.leaves.extend(sub.leaves);
     ChildRef {
         index: node_shift,
         count: 0,
