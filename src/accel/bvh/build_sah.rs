@@ -81,21 +81,56 @@ struct Binning {
 }
 
 impl Binning {
-    #[inline]
+    /// The bin of `p` on `axis`: the scalar reference that [`bin_indices`] (for
+    /// binning) and [`Binning::below`] (for partitioning) are tested against.
+    #[cfg(test)]
     fn bin(&self, p: &BuildPrim, axis: usize) -> usize {
         bin_index(
             (p.centroid_on(axis) - self.min[axis]) * self.scale[axis],
             self.count - 1,
         )
     }
+
+    /// `self.bin(p, axis) < boundary` for a boundary in `1..count`, without the
+    /// conversion: for `x ≥ 0` and a whole `b`, `trunc(x) < b` exactly when
+    /// `x < b`, and `f32::max` maps NaN to 0 as the conversion does.
+    #[inline(always)]
+    fn below(&self, p: &BuildPrim, axis: usize, boundary: usize) -> bool {
+        let k = (p.centroid_on(axis) - self.min[axis]) * self.scale[axis];
+        k.max(0.0) < boundary as f32
+    }
 }
 
-/// Bin of the scaled coordinate `k`, clamped to `[0, last]`. `as i32` saturates
-/// (NaN → 0), so odd input cannot index out of range; it is a cheaper
-/// conversion than `as usize` and gives the same bins.
-#[inline(always)]
+/// Bin of the scaled coordinate `k`, clamped to `[0, last]` (`as` saturates,
+/// NaN → 0, so odd input cannot index out of range).
+#[cfg(test)]
 fn bin_index(k: f32, last: usize) -> usize {
     (k as i32).clamp(0, last as i32) as usize
+}
+
+/// [`bin_index`] on three axes at once: clamping before the truncation instead
+/// of after gives the same bins (`max(k, 0)` maps NaN to 0, as `maxps` returns
+/// its second operand then), and truncates all three lanes in one instruction.
+#[inline(always)]
+fn bin_indices(k: Vec3A, last: usize) -> [usize; 3] {
+    let k = k.max(Vec3A::ZERO).min(Vec3A::splat(last as f32));
+    #[cfg(target_arch = "x86_64")]
+    {
+        use std::arch::x86_64::{_mm_cvtsi128_si32, _mm_cvttps_epi32, _mm_shuffle_epi32};
+        // SAFETY: SSE2 is part of the x86_64 baseline.
+        unsafe {
+            let i = _mm_cvttps_epi32(k.into());
+            [
+                _mm_cvtsi128_si32(i) as usize,
+                _mm_cvtsi128_si32(_mm_shuffle_epi32::<1>(i)) as usize,
+                _mm_cvtsi128_si32(_mm_shuffle_epi32::<2>(i)) as usize,
+            ]
+        }
+    }
+    #[cfg(not(target_arch = "x86_64"))]
+    {
+        [k.x as usize, k.y as usize, k.z as usize]
+    }
 }
 
 /// The bins of all three axes, `N ≥ Binning::count` of them per axis (those past
@@ -138,7 +173,7 @@ impl SplitRule for SahBinnedBuilder {
         if prims.len() <= self.max_leaf && leaf_cost <= split_cost {
             return None;
         }
-        let (mid, children) = partition_bounded(prims, |p| binning.bin(p, axis) < boundary);
+        let (mid, children) = partition_bounded(prims, |p| binning.below(p, axis, boundary));
         Some(Split {
             axis,
             mid,
@@ -265,9 +300,9 @@ fn bin_into<const N: usize>(prims: &[BuildPrim], binning: Binning, bins: &mut Bi
     let last = binning.count - 1;
     let add = |bins: &mut Bins<N>, p: &BuildPrim| {
         let (lo, hi) = (Vec3A::from(p.bounds.min), Vec3A::from(p.bounds.max));
-        let k = ((lo + hi) * 0.5 - origin) * scale;
+        let k = bin_indices(((lo + hi) * 0.5 - origin) * scale, last);
         for (axis, axis_bins) in bins.iter_mut().enumerate() {
-            let b = &mut axis_bins[bin_index(k[axis], last)];
+            let b = &mut axis_bins[k[axis]];
             b.min = b.min.min(lo);
             b.max = b.max.max(hi);
             b.count += 1;
@@ -295,7 +330,7 @@ fn bin_into<const N: usize>(prims: &[BuildPrim], binning: Binning, bins: &mut Bi
 }
 
 /// Nodes with at least this many primitives are binned into two sets of bins.
-const DUAL_BINS: usize = 64;
+const DUAL_BINS: usize = 256;
 
 fn merge_bins<const N: usize>(mut a: Bins<N>, b: Bins<N>) -> Bins<N> {
     for (xa, ya) in a.iter_mut().zip(&b) {
@@ -381,6 +416,57 @@ mod tests {
             {
                 assert_eq!(axis_bins[binning.bin(p, axis)].count, 1);
             }
+        }
+        // The partition's side test is the bin's.
+        for p in prims.iter().take(2000) {
+            for axis in 0..3 {
+                for boundary in 1..BINS {
+                    let below = binning.bin(p, axis) < boundary;
+                    assert_eq!(binning.below(p, axis, boundary), below);
+                }
+            }
+        }
+        let odd_binning = Binning {
+            min: [0.0; 3],
+            scale: [1.0; 3],
+            count: 8,
+        };
+        for x in [
+            f32::NAN,
+            f32::NEG_INFINITY,
+            f32::INFINITY,
+            -0.5,
+            0.5,
+            2.0,
+            2.5,
+            7.5,
+            1e30,
+        ] {
+            let p = BuildPrim::new(0, Aabb::new(Vec3::splat(x), Vec3::splat(x)));
+            for boundary in 1..8 {
+                let below = odd_binning.bin(&p, 0) < boundary;
+                assert_eq!(odd_binning.below(&p, 0, boundary), below, "{x} {boundary}");
+            }
+        }
+        // The SIMD bin indices are the scalar ones, also on odd input.
+        let odd = [
+            f32::NAN,
+            f32::NEG_INFINITY,
+            f32::INFINITY,
+            -0.5,
+            -0.0,
+            0.0,
+            0.99,
+            7.0,
+            7.5,
+            8.0,
+            1e30,
+            -1e30,
+            3.0e9,
+        ];
+        for &x in &odd {
+            let k = Vec3A::new(x, 7.999, 3.5);
+            assert_eq!(bin_indices(k, 7), [bin_index(x, 7), 7, 3], "{x}");
         }
         // The SIMD sweep over three axes chooses what the scalar one does.
         for (i, chunk) in prims.chunks(37).take(500).enumerate() {
