@@ -177,7 +177,8 @@ fn build_part<R: SplitRule>(
     depth: u32,
 ) -> Part {
     if prims.len() <= PARALLEL_THRESHOLD {
-        let mut nodes = Vec::new();
+        // About 2/3 of a node per primitive covers leaves of 3 or more.
+        let mut nodes = Vec::with_capacity(prims.len() * 2 / 3 + 1);
         build_into(rule, prims, node, first, depth, &mut nodes);
         return Part {
             len: nodes.len(),
