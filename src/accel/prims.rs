@@ -7,6 +7,7 @@ use crate::geometry::triangle::{triangle_is_hittable, PackedTriangle, Triangle4,
 use crate::geometry::{Aabb, Ray};
 use crate::scene::{PrimHit, PrimId, Scene};
 use glam::Vec3;
+use rayon::prelude::*;
 
 /// One ray's per-ray setup for every primitive test.
 pub(crate) struct PrimRay<'a> {
@@ -250,24 +251,46 @@ impl TriBlock {
 /// their bounds. Both the BVH and the brute-force oracle start from this list,
 /// so they agree on what exists.
 pub(crate) fn hittable_prims(scene: &Scene) -> Vec<(PrimId, Aabb)> {
-    let ntri = scene.triangles.len();
-    (0..scene.num_prims())
-        .filter(|&i| {
-            if i < ntri {
-                let in_range = scene.triangles[i]
-                    .v
-                    .iter()
-                    .all(|&k| (k as usize) < scene.positions.len());
-                if !in_range {
-                    return false;
-                }
-                let [p0, p1, p2] = scene.triangle_positions(i);
-                triangle_is_hittable(p0, p1, p2)
-            } else {
-                let s = &scene.spheres[i - ntri];
-                sphere_is_hittable(s.centre, s.radius)
-            }
-        })
-        .map(|i| (i as PrimId, scene.prim_bounds(i as PrimId)))
+    hittable_prims_as(scene, |id, bounds| (id, bounds))
+}
+
+/// [`hittable_prims`] made into records by `record(id, bounds)` on the way (no
+/// list in between); checked in parallel, the list is in id order.
+pub(crate) fn hittable_prims_as<T: Send>(
+    scene: &Scene,
+    record: impl Fn(PrimId, Aabb) -> T + Sync,
+) -> Vec<T> {
+    let hittable: Vec<bool> = (0..scene.num_prims())
+        .into_par_iter()
+        .map(|i| is_hittable(scene, i))
+        .collect();
+    let make = |i: usize| record(i as PrimId, scene.prim_bounds(i as PrimId));
+    if hittable.iter().all(|&h| h) {
+        // The usual case: an indexed map collects straight into the list,
+        // where a filter would gather pieces and copy them.
+        return (0..hittable.len()).into_par_iter().map(make).collect();
+    }
+    (0..hittable.len())
+        .into_par_iter()
+        .filter(|&i| hittable[i])
+        .map(make)
         .collect()
+}
+
+fn is_hittable(scene: &Scene, i: usize) -> bool {
+    let ntri = scene.triangles.len();
+    if i < ntri {
+        let in_range = scene.triangles[i]
+            .v
+            .iter()
+            .all(|&k| (k as usize) < scene.positions.len());
+        if !in_range {
+            return false;
+        }
+        let [p0, p1, p2] = scene.triangle_positions(i);
+        triangle_is_hittable(p0, p1, p2)
+    } else {
+        let s = &scene.spheres[i - ntri];
+        sphere_is_hittable(s.centre, s.radius)
+    }
 }

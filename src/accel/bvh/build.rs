@@ -1,9 +1,9 @@
 //! The builder skeleton shared by the split rules: top-down recursion over an
 //! in-place partitioned primitive array, emitting nodes depth first.
 //!
-//! Large subtrees are built in parallel with `rayon::join`, each into its own
-//! node vector that is appended in a fixed order, so the tree is the same
-//! whatever the thread count. Reductions over large nodes (bounds, SAH bins) run
+//! Large subtrees are built in parallel with `rayon::join`, then written into
+//! one node array in a fixed order, so the tree is the same whatever the
+//! thread count. Reductions over large nodes (bounds, SAH bins) run
 //! over fixed-size chunks whose partial results are merged in chunk order, so
 //! they too give the same bits whatever the thread count.
 
@@ -144,14 +144,98 @@ pub(crate) trait SplitRule: Sync {
 
 /// Builds the flat node array over `prims`, reordering them into leaf order.
 pub(crate) fn build_nodes<R: SplitRule>(rule: &R, prims: &mut [BuildPrim]) -> Vec<BvhNode> {
-    let mut nodes = Vec::with_capacity(2 * prims.len() / rule.max_leaf().max(1) + 1);
-    if !prims.is_empty() {
-        let root = NodeBounds::of(prims);
-        build_into(rule, prims, &root, 0, 0, &mut nodes);
+    if prims.is_empty() {
+        return Vec::new();
     }
+    let root = NodeBounds::of(prims);
+    let part = build_part(rule, prims, &root, 0, 0);
+    let mut nodes = vec![BvhNode::default(); part.len];
+    write_part(part, 0, &mut nodes);
     nodes
 }
 
+/// A built subtree: small ones as their own depth-first node vector (offsets
+/// relative to its start), large ones as their root and two parts built in
+/// parallel. Each node is copied once, into its final slot, by [`write_part`].
+struct Part {
+    /// Nodes in the subtree.
+    len: usize,
+    kind: PartKind,
+}
+
+enum PartKind {
+    Flat(Vec<BvhNode>),
+    /// The root (its second-child offset is set when written) and its children.
+    Split(BvhNode, Box<[Part; 2]>),
+}
+
+fn build_part<R: SplitRule>(
+    rule: &R,
+    prims: &mut [BuildPrim],
+    node: &NodeBounds,
+    first: u32,
+    depth: u32,
+) -> Part {
+    if prims.len() <= PARALLEL_THRESHOLD {
+        // About 2/3 of a node per primitive covers leaves of 3 or more.
+        let mut nodes = Vec::with_capacity(prims.len() * 2 / 3 + 1);
+        build_into(rule, prims, node, first, depth, &mut nodes);
+        return Part {
+            len: nodes.len(),
+            kind: PartKind::Flat(nodes),
+        };
+    }
+    let Some(Split {
+        axis,
+        mid,
+        children,
+    }) = choose_split(rule, prims, node, depth)
+    else {
+        let leaf = BvhNode::leaf(&node.bounds, first, prims.len() as u32);
+        return Part {
+            len: 1,
+            kind: PartKind::Flat(vec![leaf]),
+        };
+    };
+    let (left, right) = prims.split_at_mut(mid);
+    let [lb, rb] = children.unwrap_or_else(|| [NodeBounds::of(left), NodeBounds::of(right)]);
+    let right_first = first + mid as u32;
+    let (l, r) = rayon::join(
+        || build_part(rule, left, &lb, first, depth + 1),
+        || build_part(rule, right, &rb, right_first, depth + 1),
+    );
+    Part {
+        len: 1 + l.len + r.len,
+        kind: PartKind::Split(BvhNode::inner(&node.bounds, 0, axis), Box::new([l, r])),
+    }
+}
+
+/// Writes `part` into `out` (exactly its slots), whose first slot is `base`.
+fn write_part(part: Part, base: u32, out: &mut [BvhNode]) {
+    match part.kind {
+        PartKind::Flat(nodes) => {
+            for (slot, mut node) in out.iter_mut().zip(nodes) {
+                if node.count() == 0 {
+                    node.offset += base;
+                }
+                *slot = node;
+            }
+        }
+        PartKind::Split(mut root, children) => {
+            let [l, r] = *children;
+            root.offset = base + 1 + l.len as u32;
+            out[0] = root;
+            let (l_out, r_out) = out[1..].split_at_mut(l.len);
+            rayon::join(
+                || write_part(l, base + 1, l_out),
+                || write_part(r, root.offset, r_out),
+            );
+        }
+    }
+}
+
+/// The serial builder: the subtree over `prims` (the primitive slots from
+/// `first`), appended depth first to `out`.
 fn build_into<R: SplitRule>(
     rule: &R,
     prims: &mut [BuildPrim],
@@ -160,37 +244,22 @@ fn build_into<R: SplitRule>(
     depth: u32,
     out: &mut Vec<BvhNode>,
 ) {
-    let split = choose_split(rule, prims, node, depth);
     let Some(Split {
         axis,
         mid,
         children,
-    }) = split
+    }) = choose_split(rule, prims, node, depth)
     else {
         out.push(BvhNode::leaf(&node.bounds, first, prims.len() as u32));
         return;
     };
     let me = out.len();
     out.push(BvhNode::default());
-    let n = prims.len();
     let (left, right) = prims.split_at_mut(mid);
     let [lb, rb] = children.unwrap_or_else(|| [NodeBounds::of(left), NodeBounds::of(right)]);
-    let right_first = first + mid as u32;
-    let second = if n > PARALLEL_THRESHOLD {
-        let (l, r) = rayon::join(
-            || subtree(rule, left, &lb, first, depth + 1),
-            || subtree(rule, right, &rb, right_first, depth + 1),
-        );
-        append_shifted(out, l);
-        let second = out.len();
-        append_shifted(out, r);
-        second
-    } else {
-        build_into(rule, left, &lb, first, depth + 1, out);
-        let second = out.len();
-        build_into(rule, right, &rb, right_first, depth + 1, out);
-        second
-    };
+    build_into(rule, left, &lb, first, depth + 1, out);
+    let second = out.len();
+    build_into(rule, right, &rb, first + mid as u32, depth + 1, out);
     out[me] = BvhNode::inner(&node.bounds, second as u32, axis);
 }
 
@@ -212,29 +281,6 @@ fn choose_split<R: SplitRule>(
         _ if n > rule.max_leaf() => Some(median_split(prims, &node.centroids)),
         _ => None,
     }
-}
-
-/// Subtree in its own vector, with child offsets relative to its start.
-fn subtree<R: SplitRule>(
-    rule: &R,
-    prims: &mut [BuildPrim],
-    node: &NodeBounds,
-    first: u32,
-    depth: u32,
-) -> Vec<BvhNode> {
-    let mut v = Vec::with_capacity(prims.len() / 2);
-    build_into(rule, prims, node, first, depth, &mut v);
-    v
-}
-
-fn append_shifted(out: &mut Vec<BvhNode>, sub: Vec<BvhNode>) {
-    let shift = out.len() as u32;
-    out.extend(sub.into_iter().map(|mut node| {
-        if node.count() == 0 {
-            node.offset += shift;
-        }
-        node
-    }));
 }
 
 /// Object median along the longest axis of `centroids` (the centroid bounds of

@@ -11,7 +11,7 @@ mod node;
 mod traverse;
 mod wide;
 
-use super::prims::{hittable_prims, SphereStore, TriBlock};
+use super::prims::{hittable_prims_as, SphereStore, TriBlock};
 use super::{Accel, BvhBuilder, TraversalStats};
 use crate::geometry::Ray;
 use crate::scene::{PrimHit, PrimId, Scene};
@@ -19,6 +19,7 @@ use build::{build_nodes, BuildPrim};
 use build_midpoint::MidpointBuilder;
 use build_sah::SahBinnedBuilder;
 use collapse::collapse;
+use rayon::prelude::*;
 use wide::{ChildRef, WideNode, WIDTH};
 
 /// Shape and quality of a built tree (the wide traversal layout), for `ember
@@ -55,15 +56,12 @@ pub struct Bvh {
 
 impl Bvh {
     pub fn build(scene: &Scene, builder: BvhBuilder) -> Bvh {
-        let mut build_prims: Vec<BuildPrim> = hittable_prims(scene)
-            .into_iter()
-            .map(|(id, bounds)| BuildPrim::new(id, bounds))
-            .collect();
+        let mut build_prims: Vec<BuildPrim> = hittable_prims_as(scene, BuildPrim::new);
         let binary = match builder {
             BvhBuilder::Sah => build_nodes(&SahBinnedBuilder::default(), &mut build_prims),
             BvhBuilder::Midpoint => build_nodes(&MidpointBuilder::default(), &mut build_prims),
         };
-        let order: Vec<PrimId> = build_prims.iter().map(|p| p.id).collect();
+        let order: Vec<PrimId> = build_prims.par_iter().map(|p| p.id).collect();
         drop(build_prims);
         let mut tree = collapse(&binary, scene, &order);
         tree.nodes.shrink_to_fit();
