@@ -25,6 +25,7 @@ pub mod render;
 pub mod sampling;
 pub mod scene;
 pub mod shard;
+pub mod simd;
 
 pub use color::Color;
 pub use glam::{Vec2, Vec3};

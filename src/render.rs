@@ -13,6 +13,7 @@ pub use stop::{StopReason, StopToken};
 
 use crate::color::{is_finite, luminance};
 use crate::film::{heat_map, Image};
+use crate::integrators::packet::{PacketPathIntegrator, TileWork};
 use crate::integrators::{
     debug, light_tracing, DirectStrategy, Estimator, PathIntegrator, PathSettings, Roulette,
 };
@@ -288,6 +289,17 @@ fn render_rect(
         }
     }
     let tiles = tiles(rect);
+    if settings.shading == Shading::Radiance && settings.adaptive.is_none() {
+        let packet = PacketPathIntegrator::new(
+            &job.scene,
+            job.accel.as_ref(),
+            &job.camera,
+            settings.path_settings(&job.scene),
+        );
+        if let Some(packet) = packet.filter(|_| std::env::var_os("EMBER_SCALAR").is_none()) {
+            return render_packets(&packet, settings, rect, &tiles, progress, stop);
+        }
+    }
     let integrator = PathIntegrator::new(
         &job.scene,
         job.accel.as_ref(),
@@ -310,6 +322,48 @@ fn render_rect(
             progress(n);
         });
     assemble(rect, &tiles, &results)
+}
+
+/// `render_rect` by the packet engine: each tile's pixels, all their samples.
+fn render_packets(
+    packet: &PacketPathIntegrator,
+    settings: &RenderSettings,
+    rect: PixelRect,
+    tiles: &[(u32, u32)],
+    progress: &(dyn Fn(u64) + Sync),
+    stop: &StopToken,
+) -> RenderOutput {
+    let spp = settings.spp.max(1);
+    let mut results = vec![PixelResult::NOT_RENDERED; tiles.len() * TILE_PIXELS];
+    let should_stop = || stop.should_stop();
+    results
+        .par_chunks_mut(TILE_PIXELS)
+        .zip(tiles.par_iter())
+        .for_each(|(slots, &tile)| {
+            let pixels: Vec<(u32, u32)> = tile_pixels(rect, tile).collect();
+            let mut sums = vec![None; pixels.len()];
+            let work = TileWork {
+                pixels: &pixels,
+                spp,
+                spp_offset: settings.spp_offset,
+                seed: settings.seed,
+                stop: &should_stop,
+            };
+            packet.render_tile(&work, &mut sums);
+            let mut n = 0;
+            for (slot, sum) in slots.iter_mut().zip(sums) {
+                if let Some(p) = sum {
+                    *slot = PixelResult {
+                        value: p.sum / spp as f32,
+                        samples: spp,
+                        nonfinite: p.nonfinite,
+                    };
+                    n += 1;
+                }
+            }
+            progress(n);
+        });
+    assemble(rect, tiles, &results)
 }
 
 #[derive(Clone, Copy)]

@@ -2,7 +2,11 @@
 //! hittable primitives of a scene, in an order chosen by the structure, with the
 //! triangle corners copied next to each other so tests never chase scene indices.
 
-use crate::geometry::sphere::{intersect_sphere, intersect_sphere_leaving, sphere_is_hittable};
+use super::packet::{PacketHits, PacketRays};
+use crate::geometry::sphere::{
+    intersect_sphere, intersect_sphere_lanes, intersect_sphere_leaving, sphere_is_hittable,
+};
+use crate::simd::{F32s, LaneBits, Simd, U32s};
 use crate::geometry::triangle::{triangle_is_hittable, PackedTriangle, Triangle4, TriangleRay};
 use crate::geometry::{Aabb, Ray};
 use crate::scene::{PrimHit, PrimId, Scene};
@@ -226,6 +230,54 @@ impl TriBlock {
             }
         }
         None
+    }
+
+    /// The packet version of [`intersect_closest`](Self::intersect_closest) (`ANY`
+    /// false: nearer hits go into `hits`) and of [`intersect_any`](Self::intersect_any)
+    /// (`ANY`: stops once every lane of `lanes` hit). Returns the lanes that hit.
+    #[inline(always)]
+    pub fn intersect_packet<S: Simd, const ANY: bool>(
+        &self,
+        s: S,
+        spheres: &SphereStore,
+        rays: &PacketRays<S>,
+        lanes: LaneBits,
+        hits: &mut PacketHits<S>,
+    ) -> LaneBits {
+        let mut found = 0;
+        let mut rest = self.tri_lanes | self.sphere_lanes;
+        while rest != 0 {
+            let lane = rest.trailing_zeros() as usize;
+            rest &= rest - 1;
+            let id = self.ids[lane];
+            let own = rays.skip.eq(U32s::splat(s, id));
+            let todo = if ANY { lanes & !found } else { lanes };
+            let (hit, t, b1, b2) = if self.tri_lanes >> lane & 1 != 0 {
+                // A ray never meets the triangle it left.
+                let todo = todo & !own.bits();
+                if todo == 0 {
+                    continue;
+                }
+                rays.tri
+                    .intersect(s, &self.tris.corners(lane), hits.t_max, todo)
+            } else {
+                let (centre, radius) = spheres.spheres[(id - spheres.num_triangles) as usize];
+                let (hit, t) = intersect_sphere_lanes(
+                    s, rays.o, rays.d, centre, radius, hits.t_max, own, todo,
+                );
+                let zero = F32s::splat(s, 0.0);
+                (hit, t, zero, zero)
+            };
+            found |= hit;
+            if ANY {
+                if lanes & !found == 0 {
+                    break;
+                }
+            } else if hit != 0 {
+                hits.record(s, hit, t, id, b1, b2);
+            }
+        }
+        found
     }
 
     /// The triangle lanes to test: all but the triangle the ray left (`skip`).

@@ -13,6 +13,7 @@
 
 use super::ray::gamma;
 use super::Ray;
+use crate::simd::{F32s, LaneBits, Mask, Simd, Vec3s};
 use glam::Vec3;
 
 /// Whether a sphere can ever be hit.
@@ -78,6 +79,54 @@ fn intersect(ray: &Ray, centre: Vec3, radius: f32, leaving: bool) -> Option<f32>
 /// sphere near its offset origin, a real crossing of the f32 sphere but a self-hit.
 pub fn intersect_sphere_leaving(ray: &Ray, centre: Vec3, radius: f32) -> Option<f32> {
     intersect(ray, centre, radius, true)
+}
+
+/// [`intersect_sphere`] (or, in lanes `leaving`, [`intersect_sphere_leaving`])
+/// for sixteen rays from `o` along `d` with `t_min = 0`, one per lane, operation
+/// for operation: the lanes in `active` that hit, and their `t`. The sphere must
+/// be hittable.
+#[allow(clippy::too_many_arguments)]
+#[inline(always)]
+pub fn intersect_sphere_lanes<S: Simd>(
+    s: S,
+    o: Vec3s<S>,
+    d: Vec3s<S>,
+    centre: Vec3,
+    radius: f32,
+    t_max: F32s<S>,
+    leaving: Mask<S>,
+    active: LaneBits,
+) -> (LaneBits, F32s<S>) {
+    let f = o - Vec3s::splat(s, centre);
+    let a = d.length_squared();
+    let b = f.dot(d);
+    let r2 = radius * radius;
+    let ff = f.length_squared();
+    let c = ff - F32s::splat(s, r2);
+    let c_err = F32s::splat(s, gamma(8)) * (ff + F32s::splat(s, r2));
+    let b_err = F32s::splat(s, gamma(5)) * f.abs().dot(d.abs());
+    let zero = F32s::splat(s, 0.0);
+    // Origin on the surface: only the far root −2b/a, heading inward.
+    let on_surface = c.abs().le(c_err);
+    let t_surface = F32s::splat(s, -2.0) * b / a;
+    let surface_hit = on_surface & b.lt(-b_err) & t_surface.gt(zero) & t_surface.le(t_max);
+    let outside = c.gt(zero);
+    let away = outside & (leaving | b.ge(zero));
+    let f_perp = f - d * (b / a);
+    let disc = a * (F32s::splat(s, r2) - f_perp.length_squared());
+    // NaN fails `ge`.
+    let real = disc.ge(zero);
+    let q = -(b + disc.sqrt().copysign(b));
+    let (t0, t1) = (q / a, c / q);
+    let ordered = t0.le(t1);
+    let near = F32s::select(ordered, t0, t1);
+    let far = F32s::select(ordered, t1, t0);
+    let take_near = outside & near.gt(zero) & near.le(t_max);
+    let t_roots = F32s::select(take_near, near, far);
+    let roots_hit = real & !away & (take_near | (far.gt(zero) & far.le(t_max)));
+    let t = F32s::select(on_surface, t_surface, t_roots);
+    let hit = (on_surface & surface_hit) | (!on_surface & roots_hit);
+    (hit.bits() & active, t)
 }
 
 #[cfg(test)]

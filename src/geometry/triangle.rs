@@ -13,6 +13,7 @@
 //! [`PackedTriangle`] so that one SIMD lane handles one corner.
 
 use super::Ray;
+use crate::simd::{F32s, LaneBits, Mask, Simd, Vec3s};
 use glam::{Vec3, Vec4, Vec4Swizzles};
 
 /// A triangle hit: parametric distance and barycentrics of corners 1 and 2.
@@ -194,6 +195,12 @@ impl Triangle4 {
         }
     }
 
+    /// The corners of triangle `lane`.
+    #[inline(always)]
+    pub fn corners(&self, lane: usize) -> [Vec3; 3] {
+        std::array::from_fn(|k| Vec3::new(self.p[k][0][lane], self.p[k][1][lane], self.p[k][2][lane]))
+    }
+
     /// Triangle `lane` in the scalar layout.
     pub fn lane(&self, lane: usize) -> PackedTriangle {
         let c = |k: usize| Vec3::new(self.p[k][0][lane], self.p[k][1][lane], self.p[k][2][lane]);
@@ -292,6 +299,160 @@ pub fn intersect_triangle(ray: &Ray, p0: Vec3, p1: Vec3, p2: Vec3) -> Option<(f3
     let tri = PackedTriangle::new(p0, p1, p2);
     tri.intersect(&TriangleRay::new(ray), ray.t_max)
         .map(|h| (h.t, h.b1, h.b2))
+}
+
+/// The per-ray part of the watertight test for sixteen rays, one per lane: each
+/// lane has its own axis permutation, applied by selecting coordinates, so a lane
+/// computes exactly what [`TriangleRay`] and [`PackedTriangle::intersect`] do for
+/// its ray.
+#[derive(Clone, Copy)]
+pub struct TriangleRays<S: Simd> {
+    /// Lanes whose dominant axis `kz` is x, and y (else z).
+    z_is_x: Mask<S>,
+    z_is_y: Mask<S>,
+    /// The origin on the permuted axes.
+    o: Vec3s<S>,
+    sx: F32s<S>,
+    sy: F32s<S>,
+    sz: F32s<S>,
+    t_lo: F32s<S>,
+}
+
+impl<S: Simd> TriangleRays<S> {
+    /// Rays from `o` along `d` with `t_min = 0` (spawned and camera rays).
+    #[inline(always)]
+    pub fn new(s: S, o: Vec3s<S>, d: Vec3s<S>) -> Self {
+        let ad = d.abs();
+        // pbrt's MaxComponentIndex, as in `TriangleRay::new`.
+        let x_gt_y = ad.x.gt(ad.y);
+        let z_is_x = x_gt_y & ad.x.gt(ad.z);
+        let z_is_y = !x_gt_y & ad.y.gt(ad.z);
+        let (o, d) = (permute(z_is_x, z_is_y, o), permute(z_is_x, z_is_y, d));
+        TriangleRays {
+            z_is_x,
+            z_is_y,
+            o,
+            sx: -d.x / d.z,
+            sy: -d.y / d.z,
+            sz: F32s::splat(s, 1.0) / d.z,
+            t_lo: F32s::splat(s, f32::MIN_POSITIVE),
+        }
+    }
+
+    /// The watertight test of one triangle against the lanes in `active` for
+    /// `t ∈ [t_lo, t_max]`: the lanes hit, with `t`, `b1`, `b2`. Lanes whose
+    /// edge functions round to zero go through the scalar test and its `f64`
+    /// fallback, as in [`Triangle4::intersect`].
+    #[inline(always)]
+    pub fn intersect(
+        &self,
+        s: S,
+        corners: &[Vec3; 3],
+        t_max: F32s<S>,
+        active: LaneBits,
+    ) -> (LaneBits, F32s<S>, F32s<S>, F32s<S>) {
+        let (x0, y0, z0) = self.shear(s, corners[0]);
+        let (x1, y1, z1) = self.shear(s, corners[1]);
+        let (x2, y2, z2) = self.shear(s, corners[2]);
+        let e0 = x1 * y2 - y1 * x2;
+        let e1 = x2 * y0 - y2 * x0;
+        let e2 = x0 * y1 - y0 * x1;
+        let zero = F32s::splat(s, 0.0);
+        let neg = (e0.lt(zero) | e1.lt(zero) | e2.lt(zero)).bits();
+        let pos = (e0.gt(zero) | e1.gt(zero) | e2.gt(zero)).bits();
+        let rounded = (e0.eq(zero) | e1.eq(zero) | e2.eq(zero)).bits();
+        let mixed = neg & pos;
+        let det = e0 + e1 + e2;
+        let t_scaled = e0 * z0 + e1 * z1 + e2 * z2;
+        let inv_det = F32s::splat(s, 1.0) / det;
+        let mut t = t_scaled * inv_det;
+        let in_range = t.ge(self.t_lo) & t.le(t_max) & !det.eq(zero);
+        let mut hit = in_range.bits() & active & !mixed & !rounded;
+        let mut b1 = e1 * inv_det;
+        let mut b2 = e2 * inv_det;
+        let exact = active & rounded & !mixed;
+        if exact != 0 {
+            (hit, t, b1, b2) = self.exact_lanes(s, corners, t_max, exact, (hit, t, b1, b2));
+        }
+        (hit, t, b1, b2)
+    }
+
+    /// Corner `p` relative to each lane's origin, permuted and sheared.
+    #[inline(always)]
+    fn shear(&self, s: S, p: Vec3) -> (F32s<S>, F32s<S>, F32s<S>) {
+        let v = permute(self.z_is_x, self.z_is_y, Vec3s::splat(s, p)) - self.o;
+        (v.x + self.sx * v.z, v.y + self.sy * v.z, self.sz * v.z)
+    }
+
+    /// Lanes with an edge function that rounded to zero, one by one through the
+    /// scalar test.
+    #[cold]
+    #[inline(never)]
+    fn exact_lanes(
+        &self,
+        s: S,
+        corners: &[Vec3; 3],
+        t_max: F32s<S>,
+        lanes: LaneBits,
+        (mut hit, t, b1, b2): (LaneBits, F32s<S>, F32s<S>, F32s<S>),
+    ) -> (LaneBits, F32s<S>, F32s<S>, F32s<S>) {
+        let (mut t, mut b1, mut b2) = (t.to_array(), b1.to_array(), b2.to_array());
+        let tri = PackedTriangle::new(corners[0], corners[1], corners[2]);
+        let (t_max, ox, oy, oz) = (
+            t_max.to_array(),
+            self.o.x.to_array(),
+            self.o.y.to_array(),
+            self.o.z.to_array(),
+        );
+        let (sx, sy, sz) = (self.sx.to_array(), self.sy.to_array(), self.sz.to_array());
+        let (zx, zy) = (self.z_is_x.bits(), self.z_is_y.bits());
+        let mut rest = lanes;
+        while rest != 0 {
+            let i = rest.trailing_zeros() as usize;
+            rest &= rest - 1;
+            let kz = if zx >> i & 1 != 0 {
+                0
+            } else if zy >> i & 1 != 0 {
+                1
+            } else {
+                2
+            };
+            let kx = if kz == 2 { 0 } else { kz + 1 };
+            let ray = TriangleRay {
+                kx,
+                ky: if kx == 2 { 0 } else { kx + 1 },
+                kz,
+                ox: Vec4::splat(ox[i]),
+                oy: Vec4::splat(oy[i]),
+                oz: Vec4::splat(oz[i]),
+                sx: Vec4::splat(sx[i]),
+                sy: Vec4::splat(sy[i]),
+                sz: Vec4::splat(sz[i]),
+                t_lo: f32::MIN_POSITIVE,
+            };
+            if let Some(h) = tri.intersect(&ray, t_max[i]) {
+                hit |= 1 << i;
+                (t[i], b1[i], b2[i]) = (h.t, h.b1, h.b2);
+            }
+        }
+        (
+            hit,
+            F32s::from_array(s, t),
+            F32s::from_array(s, b1),
+            F32s::from_array(s, b2),
+        )
+    }
+}
+
+/// `v` on the axes `(kx, ky, kz)` of each lane: `(y, z, x)` where `kz` is x,
+/// `(z, x, y)` where it is y, else `(x, y, z)`.
+#[inline(always)]
+fn permute<S: Simd>(z_is_x: Mask<S>, z_is_y: Mask<S>, v: Vec3s<S>) -> Vec3s<S> {
+    Vec3s::new(
+        F32s::select(z_is_x, v.y, F32s::select(z_is_y, v.z, v.x)),
+        F32s::select(z_is_x, v.z, F32s::select(z_is_y, v.x, v.y)),
+        F32s::select(z_is_x, v.x, F32s::select(z_is_y, v.y, v.z)),
+    )
 }
 
 #[cfg(test)]

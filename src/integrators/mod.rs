@@ -4,6 +4,7 @@
 
 pub mod debug;
 pub mod light_tracing;
+pub mod packet;
 pub mod path;
 
 pub use path::{PathIntegrator, PathSettings};

@@ -17,7 +17,7 @@ use glam::Vec3;
 
 /// Shadow rays stop this fraction short of the sampled light point, so the light's own
 /// surface does not occlude it; relative, so it works at every scene scale.
-const SHADOW_EPSILON: f32 = 1e-4;
+pub(super) const SHADOW_EPSILON: f32 = 1e-4;
 
 /// The parameters of spec §7 that shape the estimator.
 #[derive(Clone, Copy, Debug, PartialEq)]

@@ -8,6 +8,7 @@ mod build_midpoint;
 mod build_sah;
 mod collapse;
 mod node;
+mod packet;
 mod traverse;
 mod wide;
 
@@ -131,6 +132,32 @@ impl Accel for Bvh {
     fn occluded(&self, ray: &Ray) -> bool {
         self.traverse::<true, false>(ray, &mut TraversalStats::default())
             .is_some()
+    }
+
+    fn intersect_packet(
+        &self,
+        rays: &crate::accel::RayPacket,
+        active: crate::simd::LaneBits,
+        hits: &mut crate::accel::HitPacket,
+    ) {
+        crate::simd::dispatch(packet::IntersectPacket {
+            bvh: self,
+            rays,
+            active,
+            hits,
+        })
+    }
+
+    fn occluded_packet(
+        &self,
+        rays: &crate::accel::RayPacket,
+        active: crate::simd::LaneBits,
+    ) -> crate::simd::LaneBits {
+        crate::simd::dispatch(packet::OccludedPacket {
+            bvh: self,
+            rays,
+            active,
+        })
     }
 
     fn intersect_counted(&self, ray: &Ray, stats: &mut TraversalStats) -> Option<PrimHit> {

@@ -1,0 +1,565 @@
+//! Sixteen lanes of `f32`/`u32` for code that runs one ray or one path per lane
+//! (the packet path tracer and packet BVH traversal).
+//!
+//! The code is written once, generic over an instruction set `S: Simd`, and
+//! compiled three times: AVX-512 (one register per value), AVX2 (two) and a
+//! portable version (arrays). [`dispatch`] picks the best the CPU has, detected
+//! once. Every lane performs exactly the IEEE operations the code names, in the
+//! order it names them (no fused multiply-add, exact division and square root),
+//! so a lane's result is the same whatever the instruction set and whatever the
+//! other lanes hold.
+//!
+//! Soundness: lane values can only be made from an instruction-set token (`S`),
+//! and a token of a SIMD set only exists once the CPU has been found to have it,
+//! so the intrinsics behind every operation on a value are available.
+
+mod portable;
+#[cfg(target_arch = "x86_64")]
+mod x86;
+
+use std::ops::{Add, BitAnd, BitOr, Div, Mul, Neg, Not, Sub};
+
+pub use portable::Portable;
+#[cfg(target_arch = "x86_64")]
+pub use x86::{Avx2, Avx512};
+
+/// Lanes per value.
+pub const LANES: usize = 16;
+
+/// A lane mask as bits: bit `i` is lane `i`.
+pub type LaneBits = u32;
+
+/// All sixteen lanes.
+pub const ALL_LANES: LaneBits = (1 << LANES) - 1;
+
+/// An instruction set's lane operations. Implementors are zero-sized tokens that
+/// exist only where the instruction set does; the functions are `unsafe` because
+/// they assume it.
+///
+/// # Safety
+/// An implementor's token may only be constructed after checking that the CPU
+/// supports its instructions.
+pub unsafe trait Simd: Copy + Send + Sync + 'static {
+    type F: Copy;
+    type U: Copy;
+    type M: Copy;
+
+    unsafe fn f_splat(x: f32) -> Self::F;
+    unsafe fn f_load(a: &[f32; LANES]) -> Self::F;
+    unsafe fn f_store(v: Self::F, a: &mut [f32; LANES]);
+    unsafe fn f_add(a: Self::F, b: Self::F) -> Self::F;
+    unsafe fn f_sub(a: Self::F, b: Self::F) -> Self::F;
+    unsafe fn f_mul(a: Self::F, b: Self::F) -> Self::F;
+    unsafe fn f_div(a: Self::F, b: Self::F) -> Self::F;
+    unsafe fn f_sqrt(a: Self::F) -> Self::F;
+    /// `if a < b { a } else { b }` per lane: `b` when either is NaN (x86's `min`).
+    unsafe fn f_min(a: Self::F, b: Self::F) -> Self::F;
+    /// `if a > b { a } else { b }` per lane: `b` when either is NaN (x86's `max`).
+    unsafe fn f_max(a: Self::F, b: Self::F) -> Self::F;
+    unsafe fn f_lt(a: Self::F, b: Self::F) -> Self::M;
+    unsafe fn f_le(a: Self::F, b: Self::F) -> Self::M;
+    unsafe fn f_eq(a: Self::F, b: Self::F) -> Self::M;
+    /// `a` where `m` is set, else `b`.
+    unsafe fn f_select(m: Self::M, a: Self::F, b: Self::F) -> Self::F;
+    unsafe fn f_to_bits(a: Self::F) -> Self::U;
+    unsafe fn f_from_bits(a: Self::U) -> Self::F;
+    /// Exact for values below 2²⁴ (as `u as f32`).
+    unsafe fn u_to_f(a: Self::U) -> Self::F;
+
+    unsafe fn u_splat(x: u32) -> Self::U;
+    unsafe fn u_load(a: &[u32; LANES]) -> Self::U;
+    unsafe fn u_store(v: Self::U, a: &mut [u32; LANES]);
+    unsafe fn u_add(a: Self::U, b: Self::U) -> Self::U;
+    unsafe fn u_and(a: Self::U, b: Self::U) -> Self::U;
+    unsafe fn u_or(a: Self::U, b: Self::U) -> Self::U;
+    unsafe fn u_xor(a: Self::U, b: Self::U) -> Self::U;
+    unsafe fn u_eq(a: Self::U, b: Self::U) -> Self::M;
+    unsafe fn u_select(m: Self::M, a: Self::U, b: Self::U) -> Self::U;
+
+    unsafe fn m_and(a: Self::M, b: Self::M) -> Self::M;
+    unsafe fn m_or(a: Self::M, b: Self::M) -> Self::M;
+    unsafe fn m_not(a: Self::M) -> Self::M;
+    unsafe fn m_bits(a: Self::M) -> LaneBits;
+    unsafe fn m_from_bits(bits: LaneBits) -> Self::M;
+}
+
+/// Sixteen `f32`s.
+#[derive(Clone, Copy)]
+pub struct F32s<S: Simd>(S::F);
+/// Sixteen `u32`s.
+#[derive(Clone, Copy)]
+pub struct U32s<S: Simd>(S::U);
+/// A mask of sixteen lanes.
+#[derive(Clone, Copy)]
+pub struct Mask<S: Simd>(S::M);
+
+// SAFETY (all impls below): a lane value exists only if a token `S` was made,
+// which proves the CPU has `S`'s instructions (see `Simd`).
+
+impl<S: Simd> F32s<S> {
+    #[inline(always)]
+    pub fn splat(_: S, x: f32) -> Self {
+        F32s(unsafe { S::f_splat(x) })
+    }
+    #[inline(always)]
+    pub fn from_array(_: S, a: [f32; LANES]) -> Self {
+        F32s(unsafe { S::f_load(&a) })
+    }
+    #[inline(always)]
+    pub fn to_array(self) -> [f32; LANES] {
+        let mut a = [0.0; LANES];
+        unsafe { S::f_store(self.0, &mut a) };
+        a
+    }
+    #[inline(always)]
+    pub fn sqrt(self) -> Self {
+        F32s(unsafe { S::f_sqrt(self.0) })
+    }
+    /// x86 `min`: `other` when either is NaN.
+    #[inline(always)]
+    pub fn min(self, other: Self) -> Self {
+        F32s(unsafe { S::f_min(self.0, other.0) })
+    }
+    /// x86 `max`: `other` when either is NaN.
+    #[inline(always)]
+    pub fn max(self, other: Self) -> Self {
+        F32s(unsafe { S::f_max(self.0, other.0) })
+    }
+    #[inline(always)]
+    pub fn abs(self) -> Self {
+        let bits = unsafe { S::u_and(S::f_to_bits(self.0), S::u_splat(0x7fff_ffff)) };
+        F32s(unsafe { S::f_from_bits(bits) })
+    }
+    /// `self.copysign(sign)` per lane.
+    #[inline(always)]
+    pub fn copysign(self, sign: Self) -> Self {
+        unsafe {
+            let mag = S::u_and(S::f_to_bits(self.0), S::u_splat(0x7fff_ffff));
+            let sgn = S::u_and(S::f_to_bits(sign.0), S::u_splat(0x8000_0000));
+            F32s(S::f_from_bits(S::u_or(mag, sgn)))
+        }
+    }
+    /// Lanes whose sign bit is set (so `−0` counts as negative).
+    #[inline(always)]
+    pub fn sign_negative(self) -> Mask<S> {
+        unsafe {
+            let sgn = S::u_and(S::f_to_bits(self.0), S::u_splat(0x8000_0000));
+            Mask(S::u_eq(sgn, S::u_splat(0x8000_0000)))
+        }
+    }
+    #[inline(always)]
+    pub fn lt(self, o: Self) -> Mask<S> {
+        Mask(unsafe { S::f_lt(self.0, o.0) })
+    }
+    #[inline(always)]
+    pub fn le(self, o: Self) -> Mask<S> {
+        Mask(unsafe { S::f_le(self.0, o.0) })
+    }
+    #[inline(always)]
+    pub fn gt(self, o: Self) -> Mask<S> {
+        o.lt(self)
+    }
+    #[inline(always)]
+    pub fn ge(self, o: Self) -> Mask<S> {
+        o.le(self)
+    }
+    #[inline(always)]
+    pub fn eq(self, o: Self) -> Mask<S> {
+        Mask(unsafe { S::f_eq(self.0, o.0) })
+    }
+    /// Lanes that are neither NaN nor infinite.
+    #[inline(always)]
+    pub fn is_finite(self) -> Mask<S> {
+        let inf = F32s(unsafe { S::f_splat(f32::INFINITY) });
+        self.abs().lt(inf)
+    }
+    #[inline(always)]
+    pub fn bits(self) -> U32s<S> {
+        U32s(unsafe { S::f_to_bits(self.0) })
+    }
+    /// `a` where `m`, else `b`.
+    #[inline(always)]
+    pub fn select(m: Mask<S>, a: Self, b: Self) -> Self {
+        F32s(unsafe { S::f_select(m.0, a.0, b.0) })
+    }
+    #[inline(always)]
+    pub fn lane(self, i: usize) -> f32 {
+        self.to_array()[i]
+    }
+}
+
+impl<S: Simd> U32s<S> {
+    #[inline(always)]
+    pub fn splat(_: S, x: u32) -> Self {
+        U32s(unsafe { S::u_splat(x) })
+    }
+    #[inline(always)]
+    pub fn from_array(_: S, a: [u32; LANES]) -> Self {
+        U32s(unsafe { S::u_load(&a) })
+    }
+    #[inline(always)]
+    pub fn to_array(self) -> [u32; LANES] {
+        let mut a = [0; LANES];
+        unsafe { S::u_store(self.0, &mut a) };
+        a
+    }
+    #[inline(always)]
+    pub fn eq(self, o: Self) -> Mask<S> {
+        Mask(unsafe { S::u_eq(self.0, o.0) })
+    }
+    #[inline(always)]
+    pub fn select(m: Mask<S>, a: Self, b: Self) -> Self {
+        U32s(unsafe { S::u_select(m.0, a.0, b.0) })
+    }
+    /// Exact below 2²⁴.
+    #[inline(always)]
+    pub fn to_f32(self) -> F32s<S> {
+        F32s(unsafe { S::u_to_f(self.0) })
+    }
+    #[inline(always)]
+    pub fn as_f32_bits(self) -> F32s<S> {
+        F32s(unsafe { S::f_from_bits(self.0) })
+    }
+    #[inline(always)]
+    pub fn xor(self, o: Self) -> Self {
+        U32s(unsafe { S::u_xor(self.0, o.0) })
+    }
+}
+
+impl<S: Simd> Mask<S> {
+    #[inline(always)]
+    pub fn from_bits(_: S, bits: LaneBits) -> Self {
+        Mask(unsafe { S::m_from_bits(bits) })
+    }
+    #[inline(always)]
+    pub fn bits(self) -> LaneBits {
+        unsafe { S::m_bits(self.0) }
+    }
+    #[inline(always)]
+    pub fn any(self) -> bool {
+        self.bits() != 0
+    }
+    #[inline(always)]
+    pub fn and_not(self, o: Self) -> Self {
+        self & !o
+    }
+}
+
+macro_rules! binop {
+    ($ty:ident, $tr:ident, $m:ident, $f:ident) => {
+        impl<S: Simd> $tr for $ty<S> {
+            type Output = Self;
+            #[inline(always)]
+            fn $m(self, o: Self) -> Self {
+                $ty(unsafe { S::$f(self.0, o.0) })
+            }
+        }
+    };
+}
+binop!(F32s, Add, add, f_add);
+binop!(F32s, Sub, sub, f_sub);
+binop!(F32s, Mul, mul, f_mul);
+binop!(F32s, Div, div, f_div);
+binop!(U32s, Add, add, u_add);
+binop!(U32s, BitAnd, bitand, u_and);
+binop!(U32s, BitOr, bitor, u_or);
+binop!(Mask, BitAnd, bitand, m_and);
+binop!(Mask, BitOr, bitor, m_or);
+
+impl<S: Simd> Neg for F32s<S> {
+    type Output = Self;
+    #[inline(always)]
+    fn neg(self) -> Self {
+        let bits = unsafe { S::u_xor(S::f_to_bits(self.0), S::u_splat(0x8000_0000)) };
+        F32s(unsafe { S::f_from_bits(bits) })
+    }
+}
+
+impl<S: Simd> Not for Mask<S> {
+    type Output = Self;
+    #[inline(always)]
+    fn not(self) -> Self {
+        Mask(unsafe { S::m_not(self.0) })
+    }
+}
+
+/// Three lanes of vectors, one component per value.
+#[derive(Clone, Copy)]
+pub struct Vec3s<S: Simd> {
+    pub x: F32s<S>,
+    pub y: F32s<S>,
+    pub z: F32s<S>,
+}
+
+impl<S: Simd> Vec3s<S> {
+    #[inline(always)]
+    pub fn new(x: F32s<S>, y: F32s<S>, z: F32s<S>) -> Self {
+        Vec3s { x, y, z }
+    }
+    #[inline(always)]
+    pub fn splat(s: S, v: glam::Vec3) -> Self {
+        Vec3s::new(
+            F32s::splat(s, v.x),
+            F32s::splat(s, v.y),
+            F32s::splat(s, v.z),
+        )
+    }
+    /// `(x·x + y·y) + z·z`, glam's order.
+    #[inline(always)]
+    pub fn dot(self, o: Self) -> F32s<S> {
+        self.x * o.x + self.y * o.y + self.z * o.z
+    }
+    /// glam's `cross`, operation for operation.
+    #[inline(always)]
+    pub fn cross(self, o: Self) -> Self {
+        Vec3s::new(
+            self.y * o.z - o.y * self.z,
+            self.z * o.x - o.z * self.x,
+            self.x * o.y - o.x * self.y,
+        )
+    }
+    #[inline(always)]
+    pub fn length_squared(self) -> F32s<S> {
+        self.dot(self)
+    }
+    /// glam's `normalize`: `self · (1 / |self|)`.
+    #[inline(always)]
+    pub fn normalize(self, s: S) -> Self {
+        let inv = F32s::splat(s, 1.0) / self.length_squared().sqrt();
+        self * inv
+    }
+    #[inline(always)]
+    pub fn abs(self) -> Self {
+        Vec3s::new(self.x.abs(), self.y.abs(), self.z.abs())
+    }
+    #[inline(always)]
+    pub fn select(m: Mask<S>, a: Self, b: Self) -> Self {
+        Vec3s::new(
+            F32s::select(m, a.x, b.x),
+            F32s::select(m, a.y, b.y),
+            F32s::select(m, a.z, b.z),
+        )
+    }
+    #[inline(always)]
+    pub fn lane(self, i: usize) -> glam::Vec3 {
+        glam::Vec3::new(self.x.lane(i), self.y.lane(i), self.z.lane(i))
+    }
+    /// Lanes from one array per component.
+    #[inline(always)]
+    pub fn from_arrays(s: S, a: &[[f32; LANES]; 3]) -> Self {
+        Vec3s::new(
+            F32s::from_array(s, a[0]),
+            F32s::from_array(s, a[1]),
+            F32s::from_array(s, a[2]),
+        )
+    }
+
+    /// One array per component.
+    #[inline(always)]
+    pub fn to_arrays(self) -> [[f32; LANES]; 3] {
+        [self.x.to_array(), self.y.to_array(), self.z.to_array()]
+    }
+
+    /// Lanes from sixteen vectors.
+    #[inline(always)]
+    pub fn from_lanes(s: S, v: &[glam::Vec3; LANES]) -> Self {
+        Vec3s::new(
+            F32s::from_array(s, v.map(|p| p.x)),
+            F32s::from_array(s, v.map(|p| p.y)),
+            F32s::from_array(s, v.map(|p| p.z)),
+        )
+    }
+}
+
+impl<S: Simd> Add for Vec3s<S> {
+    type Output = Self;
+    #[inline(always)]
+    fn add(self, o: Self) -> Self {
+        Vec3s::new(self.x + o.x, self.y + o.y, self.z + o.z)
+    }
+}
+impl<S: Simd> Sub for Vec3s<S> {
+    type Output = Self;
+    #[inline(always)]
+    fn sub(self, o: Self) -> Self {
+        Vec3s::new(self.x - o.x, self.y - o.y, self.z - o.z)
+    }
+}
+impl<S: Simd> Mul<F32s<S>> for Vec3s<S> {
+    type Output = Self;
+    #[inline(always)]
+    fn mul(self, k: F32s<S>) -> Self {
+        Vec3s::new(self.x * k, self.y * k, self.z * k)
+    }
+}
+impl<S: Simd> Mul for Vec3s<S> {
+    type Output = Self;
+    #[inline(always)]
+    fn mul(self, o: Self) -> Self {
+        Vec3s::new(self.x * o.x, self.y * o.y, self.z * o.z)
+    }
+}
+impl<S: Simd> Div<F32s<S>> for Vec3s<S> {
+    type Output = Self;
+    #[inline(always)]
+    fn div(self, k: F32s<S>) -> Self {
+        Vec3s::new(self.x / k, self.y / k, self.z / k)
+    }
+}
+impl<S: Simd> Neg for Vec3s<S> {
+    type Output = Self;
+    #[inline(always)]
+    fn neg(self) -> Self {
+        Vec3s::new(-self.x, -self.y, -self.z)
+    }
+}
+
+/// Code to run with the best instruction set: `run::<S>(token)` is compiled for
+/// each set, with that set's features enabled for the whole of it.
+pub trait SimdTask {
+    type Output;
+    fn run<S: Simd>(self, s: S) -> Self::Output;
+}
+
+/// Runs `task` with the widest instruction set this CPU has.
+#[inline]
+pub fn dispatch<T: SimdTask>(task: T) -> T::Output {
+    #[cfg(target_arch = "x86_64")]
+    {
+        if let Some(s) = Avx512::detect() {
+            // SAFETY: the token proves AVX-512 is present.
+            return unsafe { run_avx512(task, s) };
+        }
+        if let Some(s) = Avx2::detect() {
+            // SAFETY: the token proves AVX2 is present.
+            return unsafe { run_avx2(task, s) };
+        }
+    }
+    task.run(Portable)
+}
+
+/// Which instruction set [`dispatch`] uses on this CPU.
+pub fn instruction_set() -> &'static str {
+    #[cfg(target_arch = "x86_64")]
+    {
+        if Avx512::detect().is_some() {
+            return "AVX-512";
+        }
+        if Avx2::detect().is_some() {
+            return "AVX2";
+        }
+    }
+    "portable"
+}
+
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx512f,avx512dq,avx512bw,avx512vl,avx2,bmi1,bmi2,lzcnt,popcnt")]
+unsafe fn run_avx512<T: SimdTask>(task: T, s: Avx512) -> T::Output {
+    task.run(s)
+}
+
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2,bmi1,bmi2,lzcnt,popcnt")]
+unsafe fn run_avx2<T: SimdTask>(task: T, s: Avx2) -> T::Output {
+    task.run(s)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    struct Check;
+
+    /// Every operation against the scalar expression it stands for, bit for bit.
+    fn check_ops<S: Simd>(s: S) {
+        let vals = [
+            0.0f32,
+            -0.0,
+            1.0,
+            -1.5,
+            3.25e-8,
+            1e30,
+            f32::INFINITY,
+            f32::NEG_INFINITY,
+            f32::NAN,
+            2.0,
+            -7.0,
+            0.1,
+            1e-40,
+            5.5,
+            -3.0,
+            9.0,
+        ];
+        let mut other = vals;
+        other.rotate_left(5);
+        let (a, b) = (F32s::from_array(s, vals), F32s::from_array(s, other));
+        let same = |x: [f32; LANES], f: &dyn Fn(f32, f32) -> f32| {
+            for i in 0..LANES {
+                let want = f(vals[i], other[i]);
+                assert!(
+                    x[i].to_bits() == want.to_bits() || (x[i].is_nan() && want.is_nan()),
+                    "lane {i}: {} vs {want}",
+                    x[i]
+                );
+            }
+        };
+        same((a + b).to_array(), &|x, y| x + y);
+        same((a - b).to_array(), &|x, y| x - y);
+        same((a * b).to_array(), &|x, y| x * y);
+        same((a / b).to_array(), &|x, y| x / y);
+        same(a.min(b).to_array(), &|x, y| if x < y { x } else { y });
+        same(a.max(b).to_array(), &|x, y| if x > y { x } else { y });
+        same(a.sqrt().to_array(), &|x, _| x.sqrt());
+        same(a.abs().to_array(), &|x, _| x.abs());
+        same((-a).to_array(), &|x, _| -x);
+        same(a.copysign(b).to_array(), &|x, y| x.copysign(y));
+        let m = a.lt(b);
+        same(F32s::select(m, a, b).to_array(), &|x, y| if x < y { x } else { y });
+        for i in 0..LANES {
+            assert_eq!(a.le(b).bits() >> i & 1 == 1, vals[i] <= other[i]);
+            assert_eq!(a.eq(b).bits() >> i & 1 == 1, vals[i] == other[i]);
+            assert_eq!(a.is_finite().bits() >> i & 1 == 1, vals[i].is_finite());
+            assert_eq!(
+                a.sign_negative().bits() >> i & 1 == 1,
+                vals[i].is_sign_negative()
+            );
+        }
+        let bits = 0b1010_0110_0001_1101;
+        assert_eq!(Mask::from_bits(s, bits).bits(), bits);
+        assert_eq!((!Mask::from_bits(s, bits)).bits(), !bits & ALL_LANES);
+        let u = U32s::from_array(s, std::array::from_fn(|i| (i as u32) * 0x0101_0101));
+        let v = U32s::splat(s, 0x00ff_00ff);
+        let (ua, va) = (u.to_array(), v.to_array());
+        for i in 0..LANES {
+            assert_eq!((u + v).to_array()[i], ua[i].wrapping_add(va[i]));
+            assert_eq!((u & v).to_array()[i], ua[i] & va[i]);
+            assert_eq!(u.xor(v).to_array()[i], ua[i] ^ va[i]);
+            assert_eq!((u & v).to_f32().to_array()[i], (ua[i] & va[i] & 0xff_ffff) as f32);
+        }
+    }
+
+    impl SimdTask for Check {
+        type Output = &'static str;
+        fn run<S: Simd>(self, s: S) -> &'static str {
+            check_ops(s);
+            std::any::type_name::<S>()
+        }
+    }
+
+    #[test]
+    fn every_instruction_set_computes_what_the_scalar_code_does() {
+        check_ops(Portable);
+        #[cfg(target_arch = "x86_64")]
+        {
+            if let Some(s) = Avx2::detect() {
+                // SAFETY: detected.
+                unsafe { run_avx2(Check, s) };
+            }
+            if let Some(s) = Avx512::detect() {
+                // SAFETY: detected.
+                unsafe { run_avx512(Check, s) };
+            }
+        }
+        assert!(!dispatch(Check).is_empty());
+    }
+}
