@@ -1,5 +1,6 @@
 //! Random numbers and the warps from `[0,1)²` to directions, each next to its pdf.
 
+use crate::simd::{F32s, Mask, Simd, U64s};
 use glam::{Vec2, Vec3};
 use rand_core::{RngCore, SeedableRng};
 use rand_pcg::Pcg32;
@@ -73,6 +74,69 @@ impl PixelStreams {
     }
 }
 
+/// Sixteen sample streams, one per lane: lane `i` draws what a [`Sampler`] made by
+/// `PixelStreams::new(seed, pixel[i]).sample(sample[i])` draws (PCG32, XSH-RR
+/// output, as `rand_pcg::Pcg32`), for the packet engine.
+#[derive(Clone, Copy)]
+pub struct StreamLanes<S: Simd> {
+    state: U64s<S>,
+    increment: U64s<S>,
+}
+
+/// PCG32's multiplier (`rand_pcg`'s `Lcg64Xsh32`).
+const PCG_MULTIPLIER: u64 = 6_364_136_223_846_793_005;
+
+impl<S: Simd> StreamLanes<S> {
+    /// The streams of samples `sample` of pixels `pixel` (row-major indices in the
+    /// full image) of a render with `seed`.
+    #[inline(always)]
+    pub fn new(s: S, seed: u64, pixel: U64s<S>, sample: U64s<S>) -> Self {
+        let pixel_key = splitmix64_lanes(s, U64s::splat(s, splitmix64(seed)).xor(pixel));
+        let key = splitmix64_lanes(s, pixel_key.xor(sample));
+        let stream = splitmix64_lanes(s, key.xor(U64s::splat(s, 0xD1B5_4A32_D192_ED03)));
+        // `Pcg32::new(key, stream)`: odd increment, then one step away from the seed.
+        let increment = stream.shl::<1>().or(U64s::splat(s, 1));
+        let state = key.wrapping_add(increment);
+        let state = state
+            .wrapping_mul(U64s::splat(s, PCG_MULTIPLIER))
+            .wrapping_add(increment);
+        StreamLanes { state, increment }
+    }
+
+    /// Lane `i` of `other` where `m` is set, else of `self`.
+    #[inline(always)]
+    pub fn replace(self, m: Mask<S>, other: Self) -> Self {
+        StreamLanes {
+            state: U64s::select(m, other.state, self.state),
+            increment: U64s::select(m, other.increment, self.increment),
+        }
+    }
+
+    /// One number in `[0, 1)` per lane of `m` (`Sampler::next_f32`); the other lanes
+    /// neither draw nor advance (their value is meaningless).
+    #[inline(always)]
+    pub fn next_f32(&mut self, s: S, m: Mask<S>) -> F32s<S> {
+        let old = self.state;
+        let next = old
+            .wrapping_mul(U64s::splat(s, PCG_MULTIPLIER))
+            .wrapping_add(self.increment);
+        self.state = U64s::select(m, next, old);
+        let rot = old.shr::<59>().low32();
+        let xsh = old.shr::<18>().xor(old).shr::<27>().low32();
+        let bits = xsh.rotate_right(rot).shr::<8>();
+        bits.to_f32() * F32s::splat(s, 1.0 / (1u32 << 24) as f32)
+    }
+}
+
+/// [`splitmix64`] per lane.
+#[inline(always)]
+fn splitmix64_lanes<S: Simd>(s: S, z: U64s<S>) -> U64s<S> {
+    let z = z.wrapping_add(U64s::splat(s, 0x9E37_79B9_7F4A_7C15));
+    let z = z.xor(z.shr::<30>()).wrapping_mul(U64s::splat(s, 0xBF58_476D_1CE4_E5B9));
+    let z = z.xor(z.shr::<27>()).wrapping_mul(U64s::splat(s, 0x94D0_49BB_1331_11EB));
+    z.xor(z.shr::<31>())
+}
+
 #[inline]
 fn splitmix64(mut z: u64) -> u64 {
     z = z.wrapping_add(0x9E37_79B9_7F4A_7C15);
@@ -105,21 +169,41 @@ pub fn uniform_sphere_pdf() -> f32 {
     0.25 * FRAC_1_PI
 }
 
-/// Shirley-Chiu concentric map of the square onto the unit disk.
+/// Shirley-Chiu concentric map of the square onto the unit disk. The angle is
+/// measured from the nearer axis (`|φ| ≤ π/4`), where [`sin_cos_quarter`] needs no
+/// range reduction; the packet engine maps lanes with the same operations.
 pub fn concentric_disk(u: Vec2) -> Vec2 {
     let o = 2.0 * u - Vec2::ONE;
     if o.x == 0.0 && o.y == 0.0 {
         return Vec2::ZERO;
     }
-    let (r, theta) = if o.x.abs() > o.y.abs() {
-        (o.x, std::f32::consts::FRAC_PI_4 * (o.y / o.x))
+    let x_major = o.x.abs() > o.y.abs();
+    let (r, ratio) = if x_major {
+        (o.x, o.y / o.x)
     } else {
-        (
-            o.y,
-            std::f32::consts::FRAC_PI_2 - std::f32::consts::FRAC_PI_4 * (o.x / o.y),
-        )
+        (o.y, o.x / o.y)
     };
-    r * Vec2::new(theta.cos(), theta.sin())
+    let (sin, cos) = sin_cos_quarter(std::f32::consts::FRAC_PI_4 * ratio);
+    if x_major {
+        r * Vec2::new(cos, sin)
+    } else {
+        r * Vec2::new(sin, cos)
+    }
+}
+
+/// Cephes' `sinf`/`cosf` polynomials, for `|x| ≤ π/4` (error below 2e-7 there).
+pub const SIN_POLY: [f32; 3] = [-1.951_529_6e-4, 8.332_161e-3, -1.666_665_5e-1];
+pub const COS_POLY: [f32; 3] = [2.443_315_7e-5, -1.388_731_6e-3, 4.166_664_6e-2];
+
+/// `(sin x, cos x)` for `|x| ≤ π/4`, by [`SIN_POLY`] and [`COS_POLY`]: the same
+/// operations in the scalar and packet engines, and on every platform (libm's
+/// results vary with the machine).
+#[inline]
+pub fn sin_cos_quarter(x: f32) -> (f32, f32) {
+    let z = x * x;
+    let sin = ((SIN_POLY[0] * z + SIN_POLY[1]) * z + SIN_POLY[2]) * z * x + x;
+    let cos = ((COS_POLY[0] * z + COS_POLY[1]) * z + COS_POLY[2]) * z * z - 0.5 * z + 1.0;
+    (sin, cos)
 }
 
 /// Cosine-weighted direction on the hemisphere `z > 0` (Malley's method).
@@ -183,4 +267,79 @@ pub fn beckmann_normal_pdf(h: Vec3, alpha: f32) -> f32 {
 /// its area density is `1/|ex × ey|`.
 pub fn uniform_parallelogram(u: Vec2, centre: Vec3, ex: Vec3, ey: Vec3) -> Vec3 {
     centre + (u.x - 0.5) * ex + (u.y - 0.5) * ey
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::simd::SimdTask;
+
+    struct LanesMatch;
+
+    impl crate::simd::SimdTask for LanesMatch {
+        type Output = ();
+        fn run<S: Simd>(self, s: S) {
+            use crate::simd::{LaneBits, LANES};
+            let seed = 0x5eed;
+            let pixels: [u64; LANES] = std::array::from_fn(|i| 1000 * i as u64 + 7);
+            let samples: [u64; LANES] = std::array::from_fn(|i| (i as u64 * 37) % 11);
+            let mut lanes = StreamLanes::new(
+                s,
+                seed,
+                U64s::from_array(s, pixels),
+                U64s::from_array(s, samples),
+            );
+            let mut scalar: Vec<Sampler> = (0..LANES)
+                .map(|i| PixelStreams::new(seed, pixels[i]).sample(samples[i]))
+                .collect();
+            // Draws in a changing subset of lanes: the others must not advance.
+            for round in 0..40u32 {
+                let m: LaneBits = round.wrapping_mul(0x9E37_79B9) >> 16;
+                let u = lanes.next_f32(s, Mask::from_bits(s, m)).to_array();
+                for i in (0..LANES).filter(|&i| m >> i & 1 != 0) {
+                    assert_eq!(u[i].to_bits(), scalar[i].next_f32().to_bits(), "lane {i}");
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn stream_lanes_draw_what_the_scalar_streams_draw() {
+        crate::simd::dispatch(LanesMatch);
+        LanesMatch.run(crate::simd::Portable);
+    }
+
+    #[test]
+    fn quarter_sin_cos_is_accurate_on_its_range() {
+        let mut worst = 0.0f64;
+        for i in 0..=20_000 {
+            let x = std::f32::consts::FRAC_PI_4 * (i as f32 / 10_000.0 - 1.0);
+            let (s, c) = sin_cos_quarter(x);
+            let x64 = x as f64;
+            worst = worst.max((s as f64 - x64.sin()).abs());
+            worst = worst.max((c as f64 - x64.cos()).abs());
+        }
+        assert!(worst < 2e-7, "worst error {worst:e}");
+    }
+
+    #[test]
+    fn concentric_disk_keeps_the_angle_and_radius_of_the_square() {
+        let mut rng = Sampler::from_seed(3);
+        for _ in 0..10_000 {
+            let u = rng.next_2d();
+            let d = concentric_disk(u);
+            let o = 2.0 * u - Vec2::ONE;
+            // The radius is the square's max-norm; the angle is π/4 · (minor/major) from the major axis.
+            let r = o.x.abs().max(o.y.abs());
+            assert!((d.length() - r).abs() < 1e-6, "{u:?}");
+            let theta = if o.x.abs() > o.y.abs() {
+                std::f32::consts::FRAC_PI_4 * (o.y / o.x) + if o.x < 0.0 { PI } else { 0.0 }
+            } else {
+                std::f32::consts::FRAC_PI_2 - std::f32::consts::FRAC_PI_4 * (o.x / o.y)
+                    + if o.y < 0.0 { PI } else { 0.0 }
+            };
+            let want = Vec2::new(theta.cos(), theta.sin()) * r;
+            assert!((d - want).length() < 2e-6, "{u:?}: {d:?} vs {want:?}");
+        }
+    }
 }

@@ -1,16 +1,18 @@
 //! The path tracer of `path.rs` run on sixteen paths at once, one per SIMD lane,
-//! for the scenes whose every part it covers: Lambertian surfaces lit by area
-//! lights, light sampling or MIS (the defaults there). Each lane performs the
-//! same floating-point operations as `PathIntegrator::li` on the same random
-//! numbers (one stream per pixel sample, drawn in the same order), so a pixel is
-//! the scalar engine's pixel whatever the lanes beside it hold; rays are traced
-//! sixteen at a time (`Accel::intersect_packet`, `occluded_packet`).
+//! for the scenes whose every part it covers ([`unsupported`] says which do not):
+//! Lambertian surfaces lit by area lights, seen through a pinhole, by light
+//! sampling or MIS (the defaults there). Each lane performs the same
+//! floating-point operations as `PathIntegrator::li` on the same random numbers
+//! (one stream per pixel sample, drawn in the same order), so a pixel is the
+//! scalar engine's pixel bit for bit, whatever the lanes beside it hold; rays are
+//! traced sixteen at a time (`Accel::intersect_packet`, `occluded_packet`).
 //!
-//! Lanes are refilled as paths end (a path that escapes at once frees its lane
-//! for the next sample), taking the samples of a tile's pixels in order. A pixel's
-//! samples are summed in sample order once all are done, as the scalar renderer
-//! sums them.
+//! Lanes are refilled as paths end (a camera ray that escapes at once frees its
+//! lane for the next sample), taking the samples of a tile's pixels in order. A
+//! pixel's samples are summed in sample order once all are done, as the scalar
+//! renderer sums them.
 
+use super::path::{PathSettings, SHADOW_EPSILON};
 use super::{DirectStrategy, Roulette};
 use crate::accel::{Accel, HitPacket, RayPacket};
 use crate::camera::Camera;
@@ -18,17 +20,17 @@ use crate::geometry::ray::gamma;
 use crate::geometry::NO_PRIM;
 use crate::lights::{AreaLight, Light};
 use crate::materials::Material;
-use crate::sampling::{concentric_disk, PixelStreams, Sampler};
+use crate::sampling::{StreamLanes, COS_POLY, SIN_POLY};
 use crate::scene::{Scene, NO_LIGHT};
-use crate::simd::{dispatch, F32s, LaneBits, Mask, Simd, SimdTask, U32s, Vec3s, ALL_LANES, LANES};
+use crate::simd::{
+    dispatch, F32s, LaneBits, Mask, Simd, SimdTask, U32s, U64s, Vec3s, ALL_LANES, LANES,
+};
 use crate::Color;
-use glam::{Vec2, Vec3};
+use glam::Vec3;
 use std::f32::consts::FRAC_1_PI;
 
-use super::path::{PathSettings, SHADOW_EPSILON};
-
-/// Why a scene or setting needs the scalar path tracer.
-pub fn unsupported(scene: &Scene, s: &PathSettings) -> Option<&'static str> {
+/// Why the scene or settings need the scalar path tracer, if they do.
+pub fn unsupported(scene: &Scene, camera: &Camera, s: &PathSettings) -> Option<&'static str> {
     if !matches!(s.strategy, DirectStrategy::Light | DirectStrategy::Mis) {
         return Some("hemisphere and BSDF-only sampling");
     }
@@ -42,16 +44,13 @@ pub fn unsupported(scene: &Scene, s: &PathSettings) -> Option<&'static str> {
     if scene.has_unsampled_emitters() {
         return Some("emissive surfaces");
     }
+    if !camera.lens.is_pinhole() {
+        return Some("a thin lens");
+    }
     None
 }
 
-/// One pixel sample's result, as the scalar renderer records it.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct SampleValue {
-    pub radiance: Color,
-}
-
-/// Renders pixel samples of a scene that [`unsupported`] accepts.
+/// Renders the pixel samples of a scene that [`unsupported`] accepts.
 pub struct PacketPathIntegrator<'a> {
     scene: &'a Scene,
     accel: &'a dyn Accel,
@@ -62,11 +61,12 @@ pub struct PacketPathIntegrator<'a> {
     mis: bool,
     roulette: Roulette,
     lights: Vec<AreaLight>,
+    /// Per material: albedo, and whether it scatters nothing (light surfaces).
+    albedo: Vec<Color>,
+    black: Vec<bool>,
 }
 
-/// The pixels of a tile and where their results go: `value(i, sum, n)` is called
-/// once per pixel `pixels[i]`, with the sum of its samples' radiance in sample
-/// order and the count of non-finite samples (counted as black).
+/// The pixels of a tile and how to sample them.
 pub struct TileWork<'t> {
     pub pixels: &'t [(u32, u32)],
     pub spp: u32,
@@ -76,7 +76,8 @@ pub struct TileWork<'t> {
     pub stop: &'t (dyn Fn() -> bool + Sync),
 }
 
-/// A finished pixel: the sum of its samples in order, and how many were not finite.
+/// A finished pixel: the sum of its samples' radiance in sample order (non-finite
+/// samples counted as black), and how many were not finite.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct PixelSum {
     pub sum: Color,
@@ -91,10 +92,14 @@ impl<'a> PacketPathIntegrator<'a> {
         camera: &'a Camera,
         s: PathSettings,
     ) -> Option<Self> {
-        if unsupported(scene, &s).is_some() {
+        if unsupported(scene, camera, &s).is_some() {
             return None;
         }
         let lights = scene.lights.iter().filter_map(|l| l.as_area().copied());
+        let albedo = scene.materials.iter().map(|m| match m {
+            Material::Lambertian { albedo } => *albedo,
+            _ => Color::ZERO,
+        });
         Some(PacketPathIntegrator {
             scene,
             accel,
@@ -105,6 +110,8 @@ impl<'a> PacketPathIntegrator<'a> {
             mis: s.strategy == DirectStrategy::Mis,
             roulette: s.roulette,
             lights: lights.collect(),
+            albedo: albedo.collect(),
+            black: scene.materials.iter().map(Material::is_black).collect(),
         })
     }
 
@@ -133,61 +140,63 @@ impl SimdTask for TileTask<'_, '_, '_> {
     }
 }
 
-/// What each lane carries between bounces (structure of arrays).
-struct Lanes {
-    /// Lanes holding a live path.
-    live: LaneBits,
-    /// Index into the tile's pixels and sample index (relative to `spp_offset`).
-    pixel: [u32; LANES],
-    sample: [u32; LANES],
-    samplers: [Sampler; LANES],
-    rays: RayPacket,
-    beta: [[f32; LANES]; 3],
-    l: [[f32; LANES]; 3],
-    bounces: [u32; LANES],
-    /// Lanes whose ray left a surface vertex (else the camera), that vertex and the
-    /// BSDF pdf of the ray's direction there.
-    has_prev: LaneBits,
-    prev_p: [[f32; LANES]; 3],
-    prev_pdf: [f32; LANES],
-}
-
 /// Where a pixel's finished samples wait until they can be summed in order.
 struct PixelSlots {
     spp: usize,
     /// Tile pixel of each slot (`u32::MAX`: free), its values and how many are done.
-    pixel: Vec<u32>,
+    pixel: [u32; SLOTS],
     values: Vec<Color>,
-    done: Vec<u32>,
+    done: [u32; SLOTS],
 }
 
 /// Pixels in flight at once: lanes may run ahead of a long path by this many pixels.
 const SLOTS: usize = 8;
 
 impl PixelSlots {
-    fn new(spp: usize) -> Self {
-        PixelSlots {
-            spp,
-            pixel: vec![u32::MAX; SLOTS],
-            values: vec![Color::ZERO; SLOTS * spp],
-            done: vec![0; SLOTS],
-        }
-    }
-
     fn slot_of(pixel: u32) -> usize {
         pixel as usize % SLOTS
     }
 }
 
+/// Per lane: a path's state between bounces.
 struct Kernel<'a, 'b, 't, S: Simd> {
     s: S,
     it: &'b PacketPathIntegrator<'a>,
     work: &'b TileWork<'t>,
-    lanes: Lanes,
+    /// Lanes holding a live path.
+    live: LaneBits,
+    /// Tile pixel and sample index (relative to `spp_offset`) of each lane.
+    pixel: [u32; LANES],
+    sample: [u32; LANES],
+    rng: StreamLanes<S>,
+    rays: RayPacket,
+    beta: Vec3s<S>,
+    l: Vec3s<S>,
+    /// Scattering events so far (small integers, exact as floats).
+    bounces: F32s<S>,
+    /// Lanes whose ray left a surface vertex (else the camera), that vertex and the
+    /// BSDF pdf of the ray's direction there.
+    has_prev: LaneBits,
+    prev_p: Vec3s<S>,
+    prev_pdf: F32s<S>,
     slots: PixelSlots,
     /// Next sample to start, as (tile pixel, sample).
     next: (u32, u32),
     stopped: bool,
+}
+
+/// What the scene says about each lane's hit.
+struct HitData<S: Simd> {
+    si: Hits<S>,
+    /// Triangle lanes (the others hit spheres), their corners, sphere centres.
+    triangles: LaneBits,
+    corners: [Vec3s<S>; 3],
+    centre: Vec3s<S>,
+    albedo: Vec3s<S>,
+    /// Lanes on a surface that scatters nothing (an area light's).
+    black: LaneBits,
+    /// The area light whose surface each lane hit (`NO_LIGHT` if none).
+    light: [u32; LANES],
 }
 
 /// A surface point in lanes, as `SurfaceInteraction`.
@@ -200,25 +209,32 @@ struct Hits<S: Simd> {
 }
 
 impl<'a, 'b, 't, S: Simd> Kernel<'a, 'b, 't, S> {
+    #[inline(always)]
     fn new(s: S, it: &'b PacketPathIntegrator<'a>, work: &'b TileWork<'t>) -> Self {
+        let zero = F32s::splat(s, 0.0);
+        let spp = work.spp.max(1) as usize;
+        let none = U64s::splat(s, 0);
         Kernel {
             s,
             it,
             work,
-            lanes: Lanes {
-                live: 0,
-                pixel: [0; LANES],
-                sample: [0; LANES],
-                samplers: std::array::from_fn(|_| Sampler::from_seed(0)),
-                rays: RayPacket::default(),
-                beta: [[0.0; LANES]; 3],
-                l: [[0.0; LANES]; 3],
-                bounces: [0; LANES],
-                has_prev: 0,
-                prev_p: [[0.0; LANES]; 3],
-                prev_pdf: [0.0; LANES],
+            live: 0,
+            pixel: [0; LANES],
+            sample: [0; LANES],
+            rng: StreamLanes::new(s, work.seed, none, none),
+            rays: RayPacket::default(),
+            beta: Vec3s::new(zero, zero, zero),
+            l: Vec3s::new(zero, zero, zero),
+            bounces: zero,
+            has_prev: 0,
+            prev_p: Vec3s::new(zero, zero, zero),
+            prev_pdf: zero,
+            slots: PixelSlots {
+                spp,
+                pixel: [u32::MAX; SLOTS],
+                values: vec![Color::ZERO; SLOTS * spp],
+                done: [0; SLOTS],
             },
-            slots: PixelSlots::new(work.spp.max(1) as usize),
             next: (0, 0),
             stopped: false,
         }
@@ -229,81 +245,171 @@ impl<'a, 'b, 't, S: Simd> Kernel<'a, 'b, 't, S> {
         let mut hits = HitPacket::default();
         loop {
             self.refill();
-            if self.lanes.live == 0 {
+            if self.live == 0 {
                 break;
             }
-            let live = self.lanes.live;
             self.it
                 .accel
-                .intersect_packet(&self.lanes.rays, live, &mut hits);
+                .intersect_packet(&self.rays, self.live, &mut hits);
             let ended = self.bounce(&hits);
             self.finish(ended, out);
         }
     }
 
-    /// Starts the next samples in free lanes (camera rays, drawn as the scalar
-    /// renderer draws them).
+    // ---- lane helpers ----
+
+    #[inline(always)]
+    fn f(&self, x: f32) -> F32s<S> {
+        F32s::splat(self.s, x)
+    }
+
+    #[inline(always)]
+    fn mask(&self, bits: LaneBits) -> Mask<S> {
+        Mask::from_bits(self.s, bits)
+    }
+
+    /// One uniform number per lane of `lanes` (`Sampler::next_f32`).
+    #[inline(always)]
+    fn next_f32(&mut self, lanes: LaneBits) -> F32s<S> {
+        let m = self.mask(lanes);
+        self.rng.next_f32(self.s, m)
+    }
+
+    /// Lanes of `lanes` where light found after `bounces` scattering events counts
+    /// (`PathIntegrator::counts`).
+    #[inline(always)]
+    fn counts(&self, lanes: LaneBits) -> LaneBits {
+        let max = self.f(self.it.max_depth as f32);
+        let ok = if self.it.accumulate {
+            self.bounces.le(max)
+        } else {
+            self.bounces.eq(max)
+        };
+        ok.bits() & lanes
+    }
+
+    /// Lanes of `lanes` at the depth cap.
+    #[inline(always)]
+    fn at_depth_cap(&self, lanes: LaneBits) -> LaneBits {
+        self.bounces.ge(self.f(self.it.max_depth as f32)).bits() & lanes
+    }
+
+    /// `L += beta · c` in lanes `m`.
+    #[inline(always)]
+    fn add_radiance(&mut self, m: LaneBits, c: Vec3s<S>) {
+        if m != 0 {
+            let sum = self.l + self.beta * c;
+            self.l = Vec3s::select(self.mask(m), sum, self.l);
+        }
+    }
+
+    /// Starts the next samples in the free lanes: their streams and camera rays, as
+    /// the scalar renderer makes them (`Camera::sample_ray`, pinhole).
+    #[inline(always)]
     fn refill(&mut self) {
+        let s = self.s;
+        let (fresh, image_pixel, index, xy) = self.assign_samples();
+        if fresh == 0 {
+            return;
+        }
+        let m = self.mask(fresh);
+        let streams = StreamLanes::new(
+            s,
+            self.work.seed,
+            U64s::from_array(s, image_pixel),
+            U64s::from_array(s, index),
+        );
+        self.rng = self.rng.replace(m, streams);
+        let xi_x = self.next_f32(fresh);
+        let xi_y = self.next_f32(fresh);
+        let cam = self.it.camera;
+        let (one, two) = (self.f(1.0), self.f(2.0));
+        let u = (U32s::from_array(s, xy[0]).to_f32() + xi_x) / self.f(cam.width as f32);
+        let v = (U32s::from_array(s, xy[1]).to_f32() + xi_y) / self.f(cam.height as f32);
+        let a = (two * u - one) * self.f(cam.tan_half_x);
+        let b = (one - two * v) * self.f(cam.tan_half_y);
+        let d = (Vec3s::splat(s, cam.right) * a + Vec3s::splat(s, cam.up) * b)
+            + Vec3s::splat(s, cam.forward);
+        let d = d.normalize(s);
+        let o = Vec3s::splat(s, cam.eye);
+        let rays = &mut self.rays;
+        rays.o = Vec3s::select(m, o, Vec3s::from_arrays(s, &rays.o)).to_arrays();
+        rays.d = Vec3s::select(m, d, Vec3s::from_arrays(s, &rays.d)).to_arrays();
+        let t_max = F32s::from_array(s, rays.t_max);
+        rays.t_max = F32s::select(m, F32s::splat(s, f32::INFINITY), t_max).to_array();
+        let skip = U32s::from_array(s, rays.skip);
+        rays.skip = U32s::select(m, U32s::splat(s, NO_PRIM), skip).to_array();
+        self.beta = Vec3s::select(m, Vec3s::splat(s, Vec3::ONE), self.beta);
+        self.l = Vec3s::select(m, Vec3s::splat(s, Vec3::ZERO), self.l);
+        self.bounces = F32s::select(m, self.f(0.0), self.bounces);
+        self.has_prev &= !fresh;
+        self.live |= fresh;
+    }
+
+    /// Gives the free lanes the next samples of the tile, in order: the lanes
+    /// started, and per lane its pixel's index in the image, the sample's index
+    /// and the pixel's `(x, y)`.
+    #[allow(clippy::type_complexity)]
+    #[inline(always)]
+    fn assign_samples(&mut self) -> (LaneBits, [u64; LANES], [u64; LANES], [[u32; LANES]; 2]) {
         let spp = self.work.spp.max(1);
         let npix = self.work.pixels.len() as u32;
-        let cam = self.it.camera;
-        while self.lanes.live != ALL_LANES && !self.stopped {
+        let width = self.it.camera.width as u64;
+        let mut fresh: LaneBits = 0;
+        let mut image_pixel = [0u64; LANES];
+        let mut index = [0u64; LANES];
+        let mut xy = [[0u32; LANES]; 2];
+        while (self.live | fresh) != ALL_LANES && !self.stopped {
             let (px, sample) = self.next;
             if px >= npix {
-                return;
+                break;
             }
             let slot = PixelSlots::slot_of(px);
             if sample == 0 {
                 // A new pixel needs a free slot, and leave to start.
                 if self.slots.pixel[slot] != u32::MAX {
-                    return;
+                    break;
                 }
                 if (self.work.stop)() {
                     self.stopped = true;
-                    return;
+                    break;
                 }
                 self.slots.pixel[slot] = px;
                 self.slots.done[slot] = 0;
             }
-            let i = (!self.lanes.live).trailing_zeros() as usize;
+            let i = (!(self.live | fresh)).trailing_zeros() as usize;
             let (x, y) = self.work.pixels[px as usize];
-            let pixel = y as u64 * cam.width as u64 + x as u64;
-            let index = self.work.spp_offset as u64 + sample as u64;
-            let mut sampler = PixelStreams::new(self.work.seed, pixel).sample(index);
-            let ray = cam.sample_ray(x, y, &mut sampler);
-            let l = &mut self.lanes;
-            l.samplers[i] = sampler;
-            l.rays.set(i, &ray);
-            l.pixel[i] = px;
-            l.sample[i] = sample;
-            for c in 0..3 {
-                l.beta[c][i] = 1.0;
-                l.l[c][i] = 0.0;
-            }
-            l.bounces[i] = 0;
-            l.has_prev &= !(1 << i);
-            l.live |= 1 << i;
+            image_pixel[i] = y as u64 * width + x as u64;
+            index[i] = self.work.spp_offset as u64 + sample as u64;
+            (xy[0][i], xy[1][i]) = (x, y);
+            self.pixel[i] = px;
+            self.sample[i] = sample;
+            fresh |= 1 << i;
             self.next = if sample + 1 < spp {
                 (px, sample + 1)
             } else {
                 (px + 1, 0)
             };
         }
+        (fresh, image_pixel, index, xy)
     }
 
     /// Records the radiance of the lanes in `ended` and frees them; pixels whose
     /// samples are all done are summed into `out`.
+    #[inline(always)]
     fn finish(&mut self, ended: LaneBits, out: &mut [Option<PixelSum>]) {
+        if ended == 0 {
+            return;
+        }
+        let l = self.l.to_arrays();
+        let spp = self.slots.spp;
         let mut rest = ended;
         while rest != 0 {
             let i = rest.trailing_zeros() as usize;
             rest &= rest - 1;
-            let l = &self.lanes;
-            let radiance = Vec3::new(l.l[0][i], l.l[1][i], l.l[2][i]);
-            let (px, sample) = (l.pixel[i], l.sample[i] as usize);
+            let (px, sample) = (self.pixel[i], self.sample[i] as usize);
             let slot = PixelSlots::slot_of(px);
-            let spp = self.slots.spp;
-            self.slots.values[slot * spp + sample] = radiance;
+            self.slots.values[slot * spp + sample] = Vec3::new(l[0][i], l[1][i], l[2][i]);
             self.slots.done[slot] += 1;
             if self.slots.done[slot] as usize == spp {
                 let mut sum = Color::ZERO;
@@ -319,156 +425,61 @@ impl<'a, 'b, 't, S: Simd> Kernel<'a, 'b, 't, S> {
                 self.slots.pixel[slot] = u32::MAX;
             }
         }
-        self.lanes.live &= !ended;
+        self.live &= !ended;
     }
 
-    // ---- lane helpers ----
-
-    #[inline(always)]
-    fn f(&self, x: f32) -> F32s<S> {
-        F32s::splat(self.s, x)
-    }
-
-    #[inline(always)]
-    fn load3(&self, a: &[[f32; LANES]; 3]) -> Vec3s<S> {
-        Vec3s::new(
-            F32s::from_array(self.s, a[0]),
-            F32s::from_array(self.s, a[1]),
-            F32s::from_array(self.s, a[2]),
-        )
-    }
-
-    #[inline(always)]
-    fn mask(&self, bits: LaneBits) -> Mask<S> {
-        Mask::from_bits(self.s, bits)
-    }
-
-    /// Uniform numbers for the lanes in `lanes` (0 elsewhere), one draw each.
-    #[inline(always)]
-    fn next_f32(&mut self, lanes: LaneBits) -> F32s<S> {
-        let mut u = [0.0; LANES];
-        let mut rest = lanes;
-        while rest != 0 {
-            let i = rest.trailing_zeros() as usize;
-            rest &= rest - 1;
-            u[i] = self.lanes.samplers[i].next_f32();
-        }
-        F32s::from_array(self.s, u)
-    }
-
-    #[inline(always)]
-    fn next_2d(&mut self, lanes: LaneBits) -> (F32s<S>, F32s<S>) {
-        let mut u = [[0.0; LANES]; 2];
-        let mut rest = lanes;
-        while rest != 0 {
-            let i = rest.trailing_zeros() as usize;
-            rest &= rest - 1;
-            let v = self.lanes.samplers[i].next_2d();
-            (u[0][i], u[1][i]) = (v.x, v.y);
-        }
-        (F32s::from_array(self.s, u[0]), F32s::from_array(self.s, u[1]))
-    }
-
-    /// Lanes of `lanes` where the path's emission and light at `bounces` count
-    /// (`PathIntegrator::counts`).
-    #[inline(always)]
-    fn counts(&self, lanes: LaneBits, extra: u32) -> LaneBits {
-        let (max, acc) = (self.it.max_depth, self.it.accumulate);
-        let mut m = 0;
-        let mut rest = lanes;
-        while rest != 0 {
-            let i = rest.trailing_zeros() as usize;
-            rest &= rest - 1;
-            let b = self.lanes.bounces[i] + extra;
-            if (acc && b <= max) || (!acc && b == max) {
-                m |= 1 << i;
-            }
-        }
-        m
-    }
-
-    /// `L += beta · c` in lanes `m`.
-    #[inline(always)]
-    fn add_radiance(&mut self, m: LaneBits, c: Vec3s<S>) {
-        if m == 0 {
-            return;
-        }
-        let mk = self.mask(m);
-        let beta = self.load3(&self.lanes.beta);
-        let l = self.load3(&self.lanes.l);
-        let sum = l + beta * c;
-        let new = Vec3s::select(mk, sum, l);
-        self.lanes.l = [new.x.to_array(), new.y.to_array(), new.z.to_array()];
-    }
-
-    /// One bounce of every live lane, from its traced ray's `hits`: the lanes whose
-    /// path ended.
+    /// One bounce of every live lane, from its traced ray's `hits` (the body of the
+    /// loop in `li`): the lanes whose path ended.
     #[inline(always)]
     fn bounce(&mut self, hits: &HitPacket) -> LaneBits {
         let s = self.s;
-        let live = self.lanes.live;
-        let o = self.load3(&self.lanes.rays.o);
-        let d = self.load3(&self.lanes.rays.d);
+        let live = self.live;
+        let o = Vec3s::from_arrays(s, &self.rays.o);
+        let d = Vec3s::from_arrays(s, &self.rays.d);
         // The unit direction, once, as the scalar `li`.
         let w = d.normalize(s);
-        let mut hit_lanes = 0;
-        for i in 0..LANES {
-            if live >> i & 1 != 0 && hits.prim[i] != NO_PRIM {
-                hit_lanes |= 1 << i;
-            }
-        }
+        let prims = U32s::from_array(s, hits.prim);
+        let hit_lanes = !prims.eq(U32s::splat(s, NO_PRIM)).bits() & live;
         let mut ended = 0;
         // Area lights the sampled line meets before the hit end the path there.
-        let with_prev = live & self.lanes.has_prev;
+        let with_prev = live & self.has_prev;
         if with_prev != 0 {
             ended |= self.area_light_on_line(with_prev, hits, hit_lanes, o, d, w);
         }
         // Escaped paths end: nothing here lights them.
-        ended |= live & !hit_lanes & !ended;
+        ended |= live & !hit_lanes;
         let lanes = live & !ended;
         if lanes == 0 {
             return ended;
         }
-        let (mut si, material, light) = self.interaction(lanes, hits, o, d);
-        let from_prev = lanes & self.lanes.has_prev;
+        let mut hit = self.hit_data(lanes, hits, o, d);
+        let from_prev = lanes & self.has_prev;
         if from_prev != 0 {
-            si = self.on_line(from_prev, hits, si, w);
+            hit.si = self.on_line(from_prev, &hit, w);
         }
+        let si = hit.si;
         // Emission seen by camera rays (other vertices' light was found above).
-        let camera = lanes & !self.lanes.has_prev;
-        let counts_now = self.counts(camera, 0);
-        if counts_now != 0 {
-            self.emitted(counts_now, &light, si, w);
+        let seen = self.counts(lanes & !self.has_prev);
+        if seen != 0 {
+            self.emitted(seen, &hit.light, si, w);
         }
         // Paths end at the depth cap and on lights' surfaces.
-        let mut stop = 0;
-        for i in 0..LANES {
-            if lanes >> i & 1 != 0
-                && (self.lanes.bounces[i] >= self.it.max_depth
-                    || self.it.scene.materials[material[i] as usize].is_black())
-            {
-                stop |= 1 << i;
-            }
-        }
+        let stop = (self.at_depth_cap(lanes) | hit.black) & lanes;
         ended |= stop;
         let lanes = lanes & !stop;
         if lanes == 0 {
             return ended;
         }
-        for i in 0..LANES {
-            if lanes >> i & 1 != 0 {
-                self.lanes.bounces[i] += 1;
-            }
-        }
-        let albedo = self.albedo(lanes, &material);
+        let one_more = self.bounces + self.f(1.0);
+        self.bounces = F32s::select(self.mask(lanes), one_more, self.bounces);
         let frame = Frame::from_normal(s, si.ns);
         let wo_world = -w;
         let wo = frame.to_local(wo_world);
-        let direct = self.counts(lanes, 0);
+        let direct = self.counts(lanes);
         if direct != 0 {
-            self.direct(direct, &hits.prim, si, &frame, wo, albedo);
+            self.direct(direct, &hits.prim, si, &frame, wo, hit.albedo);
         }
-        ended |= self.scatter(lanes, &hits.prim, si, &frame, wo, wo_world, albedo);
+        ended |= self.scatter(lanes, &hits.prim, si, &frame, wo, wo_world, hit.albedo);
         ended
     }
 
@@ -485,19 +496,25 @@ impl<'a, 'b, 't, S: Simd> Kernel<'a, 'b, 't, S> {
         w: Vec3s<S>,
     ) -> LaneBits {
         let s = self.s;
-        let prev = self.load3(&self.lanes.prev_p);
+        let prev = self.prev_p;
         let t = F32s::from_array(s, hits.t);
-        let hit_m = self.mask(hit_lanes);
         let at = o + d * t;
-        let t_hit = F32s::select(hit_m, (at - prev).dot(w), self.f(f32::INFINITY));
+        let t_hit = F32s::select(
+            self.mask(hit_lanes),
+            (at - prev).dot(w),
+            self.f(f32::INFINITY),
+        );
         let mut hit_light = [NO_LIGHT; LANES];
         let ntri = self.it.scene.triangles.len();
-        for (i, light) in hit_light.iter_mut().enumerate() {
-            let p = hits.prim[i] as usize;
-            if hit_lanes >> i & 1 != 0 && p < ntri {
-                *light = self.it.scene.triangles[p].light;
+        let mut rest = hit_lanes & lanes;
+        while rest != 0 {
+            let i = rest.trailing_zeros() as usize;
+            rest &= rest - 1;
+            if let Some(tri) = self.it.scene.triangles.get(hits.prim[i] as usize) {
+                hit_light[i] = tri.light;
             }
         }
+        debug_assert!(ntri <= self.it.scene.num_prims());
         let hit_light = U32s::from_array(s, hit_light);
         let mut best_t = self.f(f32::INFINITY);
         let mut best: LaneBits = 0;
@@ -513,67 +530,64 @@ impl<'a, 'b, 't, S: Simd> Kernel<'a, 'b, 't, S> {
             best_light = U32s::select(m, U32s::splat(s, k as u32), best_light);
             best |= take;
         }
-        if best == 0 {
-            return 0;
-        }
-        let counted = self.counts(best, 0);
+        let counted = self.counts(best);
         if counted != 0 && self.it.mis {
-            // Light sampling also finds these lights: weight by the power heuristic.
-            let ids = best_light.to_array();
-            let mut le = [[0.0; LANES]; 3];
-            let mut light_pdf = [0.0; LANES];
-            let prev_a = [
-                prev.x.to_array(),
-                prev.y.to_array(),
-                prev.z.to_array(),
-            ];
-            let wa = [w.x.to_array(), w.y.to_array(), w.z.to_array()];
-            for i in (0..LANES).filter(|&i| counted >> i & 1 != 0) {
-                let light = &self.it.lights[ids[i] as usize];
-                let p = Vec3::new(prev_a[0][i], prev_a[1][i], prev_a[2][i]);
-                let dir = Vec3::new(wa[0][i], wa[1][i], wa[2][i]);
-                light_pdf[i] = light.pdf_li(p, dir);
-                (le[0][i], le[1][i], le[2][i]) = light.radiance.into();
-            }
-            let weight = power_heuristic(
-                s,
-                self.f(1.0),
-                F32s::from_array(s, self.lanes.prev_pdf),
-                self.f(self.it.light_samples as f32),
-                F32s::from_array(s, light_pdf),
-            );
-            let le = self.load3(&le) * weight;
-            self.add_radiance(counted, le);
+            self.add_light_found(counted, best_light, prev, w);
         }
         // With light sampling alone the weight is 0: nothing to add.
         best
     }
 
-    /// The surface points of the hits in `lanes` (`Scene::interaction`), and each
-    /// lane's material and light.
+    /// MIS-weighted emission of the area lights `light` found from `prev` along `w`
+    /// in lanes `lanes` (`bsdf_hit_weight`).
+    #[cold]
+    fn add_light_found(&mut self, lanes: LaneBits, light: U32s<S>, prev: Vec3s<S>, w: Vec3s<S>) {
+        let s = self.s;
+        let ids = light.to_array();
+        let (prev_a, wa) = (prev.to_arrays(), w.to_arrays());
+        let mut le = [[0.0; LANES]; 3];
+        let mut light_pdf = [0.0; LANES];
+        for i in (0..LANES).filter(|&i| lanes >> i & 1 != 0) {
+            let light = &self.it.lights[ids[i] as usize];
+            let p = Vec3::new(prev_a[0][i], prev_a[1][i], prev_a[2][i]);
+            let dir = Vec3::new(wa[0][i], wa[1][i], wa[2][i]);
+            light_pdf[i] = light.pdf_li(p, dir);
+            (le[0][i], le[1][i], le[2][i]) = light.radiance.into();
+        }
+        let weight = power_heuristic(
+            s,
+            self.f(1.0),
+            self.prev_pdf,
+            self.f(self.it.light_samples as f32),
+            F32s::from_array(s, light_pdf),
+        );
+        let le = Vec3s::from_arrays(s, &le) * weight;
+        self.add_radiance(lanes, le);
+    }
+
+    /// The scene's data for the hits in `lanes` (`Scene::interaction`).
     #[inline(always)]
-    fn interaction(
-        &self,
-        lanes: LaneBits,
-        hits: &HitPacket,
-        o: Vec3s<S>,
-        d: Vec3s<S>,
-    ) -> (Hits<S>, [u32; LANES], [u32; LANES]) {
+    fn hit_data(&self, lanes: LaneBits, hits: &HitPacket, o: Vec3s<S>, d: Vec3s<S>) -> HitData<S> {
         let s = self.s;
         let scene = self.it.scene;
         let ntri = scene.triangles.len();
         let mut corner = [[[0.0f32; LANES]; 3]; 3];
         let mut normal = [[[0.0f32; LANES]; 3]; 3];
         let mut has_normals: LaneBits = 0;
-        let mut sphere: LaneBits = 0;
+        let mut triangles: LaneBits = 0;
         let mut centre = [[0.0f32; LANES]; 3];
         let mut radius = [0.0f32; LANES];
-        let mut material = [0u32; LANES];
+        let mut albedo = [[0.0f32; LANES]; 3];
+        let mut black: LaneBits = 0;
         let mut light = [NO_LIGHT; LANES];
-        for i in (0..LANES).filter(|&i| lanes >> i & 1 != 0) {
+        let mut rest = lanes;
+        while rest != 0 {
+            let i = rest.trailing_zeros() as usize;
+            rest &= rest - 1;
             let p = hits.prim[i] as usize;
-            if p < ntri {
+            let material = if p < ntri {
                 let tri = &scene.triangles[p];
+                triangles |= 1 << i;
                 for (k, &v) in tri.v.iter().enumerate() {
                     let q = scene.positions[v as usize];
                     (corner[k][0][i], corner[k][1][i], corner[k][2][i]) = q.into();
@@ -585,75 +599,71 @@ impl<'a, 'b, 't, S: Simd> Kernel<'a, 'b, 't, S> {
                         (normal[k][0][i], normal[k][1][i], normal[k][2][i]) = q.into();
                     }
                 }
-                material[i] = tri.material;
                 light[i] = tri.light;
+                tri.material as usize
             } else {
                 let sp = &scene.spheres[p - ntri];
-                sphere |= 1 << i;
                 (centre[0][i], centre[1][i], centre[2][i]) = sp.centre.into();
                 radius[i] = sp.radius;
-                material[i] = sp.material;
-            }
+                sp.material as usize
+            };
+            (albedo[0][i], albedo[1][i], albedo[2][i]) = self.it.albedo[material].into();
+            black |= (self.it.black[material] as LaneBits) << i;
         }
         let b1 = F32s::from_array(s, hits.b1);
         let b2 = F32s::from_array(s, hits.b2);
-        let [p0, p1, p2] = corner.map(|c| self.load3(&c));
-        let mut out = triangle_points(s, p0, p1, p2, b1, b2);
+        let corners = corner.map(|c| Vec3s::from_arrays(s, &c));
+        let [p0, p1, p2] = corners;
+        let mut si = triangle_points(s, p0, p1, p2, b1, b2);
         if has_normals != 0 {
-            let [n0, n1, n2] = normal.map(|c| self.load3(&c));
-            let (ng, ns) = shading_normals(s, out.ng, n0, n1, n2, b1, b2);
+            let [n0, n1, n2] = normal.map(|c| Vec3s::from_arrays(s, &c));
+            let (ng, ns) = shading_normals(s, si.ng, n0, n1, n2, b1, b2);
             let m = self.mask(has_normals);
-            out.ng = Vec3s::select(m, ng, out.ng);
-            out.ns = Vec3s::select(m, ns, out.ns);
+            si.ng = Vec3s::select(m, ng, si.ng);
+            si.ns = Vec3s::select(m, ns, si.ns);
         }
-        if sphere != 0 {
+        let centre = Vec3s::from_arrays(s, &centre);
+        let spheres = lanes & !triangles;
+        if spheres != 0 {
             let t = F32s::from_array(s, hits.t);
-            let c = self.load3(&centre);
             let r = F32s::from_array(s, radius);
-            let sp = sphere_points(s, o, d, t, c, r);
-            let m = self.mask(sphere);
-            out = Hits {
-                p: Vec3s::select(m, sp.p, out.p),
-                p_error: Vec3s::select(m, sp.p_error, out.p_error),
-                ng: Vec3s::select(m, sp.ng, out.ng),
-                ns: Vec3s::select(m, sp.ns, out.ns),
+            let sp = sphere_points(s, o, d, t, centre, r);
+            let m = self.mask(spheres);
+            si = Hits {
+                p: Vec3s::select(m, sp.p, si.p),
+                p_error: Vec3s::select(m, sp.p_error, si.p_error),
+                ng: Vec3s::select(m, sp.ng, si.ng),
+                ns: Vec3s::select(m, sp.ns, si.ns),
             };
         }
-        (out, material, light)
+        HitData {
+            si,
+            triangles,
+            corners,
+            centre,
+            albedo: Vec3s::from_arrays(s, &albedo),
+            black,
+            light,
+        }
     }
 
-    /// `Scene::on_line` for the lanes in `lanes`.
+    /// `Scene::on_line` for the lanes in `lanes`: the hit moved onto the sampled
+    /// line from the previous vertex.
     #[inline(always)]
-    fn on_line(&self, lanes: LaneBits, hits: &HitPacket, si: Hits<S>, w: Vec3s<S>) -> Hits<S> {
+    fn on_line(&self, lanes: LaneBits, hit: &HitData<S>, w: Vec3s<S>) -> Hits<S> {
         let s = self.s;
-        let scene = self.it.scene;
-        let ntri = scene.triangles.len();
-        let from = self.load3(&self.lanes.prev_p);
+        let si = hit.si;
+        let from = self.prev_p;
+        let zero = self.f(0.0);
         let cos = w.dot(si.ng);
         let steep = cos.abs().ge(self.f(0.05));
         let dist = (si.p - from).dot(si.ng) / cos;
-        let ahead = dist.gt(self.f(0.0)) & dist.is_finite();
+        let ahead = dist.gt(zero) & dist.is_finite();
         let p = from + w * dist;
         let p_error =
             si.p_error + p.abs() * self.f(gamma(1)) + (w * dist).abs() * self.f(gamma(5));
         // Triangles: the point must lie in the hit triangle; exact axes stay.
-        let mut corner = [[[0.0f32; LANES]; 3]; 3];
-        let mut tri: LaneBits = 0;
-        let mut centre = [[0.0f32; LANES]; 3];
-        for i in (0..LANES).filter(|&i| lanes >> i & 1 != 0) {
-            let prim = hits.prim[i] as usize;
-            if prim < ntri {
-                tri |= 1 << i;
-                for k in 0..3 {
-                    let q = scene.positions[scene.triangles[prim].v[k] as usize];
-                    (corner[k][0][i], corner[k][1][i], corner[k][2][i]) = q.into();
-                }
-            } else {
-                let c = scene.spheres[prim - ntri].centre;
-                (centre[0][i], centre[1][i], centre[2][i]) = c.into();
-            }
-        }
-        let [p0, p1, p2] = corner.map(|c| self.load3(&c));
+        let [p0, p1, p2] = hit.corners;
         let inside = triangle_contains(s, p0, p1, p2, p);
         let exact = exact_axes(p0, p1, p2);
         let tri_p = Vec3s::new(
@@ -661,17 +671,15 @@ impl<'a, 'b, 't, S: Simd> Kernel<'a, 'b, 't, S> {
             F32s::select(exact[1], si.p.y, p.y),
             F32s::select(exact[2], si.p.z, p.z),
         );
-        let zero = self.f(0.0);
         let tri_err = Vec3s::new(
             F32s::select(exact[0], zero, p_error.x),
             F32s::select(exact[1], zero, p_error.y),
             F32s::select(exact[2], zero, p_error.z),
         );
         // Spheres: the normal again at the moved point.
-        let c = self.load3(&centre);
-        let n = normalize_or_zero(s, (from - c) + w * dist);
+        let n = normalize_or_zero(s, (from - hit.centre) + w * dist);
         let facing = n.dot(si.ng).gt(zero);
-        let tri_m = self.mask(tri);
+        let tri_m = self.mask(hit.triangles);
         let lands = (tri_m & inside) | (!tri_m & facing);
         let moved = self.mask(lanes) & steep & ahead & lands;
         let is_tri = moved & tri_m;
@@ -690,7 +698,7 @@ impl<'a, 'b, 't, S: Simd> Kernel<'a, 'b, 't, S> {
         let mut le = [[0.0; LANES]; 3];
         let mut any = 0;
         let cos_out = (-w).dot(si.ng).to_array();
-        for i in (0..LANES).filter(|&i| lanes >> i & 1 != 0) {
+        for i in (0..LANES).filter(|&i| lanes >> i & 1 != 0 && light[i] != NO_LIGHT) {
             let Some(Light::Area(a)) = self.it.scene.lights.get(light[i] as usize) else {
                 continue;
             };
@@ -700,19 +708,8 @@ impl<'a, 'b, 't, S: Simd> Kernel<'a, 'b, 't, S> {
                 (le[0][i], le[1][i], le[2][i]) = e.into();
             }
         }
-        let le = self.load3(&le);
+        let le = Vec3s::from_arrays(self.s, &le);
         self.add_radiance(any, le);
-    }
-
-    #[inline(always)]
-    fn albedo(&self, lanes: LaneBits, material: &[u32; LANES]) -> Vec3s<S> {
-        let mut a = [[0.0; LANES]; 3];
-        for i in (0..LANES).filter(|&i| lanes >> i & 1 != 0) {
-            if let Material::Lambertian { albedo } = self.it.scene.materials[material[i] as usize] {
-                (a[0][i], a[1][i], a[2][i]) = albedo.into();
-            }
-        }
-        self.load3(&a)
     }
 
     /// `PathIntegrator::direct` by light sampling (with MIS weights when asked):
@@ -735,12 +732,16 @@ impl<'a, 'b, 't, S: Simd> Kernel<'a, 'b, 't, S> {
         let f_black = f.x.eq(zero) & f.y.eq(zero) & f.z.eq(zero);
         let wo_world = frame.to_world(wo);
         let mut acc = Vec3s::splat(s, Vec3::ZERO);
-        let skip = *prims;
-        let mut shadow = RayPacket::default();
+        let mut shadow = RayPacket {
+            t_max: [1.0 - SHADOW_EPSILON; LANES],
+            skip: *prims,
+            ..RayPacket::default()
+        };
         for k in 0..self.it.lights.len() {
             let light = self.it.lights[k];
             for _ in 0..n {
-                let (u1, u2) = self.next_2d(lanes);
+                let u1 = self.next_f32(lanes);
+                let u2 = self.next_f32(lanes);
                 let ls = sample_area(s, &light, si.p, u1, u2);
                 let wi = frame.to_local(ls.wi);
                 let reflect = (wi.z * wo.z).gt(zero);
@@ -752,11 +753,8 @@ impl<'a, 'b, 't, S: Simd> Kernel<'a, 'b, 't, S> {
                 // The shadow segment, stopped short of the light.
                 let target = ls.p_light;
                 let origin = offset_ray_origin(s, si.p, si.p_error, si.ng, target - si.p);
-                let dir = target - origin;
-                store3(&mut shadow.o, origin);
-                store3(&mut shadow.d, dir);
-                shadow.t_max = [1.0 - SHADOW_EPSILON; LANES];
-                shadow.skip = skip;
+                shadow.o = origin.to_arrays();
+                shadow.d = (target - origin).to_arrays();
                 let blocked = self.it.accel.occluded_packet(&shadow, ok);
                 let lit = ok & !blocked;
                 if lit == 0 {
@@ -770,8 +768,7 @@ impl<'a, 'b, 't, S: Simd> Kernel<'a, 'b, 't, S> {
                 };
                 let li = Vec3s::splat(s, light.radiance);
                 let contrib = f * li * (wi.z.abs() * weight / ls.pdf);
-                let m = self.mask(lit);
-                acc = Vec3s::select(m, acc + contrib / nf, acc);
+                acc = Vec3s::select(self.mask(lit), acc + contrib / nf, acc);
             }
         }
         self.add_radiance(lanes, acc);
@@ -794,11 +791,13 @@ impl<'a, 'b, 't, S: Simd> Kernel<'a, 'b, 't, S> {
     ) -> LaneBits {
         let s = self.s;
         let zero = self.f(0.0);
+        // `material.sample(wo, next_f32(), next_2d())`: the lobe number is drawn too.
         let _u_lobe = self.next_f32(lanes);
-        let (u1, u2) = self.next_2d(lanes);
+        let u1 = self.next_f32(lanes);
+        let u2 = self.next_f32(lanes);
         // Cosine-weighted direction on the side of `wo` (`lambertian::sample`).
         let finite = wo.x.is_finite() & wo.y.is_finite() & wo.z.is_finite();
-        let (dx, dy) = concentric_disk_lanes(s, u1, u2, lanes);
+        let (dx, dy) = concentric_disk_lanes(s, u1, u2);
         let z = (self.f(1.0) - (dx * dx + dy * dy)).max(zero).sqrt();
         let sampled = finite & !wo.z.eq(zero) & z.gt(zero);
         let wi = Vec3s::new(dx, dy, z.copysign(wo.z));
@@ -806,14 +805,14 @@ impl<'a, 'b, 't, S: Simd> Kernel<'a, 'b, 't, S> {
         let mut ended = lanes & !sampled.bits();
         // At the depth cap only MIS still traces the ray, to weight the light it finds.
         if !self.it.mis {
-            ended |= lanes & self.at_depth_cap(lanes);
+            ended |= self.at_depth_cap(lanes);
         }
         let wi_world = frame.to_world(wi);
         let reflect = (wi.z * wo.z).gt(zero);
         let consistent = geometrically_consistent(s, si.ng, wo_world, wi_world, reflect);
         ended |= lanes & !consistent.bits();
         let go = lanes & !ended;
-        let beta = self.load3(&self.lanes.beta) * albedo;
+        let beta = self.beta * albedo;
         let q = self.continue_prob(go, beta);
         let play = go & q.lt(self.f(1.0)).bits();
         let mut survive = go;
@@ -828,32 +827,20 @@ impl<'a, 'b, 't, S: Simd> Kernel<'a, 'b, 't, S> {
         ended |= lanes & !survive;
         if survive != 0 {
             let m = self.mask(survive);
-            let old = self.load3(&self.lanes.beta);
-            store3(&mut self.lanes.beta, Vec3s::select(m, beta, old));
-            let prev = self.load3(&self.lanes.prev_p);
-            store3(&mut self.lanes.prev_p, Vec3s::select(m, si.p, prev));
-            let old_pdf = F32s::from_array(s, self.lanes.prev_pdf);
-            self.lanes.prev_pdf = F32s::select(m, pdf, old_pdf).to_array();
-            self.lanes.has_prev |= survive;
+            self.beta = Vec3s::select(m, beta, self.beta);
+            self.prev_p = Vec3s::select(m, si.p, self.prev_p);
+            self.prev_pdf = F32s::select(m, pdf, self.prev_pdf);
+            self.has_prev |= survive;
             let origin = offset_ray_origin(s, si.p, si.p_error, si.ng, wi_world);
-            let rays = &mut self.lanes.rays;
-            let (o, d) = (rays.o, rays.d);
-            rays.o = select3(m, origin, self_load3(s, &o));
-            rays.d = select3(m, wi_world, self_load3(s, &d));
-            for i in (0..LANES).filter(|&i| survive >> i & 1 != 0) {
-                rays.t_max[i] = f32::INFINITY;
-                rays.skip[i] = prims[i];
-            }
+            let rays = &mut self.rays;
+            rays.o = Vec3s::select(m, origin, Vec3s::from_arrays(s, &rays.o)).to_arrays();
+            rays.d = Vec3s::select(m, wi_world, Vec3s::from_arrays(s, &rays.d)).to_arrays();
+            let t_max = F32s::from_array(s, rays.t_max);
+            rays.t_max = F32s::select(m, F32s::splat(s, f32::INFINITY), t_max).to_array();
+            let skip = U32s::from_array(s, rays.skip);
+            rays.skip = U32s::select(m, U32s::from_array(s, *prims), skip).to_array();
         }
         ended
-    }
-
-    /// Lanes of `lanes` at the depth cap (after this bounce's increment).
-    #[inline(always)]
-    fn at_depth_cap(&self, lanes: LaneBits) -> LaneBits {
-        (0..LANES)
-            .filter(|&i| lanes >> i & 1 != 0 && self.lanes.bounces[i] >= self.it.max_depth)
-            .fold(0, |m, i| m | 1 << i)
     }
 
     /// `Roulette::continue_prob` per lane (1 where the lane is not in `lanes`).
@@ -869,9 +856,7 @@ impl<'a, 'b, 't, S: Simd> Kernel<'a, 'b, 't, S> {
             }
             Roulette::Fixed { start, prob } => (start, self.f(prob.clamp(1e-6, 1.0))),
         };
-        let playing = (0..LANES)
-            .filter(|&i| lanes >> i & 1 != 0 && self.lanes.bounces[i] >= start)
-            .fold(0, |m, i| m | 1 << i);
+        let playing = self.bounces.ge(self.f(start as f32)).bits() & lanes;
         F32s::select(self.mask(playing), q, one)
     }
 }
@@ -904,26 +889,6 @@ impl<S: Simd> Frame<S> {
     fn to_world(&self, v: Vec3s<S>) -> Vec3s<S> {
         self.s * v.x + self.t * v.y + self.n * v.z
     }
-}
-
-#[inline(always)]
-fn store3<S: Simd>(a: &mut [[f32; LANES]; 3], v: Vec3s<S>) {
-    *a = [v.x.to_array(), v.y.to_array(), v.z.to_array()];
-}
-
-#[inline(always)]
-fn self_load3<S: Simd>(s: S, a: &[[f32; LANES]; 3]) -> Vec3s<S> {
-    Vec3s::new(
-        F32s::from_array(s, a[0]),
-        F32s::from_array(s, a[1]),
-        F32s::from_array(s, a[2]),
-    )
-}
-
-#[inline(always)]
-fn select3<S: Simd>(m: Mask<S>, a: Vec3s<S>, b: Vec3s<S>) -> [[f32; LANES]; 3] {
-    let v = Vec3s::select(m, a, b);
-    [v.x.to_array(), v.y.to_array(), v.z.to_array()]
 }
 
 /// `f32::max`: the other operand where one is NaN.
@@ -1208,20 +1173,28 @@ fn next_float_down<S: Simd>(s: S, v: F32s<S>) -> F32s<S> {
     F32s::select(v.eq(F32s::splat(s, f32::NEG_INFINITY)), v, r)
 }
 
-/// `sampling::concentric_disk` of the lanes in `lanes` (0 elsewhere).
+/// `sampling::concentric_disk` in lanes, operation for operation.
 #[inline(always)]
-fn concentric_disk_lanes<S: Simd>(
-    s: S,
-    u1: F32s<S>,
-    u2: F32s<S>,
-    lanes: LaneBits,
-) -> (F32s<S>, F32s<S>) {
-    let (a, b) = (u1.to_array(), u2.to_array());
-    let mut x = [0.0; LANES];
-    let mut y = [0.0; LANES];
-    for i in (0..LANES).filter(|&i| lanes >> i & 1 != 0) {
-        let d = concentric_disk(Vec2::new(a[i], b[i]));
-        (x[i], y[i]) = (d.x, d.y);
-    }
-    (F32s::from_array(s, x), F32s::from_array(s, y))
+fn concentric_disk_lanes<S: Simd>(s: S, u1: F32s<S>, u2: F32s<S>) -> (F32s<S>, F32s<S>) {
+    let (zero, one, two) = (F32s::splat(s, 0.0), F32s::splat(s, 1.0), F32s::splat(s, 2.0));
+    let (ox, oy) = (two * u1 - one, two * u2 - one);
+    let centre = ox.eq(zero) & oy.eq(zero);
+    let x_major = ox.abs().gt(oy.abs());
+    let r = F32s::select(x_major, ox, oy);
+    let ratio = F32s::select(x_major, oy / ox, ox / oy);
+    let (sin, cos) = sin_cos_quarter_lanes(s, F32s::splat(s, std::f32::consts::FRAC_PI_4) * ratio);
+    let x = F32s::select(x_major, r * cos, r * sin);
+    let y = F32s::select(x_major, r * sin, r * cos);
+    (F32s::select(centre, zero, x), F32s::select(centre, zero, y))
+}
+
+/// `sampling::sin_cos_quarter` in lanes.
+#[inline(always)]
+fn sin_cos_quarter_lanes<S: Simd>(s: S, x: F32s<S>) -> (F32s<S>, F32s<S>) {
+    let [s0, s1, s2] = SIN_POLY.map(|c| F32s::splat(s, c));
+    let [c0, c1, c2] = COS_POLY.map(|c| F32s::splat(s, c));
+    let z = x * x;
+    let sin = ((s0 * z + s1) * z + s2) * z * x + x;
+    let cos = ((c0 * z + c1) * z + c2) * z * z - F32s::splat(s, 0.5) * z + F32s::splat(s, 1.0);
+    (sin, cos)
 }

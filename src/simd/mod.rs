@@ -43,6 +43,8 @@ pub unsafe trait Simd: Copy + Send + Sync + 'static {
     type F: Copy;
     type U: Copy;
     type M: Copy;
+    /// Sixteen `u64`s.
+    type W: Copy;
 
     unsafe fn f_splat(x: f32) -> Self::F;
     unsafe fn f_load(a: &[f32; LANES]) -> Self::F;
@@ -76,6 +78,25 @@ pub unsafe trait Simd: Copy + Send + Sync + 'static {
     unsafe fn u_eq(a: Self::U, b: Self::U) -> Self::M;
     unsafe fn u_select(m: Self::M, a: Self::U, b: Self::U) -> Self::U;
 
+    /// `a >> N` (logical) per lane.
+    unsafe fn u_shr<const N: u32>(a: Self::U) -> Self::U;
+    /// `a.rotate_right(r)` per lane (`r < 32`).
+    unsafe fn u_rotr(a: Self::U, r: Self::U) -> Self::U;
+
+    unsafe fn w_splat(x: u64) -> Self::W;
+    unsafe fn w_load(a: &[u64; LANES]) -> Self::W;
+    unsafe fn w_store(v: Self::W, a: &mut [u64; LANES]);
+    unsafe fn w_add(a: Self::W, b: Self::W) -> Self::W;
+    /// Wrapping product (the low 64 bits).
+    unsafe fn w_mul(a: Self::W, b: Self::W) -> Self::W;
+    unsafe fn w_xor(a: Self::W, b: Self::W) -> Self::W;
+    unsafe fn w_or(a: Self::W, b: Self::W) -> Self::W;
+    unsafe fn w_shr<const N: u32>(a: Self::W) -> Self::W;
+    unsafe fn w_shl<const N: u32>(a: Self::W) -> Self::W;
+    /// The low 32 bits of each lane.
+    unsafe fn w_low(a: Self::W) -> Self::U;
+    unsafe fn w_select(m: Self::M, a: Self::W, b: Self::W) -> Self::W;
+
     unsafe fn m_and(a: Self::M, b: Self::M) -> Self::M;
     unsafe fn m_or(a: Self::M, b: Self::M) -> Self::M;
     unsafe fn m_not(a: Self::M) -> Self::M;
@@ -89,6 +110,9 @@ pub struct F32s<S: Simd>(S::F);
 /// Sixteen `u32`s.
 #[derive(Clone, Copy)]
 pub struct U32s<S: Simd>(S::U);
+/// Sixteen `u64`s.
+#[derive(Clone, Copy)]
+pub struct U64s<S: Simd>(S::W);
 /// A mask of sixteen lanes.
 #[derive(Clone, Copy)]
 pub struct Mask<S: Simd>(S::M);
@@ -223,6 +247,64 @@ impl<S: Simd> U32s<S> {
     #[inline(always)]
     pub fn xor(self, o: Self) -> Self {
         U32s(unsafe { S::u_xor(self.0, o.0) })
+    }
+    #[inline(always)]
+    pub fn shr<const N: u32>(self) -> Self {
+        U32s(unsafe { S::u_shr::<N>(self.0) })
+    }
+    #[inline(always)]
+    pub fn rotate_right(self, r: Self) -> Self {
+        U32s(unsafe { S::u_rotr(self.0, r.0) })
+    }
+}
+
+impl<S: Simd> U64s<S> {
+    #[inline(always)]
+    pub fn splat(_: S, x: u64) -> Self {
+        U64s(unsafe { S::w_splat(x) })
+    }
+    #[inline(always)]
+    pub fn from_array(_: S, a: [u64; LANES]) -> Self {
+        U64s(unsafe { S::w_load(&a) })
+    }
+    #[inline(always)]
+    pub fn to_array(self) -> [u64; LANES] {
+        let mut a = [0; LANES];
+        unsafe { S::w_store(self.0, &mut a) };
+        a
+    }
+    #[inline(always)]
+    pub fn wrapping_add(self, o: Self) -> Self {
+        U64s(unsafe { S::w_add(self.0, o.0) })
+    }
+    #[inline(always)]
+    pub fn wrapping_mul(self, o: Self) -> Self {
+        U64s(unsafe { S::w_mul(self.0, o.0) })
+    }
+    #[inline(always)]
+    pub fn xor(self, o: Self) -> Self {
+        U64s(unsafe { S::w_xor(self.0, o.0) })
+    }
+    #[inline(always)]
+    pub fn or(self, o: Self) -> Self {
+        U64s(unsafe { S::w_or(self.0, o.0) })
+    }
+    #[inline(always)]
+    pub fn shr<const N: u32>(self) -> Self {
+        U64s(unsafe { S::w_shr::<N>(self.0) })
+    }
+    #[inline(always)]
+    pub fn shl<const N: u32>(self) -> Self {
+        U64s(unsafe { S::w_shl::<N>(self.0) })
+    }
+    /// `x as u32` per lane.
+    #[inline(always)]
+    pub fn low32(self) -> U32s<S> {
+        U32s(unsafe { S::w_low(self.0) })
+    }
+    #[inline(always)]
+    pub fn select(m: Mask<S>, a: Self, b: Self) -> Self {
+        U64s(unsafe { S::w_select(m.0, a.0, b.0) })
     }
 }
 
@@ -524,6 +606,24 @@ mod tests {
                 vals[i].is_sign_negative()
             );
         }
+        let w: [u64; LANES] = std::array::from_fn(|i| 0x9E37_79B9_7F4A_7C15u64.wrapping_mul(i as u64 + 1));
+        let x: [u64; LANES] = std::array::from_fn(|i| 0xD1B5_4A32_D192_ED03u64 ^ (i as u64) << 40);
+        let (wa, xa) = (U64s::from_array(s, w), U64s::from_array(s, x));
+        for i in 0..LANES {
+            assert_eq!(wa.wrapping_mul(xa).to_array()[i], w[i].wrapping_mul(x[i]));
+            assert_eq!(wa.wrapping_add(xa).to_array()[i], w[i].wrapping_add(x[i]));
+            assert_eq!(wa.xor(xa).to_array()[i], w[i] ^ x[i]);
+            assert_eq!(wa.or(xa).to_array()[i], w[i] | x[i]);
+            assert_eq!(wa.shr::<27>().to_array()[i], w[i] >> 27);
+            assert_eq!(wa.shl::<1>().to_array()[i], w[i] << 1);
+            assert_eq!(wa.low32().to_array()[i], w[i] as u32);
+            let r = (x[i] >> 59) as u32;
+            let rot = wa.low32().rotate_right(xa.shr::<59>().low32());
+            assert_eq!(rot.to_array()[i], (w[i] as u32).rotate_right(r));
+            assert_eq!(wa.low32().shr::<8>().to_array()[i], (w[i] as u32) >> 8);
+        }
+        let sel = U64s::select(Mask::from_bits(s, 0b101), wa, xa).to_array();
+        assert_eq!((sel[0], sel[1], sel[2]), (w[0], x[1], w[2]));
         let bits = 0b1010_0110_0001_1101;
         assert_eq!(Mask::from_bits(s, bits).bits(), bits);
         assert_eq!((!Mask::from_bits(s, bits)).bits(), !bits & ALL_LANES);

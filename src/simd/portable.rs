@@ -24,6 +24,7 @@ unsafe impl Simd for Portable {
     type F = Fa;
     type U = Ua;
     type M = LaneBits;
+    type W = [u64; LANES];
 
     #[inline(always)]
     unsafe fn f_splat(x: f32) -> Fa {
@@ -127,6 +128,58 @@ unsafe impl Simd for Portable {
     }
     #[inline(always)]
     unsafe fn u_select(m: LaneBits, a: Ua, b: Ua) -> Ua {
+        std::array::from_fn(|i| if m >> i & 1 != 0 { a[i] } else { b[i] })
+    }
+    #[inline(always)]
+    unsafe fn u_shr<const N: u32>(a: Ua) -> Ua {
+        a.map(|x| x >> N)
+    }
+    #[inline(always)]
+    unsafe fn u_rotr(a: Ua, r: Ua) -> Ua {
+        map2(a, r, u32::rotate_right)
+    }
+    #[inline(always)]
+    unsafe fn w_splat(x: u64) -> [u64; LANES] {
+        [x; LANES]
+    }
+    #[inline(always)]
+    unsafe fn w_load(a: &[u64; LANES]) -> [u64; LANES] {
+        *a
+    }
+    #[inline(always)]
+    unsafe fn w_store(v: [u64; LANES], a: &mut [u64; LANES]) {
+        *a = v;
+    }
+    #[inline(always)]
+    unsafe fn w_add(a: [u64; LANES], b: [u64; LANES]) -> [u64; LANES] {
+        map2(a, b, u64::wrapping_add)
+    }
+    #[inline(always)]
+    unsafe fn w_mul(a: [u64; LANES], b: [u64; LANES]) -> [u64; LANES] {
+        map2(a, b, u64::wrapping_mul)
+    }
+    #[inline(always)]
+    unsafe fn w_xor(a: [u64; LANES], b: [u64; LANES]) -> [u64; LANES] {
+        map2(a, b, |x, y| x ^ y)
+    }
+    #[inline(always)]
+    unsafe fn w_or(a: [u64; LANES], b: [u64; LANES]) -> [u64; LANES] {
+        map2(a, b, |x, y| x | y)
+    }
+    #[inline(always)]
+    unsafe fn w_shr<const N: u32>(a: [u64; LANES]) -> [u64; LANES] {
+        a.map(|x| x >> N)
+    }
+    #[inline(always)]
+    unsafe fn w_shl<const N: u32>(a: [u64; LANES]) -> [u64; LANES] {
+        a.map(|x| x << N)
+    }
+    #[inline(always)]
+    unsafe fn w_low(a: [u64; LANES]) -> Ua {
+        a.map(|x| x as u32)
+    }
+    #[inline(always)]
+    unsafe fn w_select(m: LaneBits, a: [u64; LANES], b: [u64; LANES]) -> [u64; LANES] {
         std::array::from_fn(|i| if m >> i & 1 != 0 { a[i] } else { b[i] })
     }
     #[inline(always)]

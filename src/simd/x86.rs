@@ -4,6 +4,12 @@
 use super::{LaneBits, Simd, LANES};
 use std::arch::x86_64::*;
 
+macro_rules! pair {
+    ($f:path, $a:expr, $b:expr) => {
+        [$f($a[0], $b[0]), $f($a[1], $b[1])]
+    };
+}
+
 /// AVX-512 (F, DQ, BW, VL): a token that exists only on CPUs that have it.
 #[derive(Clone, Copy, Debug)]
 pub struct Avx512(());
@@ -41,6 +47,8 @@ unsafe impl Simd for Avx512 {
     type F = __m512;
     type U = __m512i;
     type M = __mmask16;
+    /// Lanes 0-7 and 8-15.
+    type W = [__m512i; 2];
 
     #[inline(always)]
     unsafe fn f_splat(x: f32) -> __m512 {
@@ -147,6 +155,68 @@ unsafe impl Simd for Avx512 {
         _mm512_mask_blend_epi32(m, b, a)
     }
     #[inline(always)]
+    unsafe fn u_shr<const N: u32>(a: __m512i) -> __m512i {
+        _mm512_srl_epi32(a, _mm_cvtsi32_si128(N as i32))
+    }
+    #[inline(always)]
+    unsafe fn u_rotr(a: __m512i, r: __m512i) -> __m512i {
+        _mm512_rorv_epi32(a, r)
+    }
+    #[inline(always)]
+    unsafe fn w_splat(x: u64) -> [__m512i; 2] {
+        [_mm512_set1_epi64(x as i64); 2]
+    }
+    #[inline(always)]
+    unsafe fn w_load(a: &[u64; LANES]) -> [__m512i; 2] {
+        let p = a.as_ptr();
+        [_mm512_loadu_si512(p.cast()), _mm512_loadu_si512(p.add(8).cast())]
+    }
+    #[inline(always)]
+    unsafe fn w_store(v: [__m512i; 2], a: &mut [u64; LANES]) {
+        let p = a.as_mut_ptr();
+        _mm512_storeu_si512(p.cast(), v[0]);
+        _mm512_storeu_si512(p.add(8).cast(), v[1]);
+    }
+    #[inline(always)]
+    unsafe fn w_add(a: [__m512i; 2], b: [__m512i; 2]) -> [__m512i; 2] {
+        pair!(_mm512_add_epi64, a, b)
+    }
+    #[inline(always)]
+    unsafe fn w_mul(a: [__m512i; 2], b: [__m512i; 2]) -> [__m512i; 2] {
+        pair!(_mm512_mullo_epi64, a, b)
+    }
+    #[inline(always)]
+    unsafe fn w_xor(a: [__m512i; 2], b: [__m512i; 2]) -> [__m512i; 2] {
+        pair!(_mm512_xor_si512, a, b)
+    }
+    #[inline(always)]
+    unsafe fn w_or(a: [__m512i; 2], b: [__m512i; 2]) -> [__m512i; 2] {
+        pair!(_mm512_or_si512, a, b)
+    }
+    #[inline(always)]
+    unsafe fn w_shr<const N: u32>(a: [__m512i; 2]) -> [__m512i; 2] {
+        let n = _mm_cvtsi32_si128(N as i32);
+        [_mm512_srl_epi64(a[0], n), _mm512_srl_epi64(a[1], n)]
+    }
+    #[inline(always)]
+    unsafe fn w_shl<const N: u32>(a: [__m512i; 2]) -> [__m512i; 2] {
+        let n = _mm_cvtsi32_si128(N as i32);
+        [_mm512_sll_epi64(a[0], n), _mm512_sll_epi64(a[1], n)]
+    }
+    #[inline(always)]
+    unsafe fn w_low(a: [__m512i; 2]) -> __m512i {
+        let lo = _mm512_cvtepi64_epi32(a[0]);
+        let hi = _mm512_cvtepi64_epi32(a[1]);
+        _mm512_inserti64x4::<1>(_mm512_castsi256_si512(lo), hi)
+    }
+    #[inline(always)]
+    unsafe fn w_select(m: __mmask16, a: [__m512i; 2], b: [__m512i; 2]) -> [__m512i; 2] {
+        [
+            _mm512_mask_blend_epi64(m as __mmask8, b[0], a[0]),
+            _mm512_mask_blend_epi64((m >> 8) as __mmask8, b[1], a[1]),
+        ]
+    }
+    #[inline(always)]
     unsafe fn m_and(a: __mmask16, b: __mmask16) -> __mmask16 {
         a & b
     }
@@ -170,11 +240,48 @@ unsafe impl Simd for Avx512 {
 
 type F2 = [__m256; 2];
 type U2 = [__m256i; 2];
+/// Lanes 0-3, 4-7, 8-11, 12-15.
+type W4 = [__m256i; 4];
 
-macro_rules! pair {
+macro_rules! quad {
     ($f:path, $a:expr, $b:expr) => {
-        [$f($a[0], $b[0]), $f($a[1], $b[1])]
+        [$f($a[0], $b[0]), $f($a[1], $b[1]), $f($a[2], $b[2]), $f($a[3], $b[3])]
     };
+}
+
+/// `x.rotate_right(r)` per 32-bit lane.
+#[inline(always)]
+unsafe fn rotr32(x: __m256i, r: __m256i) -> __m256i {
+    let left = _mm256_sub_epi32(_mm256_set1_epi32(32), r);
+    _mm256_or_si256(_mm256_srlv_epi32(x, r), _mm256_sllv_epi32(x, left))
+}
+
+/// The low 32 bits of the four 64-bit lanes of `x`, then of `y`.
+#[inline(always)]
+unsafe fn low_halves(x: __m256i, y: __m256i) -> __m256i {
+    let even = _mm256_setr_epi32(0, 2, 4, 6, 0, 2, 4, 6);
+    let lo = _mm256_permutevar8x32_epi32(x, even);
+    let hi = _mm256_permutevar8x32_epi32(y, even);
+    _mm256_permute2x128_si256::<0x20>(lo, hi)
+}
+
+/// `a` where the 32-bit mask lane `m[i]` is set, else `b`, per 64-bit lane `i`.
+#[inline(always)]
+unsafe fn blend64(m: __m128i, a: __m256i, b: __m256i) -> __m256i {
+    let mask = _mm256_castsi256_pd(_mm256_cvtepi32_epi64(m));
+    let (a, b) = (_mm256_castsi256_pd(a), _mm256_castsi256_pd(b));
+    _mm256_castpd_si256(_mm256_blendv_pd(b, a, mask))
+}
+
+/// `a·b mod 2⁶⁴` per 64-bit lane from 32×32→64 products.
+#[inline(always)]
+unsafe fn mullo64(a: __m256i, b: __m256i) -> __m256i {
+    let lo = _mm256_mul_epu32(a, b);
+    let cross = _mm256_add_epi64(
+        _mm256_mul_epu32(_mm256_srli_epi64::<32>(a), b),
+        _mm256_mul_epu32(a, _mm256_srli_epi64::<32>(b)),
+    );
+    _mm256_add_epi64(lo, _mm256_slli_epi64::<32>(cross))
 }
 
 // SAFETY: the token is only made by `detect`, after checking every feature used.
@@ -183,6 +290,7 @@ unsafe impl Simd for Avx2 {
     type U = U2;
     /// Lane masks as all-ones/all-zeros floats.
     type M = F2;
+    type W = W4;
 
     #[inline(always)]
     unsafe fn f_splat(x: f32) -> F2 {
@@ -296,6 +404,87 @@ unsafe impl Simd for Avx2 {
     unsafe fn u_select(m: F2, a: U2, b: U2) -> U2 {
         let (a, b) = (Self::f_from_bits(a), Self::f_from_bits(b));
         Self::f_to_bits(Self::f_select(m, a, b))
+    }
+    #[inline(always)]
+    unsafe fn u_shr<const N: u32>(a: U2) -> U2 {
+        let n = _mm_cvtsi32_si128(N as i32);
+        [_mm256_srl_epi32(a[0], n), _mm256_srl_epi32(a[1], n)]
+    }
+    #[inline(always)]
+    unsafe fn u_rotr(a: U2, r: U2) -> U2 {
+        pair!(rotr32, a, r)
+    }
+    #[inline(always)]
+    unsafe fn w_splat(x: u64) -> W4 {
+        [_mm256_set1_epi64x(x as i64); 4]
+    }
+    #[inline(always)]
+    unsafe fn w_load(a: &[u64; LANES]) -> W4 {
+        let p = a.as_ptr().cast::<__m256i>();
+        [
+            _mm256_loadu_si256(p),
+            _mm256_loadu_si256(p.add(1)),
+            _mm256_loadu_si256(p.add(2)),
+            _mm256_loadu_si256(p.add(3)),
+        ]
+    }
+    #[inline(always)]
+    unsafe fn w_store(v: W4, a: &mut [u64; LANES]) {
+        let p = a.as_mut_ptr().cast::<__m256i>();
+        for (i, x) in v.iter().enumerate() {
+            _mm256_storeu_si256(p.add(i), *x);
+        }
+    }
+    #[inline(always)]
+    unsafe fn w_add(a: W4, b: W4) -> W4 {
+        quad!(_mm256_add_epi64, a, b)
+    }
+    #[inline(always)]
+    unsafe fn w_mul(a: W4, b: W4) -> W4 {
+        quad!(mullo64, a, b)
+    }
+    #[inline(always)]
+    unsafe fn w_xor(a: W4, b: W4) -> W4 {
+        quad!(_mm256_xor_si256, a, b)
+    }
+    #[inline(always)]
+    unsafe fn w_or(a: W4, b: W4) -> W4 {
+        quad!(_mm256_or_si256, a, b)
+    }
+    #[inline(always)]
+    unsafe fn w_shr<const N: u32>(a: W4) -> W4 {
+        let n = _mm_cvtsi32_si128(N as i32);
+        [
+            _mm256_srl_epi64(a[0], n),
+            _mm256_srl_epi64(a[1], n),
+            _mm256_srl_epi64(a[2], n),
+            _mm256_srl_epi64(a[3], n),
+        ]
+    }
+    #[inline(always)]
+    unsafe fn w_shl<const N: u32>(a: W4) -> W4 {
+        let n = _mm_cvtsi32_si128(N as i32);
+        [
+            _mm256_sll_epi64(a[0], n),
+            _mm256_sll_epi64(a[1], n),
+            _mm256_sll_epi64(a[2], n),
+            _mm256_sll_epi64(a[3], n),
+        ]
+    }
+    #[inline(always)]
+    unsafe fn w_low(a: W4) -> U2 {
+        [low_halves(a[0], a[1]), low_halves(a[2], a[3])]
+    }
+    #[inline(always)]
+    unsafe fn w_select(m: F2, a: W4, b: W4) -> W4 {
+        // Each 32-bit mask lane widened to the 64-bit lane it covers.
+        let (m0, m1) = (_mm256_castps_si256(m[0]), _mm256_castps_si256(m[1]));
+        [
+            blend64(_mm256_castsi256_si128(m0), a[0], b[0]),
+            blend64(_mm256_extracti128_si256::<1>(m0), a[1], b[1]),
+            blend64(_mm256_castsi256_si128(m1), a[2], b[2]),
+            blend64(_mm256_extracti128_si256::<1>(m1), a[3], b[3]),
+        ]
     }
     #[inline(always)]
     unsafe fn m_and(a: F2, b: F2) -> F2 {
