@@ -172,6 +172,19 @@ impl<S: Simd> PacketHits<S> {
         self.b2 = F32s::select(m, b2, self.b2);
     }
 
+    /// Takes `hit` for lane `i` if it beats the lane's current hit (as `record`).
+    #[inline(always)]
+    pub fn record_lane(&mut self, s: S, i: usize, hit: PrimHit) {
+        let (t, prim) = (self.t_max.to_array(), self.prim.to_array());
+        if hit.t < t[i] || (hit.t == t[i] && hit.prim < prim[i]) {
+            let m = Mask::from_bits(s, 1 << i);
+            self.t_max = F32s::select(m, F32s::splat(s, hit.t), self.t_max);
+            self.prim = U32s::select(m, U32s::splat(s, hit.prim), self.prim);
+            self.b1 = F32s::select(m, F32s::splat(s, hit.b1), self.b1);
+            self.b2 = F32s::select(m, F32s::splat(s, hit.b2), self.b2);
+        }
+    }
+
     #[cold]
     fn lower_id_lanes(&self, lanes: LaneBits, prim: u32) -> LaneBits {
         let current = self.prim.to_array();
@@ -180,16 +193,15 @@ impl<S: Simd> PacketHits<S> {
             .fold(0, |m, i| m | 1 << i)
     }
 
+    /// Writes the hits of lanes `active` into `out` (a miss: `NO_PRIM`, `t = ∞`).
     #[inline(always)]
-    pub fn store(&self, out: &mut HitPacket) {
-        out.t = self.t_max.to_array();
-        out.prim = self.prim.to_array();
-        out.b1 = self.b1.to_array();
-        out.b2 = self.b2.to_array();
-        for i in 0..LANES {
-            if out.prim[i] == NO_PRIM {
-                out.t[i] = f32::INFINITY;
-            }
-        }
+    pub fn store(&self, s: S, active: LaneBits, out: &mut HitPacket) {
+        let m = Mask::from_bits(s, active);
+        let missed = self.prim.eq(U32s::splat(s, NO_PRIM));
+        let t = F32s::select(missed, F32s::splat(s, f32::INFINITY), self.t_max);
+        out.t = F32s::select(m, t, F32s::from_array(s, out.t)).to_array();
+        out.prim = U32s::select(m, self.prim, U32s::from_array(s, out.prim)).to_array();
+        out.b1 = F32s::select(m, self.b1, F32s::from_array(s, out.b1)).to_array();
+        out.b2 = F32s::select(m, self.b2, F32s::from_array(s, out.b2)).to_array();
     }
 }

@@ -177,38 +177,46 @@ impl TriBlock {
         }
     }
 
-    /// Closest hit with `t ≤ t_max`. Lanes are taken in order with `≤`, as a
-    /// loop of scalar tests would, so ties go to the later lane.
+    /// The nearest hit with `t ≤ t_max` that beats the best so far (`t_max` itself
+    /// from primitive `best_id`): nearer, or as near with a lower primitive id, so
+    /// ties do not depend on the order in which leaves are visited.
     #[inline(always)]
     pub fn intersect_closest(
         &self,
         spheres: &SphereStore,
         r: &PrimRay,
         mut t_max: f32,
+        mut best_id: PrimId,
     ) -> Option<PrimHit> {
         let h = self.tris.intersect(&r.tri, t_max, self.tri_lanes(r));
         let mut best = None;
+        let beats = |t: f32, id: PrimId, t_max: f32, best_id: PrimId| {
+            t < t_max || (t == t_max && id < best_id)
+        };
         if self.sphere_lanes == 0 {
             let mut mask = h.mask;
             while mask != 0 {
                 let lane = mask.trailing_zeros() as usize;
                 mask &= mask - 1;
-                if h.t[lane] <= t_max {
+                if beats(h.t[lane], self.ids[lane], t_max, best_id) {
                     t_max = h.t[lane];
+                    best_id = self.ids[lane];
                     best = Some(self.hit(&h, lane));
                 }
             }
             return best;
         }
         for lane in 0..4 {
-            if h.mask & 1 << lane != 0 && h.t[lane] <= t_max {
-                t_max = h.t[lane];
-                best = Some(self.hit(&h, lane));
+            let hit = if h.mask & 1 << lane != 0 {
+                Some(self.hit(&h, lane))
             } else if self.sphere_lanes & 1 << lane != 0 {
-                if let Some(hit) = spheres.intersect(self.ids[lane], r.ray, t_max) {
-                    t_max = hit.t;
-                    best = Some(hit);
-                }
+                spheres.intersect(self.ids[lane], r.ray, t_max)
+            } else {
+                None
+            };
+            if let Some(hit) = hit.filter(|h| beats(h.t, h.prim, t_max, best_id)) {
+                (t_max, best_id) = (hit.t, hit.prim);
+                best = Some(hit);
             }
         }
         best

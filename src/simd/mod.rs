@@ -40,6 +40,9 @@ pub const ALL_LANES: LaneBits = (1 << LANES) - 1;
 /// An implementor's token may only be constructed after checking that the CPU
 /// supports its instructions.
 pub unsafe trait Simd: Copy + Send + Sync + 'static {
+    /// Whether AVX2 code (e.g. the single-ray BVH box test) may run here.
+    const AVX2: bool;
+
     type F: Copy;
     type U: Copy;
     type M: Copy;
@@ -63,6 +66,9 @@ pub unsafe trait Simd: Copy + Send + Sync + 'static {
     unsafe fn f_eq(a: Self::F, b: Self::F) -> Self::M;
     /// `a` where `m` is set, else `b`.
     unsafe fn f_select(m: Self::M, a: Self::F, b: Self::F) -> Self::F;
+    /// The smallest of the lanes in `m` (`+∞` when `m` is empty; NaN lanes are
+    /// ignored unless all are NaN).
+    unsafe fn f_reduce_min(a: Self::F, m: Self::M) -> f32;
     unsafe fn f_to_bits(a: Self::F) -> Self::U;
     unsafe fn f_from_bits(a: Self::U) -> Self::F;
     /// Exact for values below 2²⁴ (as `u as f32`).
@@ -209,6 +215,11 @@ impl<S: Simd> F32s<S> {
     #[inline(always)]
     pub fn lane(self, i: usize) -> f32 {
         self.to_array()[i]
+    }
+    /// The smallest lane of `m` (`+∞` for none).
+    #[inline(always)]
+    pub fn reduce_min(self, m: Mask<S>) -> f32 {
+        unsafe { S::f_reduce_min(self.0, m.0) }
     }
 }
 
@@ -597,6 +608,14 @@ mod tests {
         same(a.copysign(b).to_array(), &|x, y| x.copysign(y));
         let m = a.lt(b);
         same(F32s::select(m, a, b).to_array(), &|x, y| if x < y { x } else { y });
+        let fin = a.is_finite();
+        let want = (0..LANES)
+            .filter(|&i| vals[i].is_finite())
+            .map(|i| vals[i])
+            .fold(f32::INFINITY, f32::min);
+        assert_eq!(a.reduce_min(fin), want);
+        assert_eq!(a.reduce_min(Mask::from_bits(s, 0)), f32::INFINITY);
+        assert_eq!(a.reduce_min(Mask::from_bits(s, 1 << 3)), vals[3]);
         for i in 0..LANES {
             assert_eq!(a.le(b).bits() >> i & 1 == 1, vals[i] <= other[i]);
             assert_eq!(a.eq(b).bits() >> i & 1 == 1, vals[i] == other[i]);

@@ -21,6 +21,7 @@ fn mask(a: Fa, b: Fa, f: impl Fn(f32, f32) -> bool) -> LaneBits {
 
 // SAFETY: plain Rust; available everywhere.
 unsafe impl Simd for Portable {
+    const AVX2: bool = false;
     type F = Fa;
     type U = Ua;
     type M = LaneBits;
@@ -81,6 +82,12 @@ unsafe impl Simd for Portable {
     #[inline(always)]
     unsafe fn f_select(m: LaneBits, a: Fa, b: Fa) -> Fa {
         std::array::from_fn(|i| if m >> i & 1 != 0 { a[i] } else { b[i] })
+    }
+    #[inline(always)]
+    unsafe fn f_reduce_min(a: Fa, m: LaneBits) -> f32 {
+        (0..LANES)
+            .filter(|&i| m >> i & 1 != 0)
+            .fold(f32::INFINITY, |b, i| b.min(a[i]))
     }
     #[inline(always)]
     unsafe fn f_to_bits(a: Fa) -> Ua {

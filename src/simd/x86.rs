@@ -44,6 +44,7 @@ impl Avx2 {
 
 // SAFETY: the token is only made by `detect`, after checking every feature used.
 unsafe impl Simd for Avx512 {
+    const AVX2: bool = true;
     type F = __m512;
     type U = __m512i;
     type M = __mmask16;
@@ -105,6 +106,12 @@ unsafe impl Simd for Avx512 {
     #[inline(always)]
     unsafe fn f_select(m: __mmask16, a: __m512, b: __m512) -> __m512 {
         _mm512_mask_blend_ps(m, b, a)
+    }
+    #[inline(always)]
+    unsafe fn f_reduce_min(a: __m512, m: __mmask16) -> f32 {
+        // Lanes outside `m`, and NaN lanes, become +∞.
+        let keep = m & _mm512_cmp_ps_mask::<_CMP_ORD_Q>(a, a);
+        _mm512_reduce_min_ps(_mm512_mask_blend_ps(keep, _mm512_set1_ps(f32::INFINITY), a))
     }
     #[inline(always)]
     unsafe fn f_to_bits(a: __m512) -> __m512i {
@@ -249,6 +256,13 @@ macro_rules! quad {
     };
 }
 
+/// `x` where `m` is set and `x` is not NaN, else `+∞`.
+#[inline(always)]
+unsafe fn finite_in(x: __m256, m: __m256) -> __m256 {
+    let keep = _mm256_and_ps(m, _mm256_cmp_ps::<_CMP_ORD_Q>(x, x));
+    _mm256_blendv_ps(_mm256_set1_ps(f32::INFINITY), x, keep)
+}
+
 /// `x.rotate_right(r)` per 32-bit lane.
 #[inline(always)]
 unsafe fn rotr32(x: __m256i, r: __m256i) -> __m256i {
@@ -286,6 +300,7 @@ unsafe fn mullo64(a: __m256i, b: __m256i) -> __m256i {
 
 // SAFETY: the token is only made by `detect`, after checking every feature used.
 unsafe impl Simd for Avx2 {
+    const AVX2: bool = true;
     type F = F2;
     type U = U2;
     /// Lane masks as all-ones/all-zeros floats.
@@ -351,6 +366,14 @@ unsafe impl Simd for Avx2 {
             _mm256_blendv_ps(b[0], a[0], m[0]),
             _mm256_blendv_ps(b[1], a[1], m[1]),
         ]
+    }
+    #[inline(always)]
+    unsafe fn f_reduce_min(a: F2, m: F2) -> f32 {
+        let v = _mm256_min_ps(finite_in(a[0], m[0]), finite_in(a[1], m[1]));
+        let v = _mm_min_ps(_mm256_castps256_ps128(v), _mm256_extractf128_ps::<1>(v));
+        let v = _mm_min_ps(v, _mm_movehl_ps(v, v));
+        let v = _mm_min_ss(v, _mm_shuffle_ps::<1>(v, v));
+        _mm_cvtss_f32(v)
     }
     #[inline(always)]
     unsafe fn f_to_bits(a: F2) -> U2 {

@@ -7,15 +7,18 @@
 //! at once. Packets that have thinned out to a few rays finish one ray at a time.
 
 use super::build::MAX_DEPTH;
-use super::wide::{ChildRef, EXIT_SLACK, WIDTH};
+#[cfg(target_arch = "x86_64")]
+use super::wide::Avx2Boxes;
+use super::wide::{ChildRef, ScalarBoxes, EXIT_SLACK, WIDTH};
 use super::Bvh;
 use crate::accel::packet::{HitPacket, PacketHits, PacketRays, RayPacket};
 use crate::accel::TraversalStats;
-use crate::simd::{F32s, LaneBits, Simd, SimdTask, LANES};
+use crate::geometry::Ray;
+use crate::simd::{F32s, LaneBits, Mask, Simd, SimdTask};
 use std::mem::MaybeUninit;
 
 /// Rays left in a packet at or below which the rest is traced ray by ray.
-const SINGLE_RAY_BELOW: u32 = 0;
+const SINGLE_RAY_BELOW: u32 = 4;
 
 /// Every level pushes at most `WIDTH − 1` children.
 const STACK: usize = MAX_DEPTH * (WIDTH - 1) + 1;
@@ -46,23 +49,9 @@ impl SimdTask for IntersectPacket<'_> {
     #[inline(always)]
     fn run<S: Simd>(self, s: S) {
         let mut found = PacketHits::new(s, self.rays);
-        let done = self
-            .bvh
+        self.bvh
             .traverse_packet::<S, false>(s, self.rays, self.active, &mut found);
-        let mut all = *self.hits;
-        found.store(&mut all);
-        for i in (0..LANES).filter(|&i| self.active >> i & 1 != 0) {
-            if done >> i & 1 != 0 {
-                self.hits.set(i, all.hit(i));
-            } else {
-                // Finished on its own after the packet thinned out.
-                let hit = self.bvh.traverse::<false, false>(
-                    &self.rays.ray(i),
-                    &mut TraversalStats::default(),
-                );
-                self.hits.set(i, hit);
-            }
-        }
+        found.store(s, self.active, self.hits);
     }
 }
 
@@ -78,17 +67,15 @@ impl SimdTask for OccludedPacket<'_> {
     #[inline(always)]
     fn run<S: Simd>(self, s: S) -> LaneBits {
         let mut unused = PacketHits::new(s, self.rays);
-        let occluded = self
-            .bvh
-            .traverse_packet::<S, true>(s, self.rays, self.active, &mut unused);
-        occluded & self.active
+        self.bvh
+            .traverse_packet::<S, true>(s, self.rays, self.active, &mut unused)
+            & self.active
     }
 }
 
 impl Bvh {
-    /// With `ANY` false: nearest hits of the lanes of `active` into `hits`; returns
-    /// the lanes it finished (the others must be traced alone). With `ANY`:
-    /// returns the occluded lanes (it finishes every lane).
+    /// With `ANY` false: the nearest hits of the lanes of `active`, into `hits`.
+    /// With `ANY`: returns the lanes that are occluded.
     #[inline(always)]
     fn traverse_packet<S: Simd, const ANY: bool>(
         &self,
@@ -98,7 +85,7 @@ impl Bvh {
         hits: &mut PacketHits<S>,
     ) -> LaneBits {
         if self.blocks.is_empty() || active == 0 {
-            return if ANY { 0 } else { active };
+            return 0;
         }
         let rays = PacketRays::new(s, packet);
         let zero = F32s::splat(s, 0.0);
@@ -113,8 +100,6 @@ impl Bvh {
         });
         let mut sp = 1;
         let mut occluded: LaneBits = 0;
-        // Lanes left to finish one by one (closest hit only).
-        let mut alone: LaneBits = 0;
         while sp > 0 {
             sp -= 1;
             // SAFETY: entries below `sp` were written by a push.
@@ -126,13 +111,16 @@ impl Bvh {
             if ANY {
                 lanes &= !occluded;
             } else {
-                lanes &= entry.le(hits.t_max * slack).bits() & !alone;
+                lanes &= entry.le(hits.t_max * slack).bits();
             }
             if lanes == 0 {
                 continue;
             }
-            if !ANY && lanes.count_ones() <= SINGLE_RAY_BELOW && child != self.root {
-                alone |= lanes;
+            if lanes.count_ones() <= SINGLE_RAY_BELOW {
+                occluded |= self.finish_alone::<S, ANY>(s, packet, child, lanes, hits);
+                if ANY && active & !occluded == 0 {
+                    return occluded;
+                }
                 continue;
             }
             if child.is_leaf() {
@@ -147,7 +135,9 @@ impl Bvh {
                 continue;
             }
             let node = &self.nodes[child.index as usize];
-            let mut order = [(0.0f32, 0usize, 0 as LaneBits, zero); WIDTH];
+            // Entered children, nearest last (pushed last, popped first).
+            let mut entry_of = [zero; WIDTH];
+            let mut order = [(0.0f32, 0u8, 0 as LaneBits); WIDTH];
             let mut n = 0;
             for c in 0..WIDTH {
                 if node.lo[0][c] > node.hi[0][c] {
@@ -155,30 +145,78 @@ impl Bvh {
                 }
                 let (entered, t0) = box_test(s, &rays, node, c, hits.t_max);
                 let entered = entered & lanes;
-                if entered != 0 {
-                    let key = if ANY { 0.0 } else { nearest(t0, entered) };
-                    order[n] = (key, c, entered, t0);
-                    n += 1;
+                if entered == 0 {
+                    continue;
                 }
+                entry_of[c] = t0;
+                let key = if ANY {
+                    0.0
+                } else {
+                    t0.reduce_min(Mask::from_bits(s, entered))
+                };
+                // Insertion by decreasing key.
+                let mut j = n;
+                while j > 0 && order[j - 1].0 < key {
+                    order[j] = order[j - 1];
+                    j -= 1;
+                }
+                order[j] = (key, c as u8, entered);
+                n += 1;
             }
-            // Farthest pushed first, so the nearest is popped next.
-            if !ANY {
-                order[..n].sort_unstable_by(|a, b| b.0.total_cmp(&a.0));
-            }
-            for &(_, c, entered, t0) in &order[..n] {
+            for &(_, c, entered) in &order[..n] {
                 stack[sp] = MaybeUninit::new(Pending {
-                    child: node.children[c],
+                    child: node.children[c as usize],
                     lanes: entered,
-                    entry: t0,
+                    entry: entry_of[c as usize],
                 });
                 sp += 1;
             }
         }
-        if ANY {
-            occluded
-        } else {
-            active & !alone
+        occluded
+    }
+
+    /// The lanes `lanes` of the subtree `child`, one ray at a time (a packet that
+    /// has thinned out to a few rays costs more as a packet): nearer hits go into
+    /// `hits`; with `ANY`, returns the lanes occluded.
+    #[inline(always)]
+    fn finish_alone<S: Simd, const ANY: bool>(
+        &self,
+        s: S,
+        packet: &RayPacket,
+        child: ChildRef,
+        lanes: LaneBits,
+        hits: &mut PacketHits<S>,
+    ) -> LaneBits {
+        let t_max = hits.t_max.to_array();
+        let mut occluded = 0;
+        let mut rest = lanes;
+        while rest != 0 {
+            let i = rest.trailing_zeros() as usize;
+            rest &= rest - 1;
+            let ray = Ray {
+                t_max: t_max[i],
+                ..packet.ray(i)
+            };
+            let mut stats = TraversalStats::default();
+            let hit = if S::AVX2 {
+                #[cfg(target_arch = "x86_64")]
+                {
+                    self.traverse_from::<Avx2Boxes, ANY, false>(&ray, child, &mut stats)
+                }
+                #[cfg(not(target_arch = "x86_64"))]
+                unreachable!()
+            } else {
+                self.traverse_from::<ScalarBoxes, ANY, false>(&ray, child, &mut stats)
+            };
+            if let Some(h) = hit {
+                if ANY {
+                    occluded |= 1 << i;
+                } else {
+                    hits.record_lane(s, i, h);
+                }
+            }
         }
+        occluded
     }
 }
 
@@ -203,18 +241,4 @@ fn box_test<S: Simd>(
         t1 = ((far - o[a]) * rays.inv[a]).min(t1);
     }
     (t0.le(t1 * F32s::splat(s, EXIT_SLACK)).bits(), t0)
-}
-
-/// The smallest entry distance among `lanes`.
-#[inline(always)]
-fn nearest<S: Simd>(t0: F32s<S>, lanes: LaneBits) -> f32 {
-    let t = t0.to_array();
-    let mut best = f32::INFINITY;
-    let mut rest = lanes;
-    while rest != 0 {
-        let i = rest.trailing_zeros() as usize;
-        rest &= rest - 1;
-        best = best.min(t[i]);
-    }
-    best
 }

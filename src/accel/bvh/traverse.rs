@@ -11,7 +11,7 @@ use super::wide::{BoxTest, ChildRef, WideNode, WideRay, EXIT_SLACK, WIDTH};
 use super::Bvh;
 use crate::accel::prims::{PrimRay, TriBlock};
 use crate::accel::TraversalStats;
-use crate::geometry::Ray;
+use crate::geometry::{Ray, NO_PRIM};
 use crate::scene::PrimHit;
 use std::mem::MaybeUninit;
 
@@ -84,6 +84,18 @@ impl Bvh {
         ray: &Ray,
         stats: &mut TraversalStats,
     ) -> Option<PrimHit> {
+        self.traverse_from::<B, ANY, COUNT>(ray, self.root, stats)
+    }
+
+    /// [`traverse_with`](Self::traverse_with) of the subtree under `start` (the
+    /// packet traversal finishes thinned-out packets ray by ray this way).
+    #[inline(always)]
+    pub(super) fn traverse_from<B: BoxTest, const ANY: bool, const COUNT: bool>(
+        &self,
+        ray: &Ray,
+        start: ChildRef,
+        stats: &mut TraversalStats,
+    ) -> Option<PrimHit> {
         if self.blocks.is_empty() {
             return None;
         }
@@ -94,7 +106,7 @@ impl Bvh {
         // Left uninitialised: zeroing it cost as much as a small scene's traversal.
         let mut stack = [MaybeUninit::<Pending>::uninit(); STACK];
         let mut sp = 0;
-        let mut cur = self.root;
+        let mut cur = start;
         let mut entry = [0.0f32; WIDTH];
         loop {
             if !cur.is_leaf() {
@@ -161,9 +173,13 @@ impl Bvh {
                     if let Some(hit) = block.intersect_any(&self.spheres, &prim_ray, t_max) {
                         return Some(hit);
                     }
-                } else if let Some(hit) = block.intersect_closest(&self.spheres, &prim_ray, t_max) {
-                    t_max = hit.t;
-                    best = Some(hit);
+                } else {
+                    let best_id = best.map_or(NO_PRIM, |h: PrimHit| h.prim);
+                    let hit = block.intersect_closest(&self.spheres, &prim_ray, t_max, best_id);
+                    if let Some(hit) = hit {
+                        t_max = hit.t;
+                        best = Some(hit);
+                    }
                 }
             }
             // Pop the next child the ray may still reach (with `ANY`, `t_max` has
