@@ -55,6 +55,38 @@ impl Named for Shading {
 }
 display_from_table!(Shading);
 
+/// How camera paths run on the CPU. The image is the same bit for bit either way
+/// (`integrators::packet`); only the speed differs.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
+pub enum Engine {
+    /// Packets wherever the render allows them ([`RenderSettings::packet_blocker`]).
+    #[default]
+    Auto,
+    /// One path at a time.
+    Scalar,
+    /// Sixteen paths at a time, one per SIMD lane; renders the engine cannot run
+    /// are refused by the CLI (a library caller gets the scalar engine).
+    Packet,
+}
+
+impl Named for Engine {
+    const WHAT: &'static str = "engine";
+    const TABLE: &'static [(Self, &'static str, &'static str)] = &[
+        (
+            Engine::Auto,
+            "auto",
+            "Sixteen paths per SIMD pass where the render allows (Lambertian surfaces, area lights, pinhole, light sampling or MIS, no -a), else one at a time",
+        ),
+        (Engine::Scalar, "scalar", "One path at a time"),
+        (
+            Engine::Packet,
+            "packet",
+            "Sixteen paths per SIMD pass (AVX-512, AVX2 or portable code); an error where the render needs the scalar engine",
+        ),
+    ];
+}
+display_from_table!(Engine);
+
 /// Adaptive sampling (spec §7): stop a pixel once `1.96·σ/√n ≤ tol·μ`.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Adaptive {
@@ -109,6 +141,7 @@ pub struct RenderSettings {
     /// `spp_offset .. spp_offset + spp`, so renders of disjoint sample ranges (sample
     /// shards, `--spp-offset`) merge into one render of all of them. Not with `adaptive`.
     pub spp_offset: u32,
+    pub engine: Engine,
 }
 
 impl RenderSettings {
@@ -121,6 +154,31 @@ impl RenderSettings {
     pub fn strategy_for(&self, scene: &Scene) -> DirectStrategy {
         self.strategy
             .unwrap_or_else(|| DirectStrategy::auto_for(scene))
+    }
+
+    /// Why these settings must render `job` one path at a time, if they must: the
+    /// packet engine covers plain radiance renders by path tracing of what
+    /// `packet::unsupported` accepts.
+    pub fn packet_blocker(&self, job: &RenderJob) -> Option<&'static str> {
+        if self.shading != Shading::Radiance {
+            return Some("debug shading (--shading)");
+        }
+        if self.adaptive.is_some() {
+            return Some("adaptive sampling (-a)");
+        }
+        if self.estimator_for(&job.scene) != Estimator::Path {
+            return Some("light tracing");
+        }
+        crate::integrators::packet::unsupported(
+            &job.scene,
+            &job.camera,
+            &self.path_settings(&job.scene),
+        )
+    }
+
+    /// Whether `job` renders by packets with these settings.
+    pub fn uses_packets(&self, job: &RenderJob) -> bool {
+        self.engine != Engine::Scalar && self.packet_blocker(job).is_none()
     }
 
     pub fn path_settings(&self, scene: &Scene) -> PathSettings {
@@ -148,6 +206,7 @@ impl Default for RenderSettings {
             shading: Shading::Radiance,
             seed: 0,
             spp_offset: 0,
+            engine: Engine::Auto,
         }
     }
 }
@@ -289,14 +348,14 @@ fn render_rect(
         }
     }
     let tiles = tiles(rect);
-    if settings.shading == Shading::Radiance && settings.adaptive.is_none() {
+    if settings.uses_packets(job) {
         let packet = PacketPathIntegrator::new(
             &job.scene,
             job.accel.as_ref(),
             &job.camera,
             settings.path_settings(&job.scene),
         );
-        if let Some(packet) = packet.filter(|_| std::env::var_os("EMBER_SCALAR").is_none()) {
+        if let Some(packet) = packet {
             return render_packets(&packet, settings, rect, &tiles, progress, stop);
         }
     }

@@ -132,8 +132,12 @@ impl<S: Simd> StreamLanes<S> {
 #[inline(always)]
 fn splitmix64_lanes<S: Simd>(s: S, z: U64s<S>) -> U64s<S> {
     let z = z.wrapping_add(U64s::splat(s, 0x9E37_79B9_7F4A_7C15));
-    let z = z.xor(z.shr::<30>()).wrapping_mul(U64s::splat(s, 0xBF58_476D_1CE4_E5B9));
-    let z = z.xor(z.shr::<27>()).wrapping_mul(U64s::splat(s, 0x94D0_49BB_1331_11EB));
+    let z = z
+        .xor(z.shr::<30>())
+        .wrapping_mul(U64s::splat(s, 0xBF58_476D_1CE4_E5B9));
+    let z = z
+        .xor(z.shr::<27>())
+        .wrapping_mul(U64s::splat(s, 0x94D0_49BB_1331_11EB));
     z.xor(z.shr::<31>())
 }
 

@@ -8,10 +8,10 @@ pub mod embree;
 pub mod packet;
 mod prims;
 
+use crate::simd::LaneBits;
 pub use brute::BruteForce;
 pub use bvh::{Bvh, BvhStats};
 pub use packet::{HitPacket, RayPacket};
-use crate::simd::LaneBits;
 
 use crate::geometry::Ray;
 use crate::names::{display_from_table, Named};

@@ -121,7 +121,11 @@ impl<S: Simd> PacketRays<S> {
             o,
             d,
             inv: [one / d.x, one / d.y, one / d.z],
-            neg: [d.x.sign_negative(), d.y.sign_negative(), d.z.sign_negative()],
+            neg: [
+                d.x.sign_negative(),
+                d.y.sign_negative(),
+                d.z.sign_negative(),
+            ],
             tri: TriangleRays::new(s, o, d),
             skip: U32s::from_array(s, rays.skip),
         }
@@ -151,15 +155,7 @@ impl<S: Simd> PacketHits<S> {
     /// Takes the hits of `prim` in lanes `hit` (all with `t ≤ t_max`) that are
     /// nearer than the current ones, or as near with a lower primitive id.
     #[inline(always)]
-    pub fn record(
-        &mut self,
-        s: S,
-        hit: LaneBits,
-        t: F32s<S>,
-        prim: u32,
-        b1: F32s<S>,
-        b2: F32s<S>,
-    ) {
+    pub fn record(&mut self, s: S, hit: LaneBits, t: F32s<S>, prim: u32, b1: F32s<S>, b2: F32s<S>) {
         let mut take = hit & t.lt(self.t_max).bits();
         let tied = hit & t.eq(self.t_max).bits();
         if tied != 0 {

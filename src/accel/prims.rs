@@ -6,10 +6,10 @@ use super::packet::{PacketHits, PacketRays};
 use crate::geometry::sphere::{
     intersect_sphere, intersect_sphere_lanes, intersect_sphere_leaving, sphere_is_hittable,
 };
-use crate::simd::{F32s, LaneBits, Simd, U32s};
 use crate::geometry::triangle::{triangle_is_hittable, PackedTriangle, Triangle4, TriangleRay};
 use crate::geometry::{Aabb, Ray};
 use crate::scene::{PrimHit, PrimId, Scene};
+use crate::simd::{F32s, LaneBits, Simd, U32s};
 use glam::Vec3;
 use rayon::prelude::*;
 

@@ -5,7 +5,7 @@ use clap::{Args, Parser, Subcommand, ValueEnum};
 use ember::accel::{Backend, BvhBuilder, EmbreeQuality};
 use ember::integrators::{DirectStrategy, Estimator};
 use ember::names::Named;
-use ember::render::Shading;
+use ember::render::{Engine, Shading};
 use std::path::PathBuf;
 
 /// What `--help` adds after the options: stopping a render, and where ember differs
@@ -362,6 +362,11 @@ pub struct RenderArgs {
     #[arg(long, value_name = "COUNT")]
     pub cost_scale: Option<f32>,
 
+    /// How paths run on the CPU: sixteen per SIMD pass (AVX-512, AVX2 or portable code) or one at a time.
+    /// The image is the same bit for bit; only the speed differs.
+    #[arg(long, value_parser = named::<Engine>(), default_value_t = Engine::Auto)]
+    pub engine: Engine,
+
     /// Estimator. auto: light tracing when every light is a point light and nothing is specular or self-emitting (CBempty: see BENCHMARKS.md, stability case 9); otherwise path tracing with MIS (light + BSDF sampling) when the scene has glossy surfaces or an ambient or environment (-e) light, light sampling otherwise. A direct-lighting strategy name means path tracing with it. -H forces hemisphere.
     #[arg(long, value_parser = integrator(), default_value = AUTO)]
     pub integrator: IntegratorChoice,
@@ -495,6 +500,7 @@ mod tests {
         check("bvh", |a| a.bvh.unwrap_or_default());
         check("embree-quality", |a| a.embree_quality.unwrap_or_default());
         check("shading", |a| a.shading);
+        check("engine", |a| a.engine);
         let integrators = listed("integrator");
         for &(_, name, _) in DirectStrategy::TABLE {
             assert!(integrators.iter().any(|l| l == name), "--integrator {name}");

@@ -13,8 +13,8 @@ use ember::image_io::{OutputFormat, PendingImage};
 use ember::image_metadata::ImageMetadata;
 use ember::integrators::Estimator;
 use ember::render::{
-    render_passes, Film, PixelRect, RenderJob, RenderOutput, RenderSettings, Shading, StopReason,
-    StopToken,
+    render_passes, Engine, Film, PixelRect, RenderJob, RenderOutput, RenderSettings, Shading,
+    StopReason, StopToken,
 };
 use ember::scene::{collada, Scene};
 use ember::shard::Shard;
@@ -192,6 +192,14 @@ impl RenderRequest {
         let kind = self.accel_kind(args);
         let t1 = Instant::now();
         let job = pool.install(|| RenderJob::with_camera(scene, kind, camera))?;
+        if self.settings.engine == Engine::Packet {
+            if let Some(why) = self.settings.packet_blocker(&job) {
+                bail!(
+                    "--engine packet: {} needs the scalar engine ({why}); use --engine auto or scalar",
+                    self.scene_path.display()
+                );
+            }
+        }
         Ok((job, t_load, t1.elapsed()))
     }
 
@@ -471,8 +479,13 @@ impl RenderRun<'_> {
             (Some(_), _, _) => format!("mean {mean:.1} spp (cap {}, -a)", s.spp),
             (None, _, _) => format!("mean {mean:.1} spp"),
         };
+        let engine = if s.uses_packets(self.job) {
+            format!("packets of 16 ({})", ember::simd::instruction_set())
+        } else {
+            "one path at a time".into()
+        };
         format!(
-            "{} estimator, {spp}, -m {}, -l {}, seed {}, {threads} threads",
+            "{} estimator, {spp}, -m {}, -l {}, seed {}, {threads} threads, {engine}",
             ember::image_metadata::estimator_label(s, &self.job.scene),
             s.max_depth,
             s.light_samples,

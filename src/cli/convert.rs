@@ -183,6 +183,7 @@ pub(super) fn settings_from(args: &RenderArgs) -> Result<RenderSettings> {
         shading: args.shading,
         seed: args.seed,
         spp_offset: args.spp_offset.unwrap_or(0),
+        engine: args.engine,
     })
 }
 

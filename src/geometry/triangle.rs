@@ -198,7 +198,9 @@ impl Triangle4 {
     /// The corners of triangle `lane`.
     #[inline(always)]
     pub fn corners(&self, lane: usize) -> [Vec3; 3] {
-        std::array::from_fn(|k| Vec3::new(self.p[k][0][lane], self.p[k][1][lane], self.p[k][2][lane]))
+        std::array::from_fn(|k| {
+            Vec3::new(self.p[k][0][lane], self.p[k][1][lane], self.p[k][2][lane])
+        })
     }
 
     /// Triangle `lane` in the scalar layout.

@@ -23,7 +23,7 @@ use crate::materials::Material;
 use crate::sampling::{StreamLanes, COS_POLY, SIN_POLY};
 use crate::scene::{Scene, NO_LIGHT};
 use crate::simd::{
-    dispatch, F32s, LaneBits, Mask, Simd, SimdTask, U32s, U64s, Vec3s, ALL_LANES, LANES,
+    dispatch, prefetch, F32s, LaneBits, Mask, Simd, SimdTask, U32s, U64s, Vec3s, ALL_LANES, LANES,
 };
 use crate::Color;
 use glam::Vec3;
@@ -440,6 +440,13 @@ impl<'a, 'b, 't, S: Simd> Kernel<'a, 'b, 't, S> {
         let w = d.normalize(s);
         let prims = U32s::from_array(s, hits.prim);
         let hit_lanes = !prims.eq(U32s::splat(s, NO_PRIM)).bits() & live;
+        let triangles = self.it.scene.triangles.as_ptr();
+        let mut rest = hit_lanes;
+        while rest != 0 {
+            let i = rest.trailing_zeros() as usize;
+            rest &= rest - 1;
+            prefetch(triangles.wrapping_add(hits.prim[i] as usize));
+        }
         let mut ended = 0;
         // Area lights the sampled line meets before the hit end the path there.
         let with_prev = live & self.has_prev;
@@ -580,23 +587,28 @@ impl<'a, 'b, 't, S: Simd> Kernel<'a, 'b, 't, S> {
         let mut albedo = [[0.0f32; LANES]; 3];
         let mut black: LaneBits = 0;
         let mut light = [NO_LIGHT; LANES];
+        // First the triangles' records, asking for their corners' and normals'
+        // memory as the indices arrive, so the misses of all lanes overlap.
+        let mut vertex = [[0u32; LANES]; 3];
+        let mut normal_index = [[0u32; LANES]; 3];
+        let mut material = [0usize; LANES];
         let mut rest = lanes;
         while rest != 0 {
             let i = rest.trailing_zeros() as usize;
             rest &= rest - 1;
             let p = hits.prim[i] as usize;
-            let material = if p < ntri {
+            material[i] = if p < ntri {
                 let tri = &scene.triangles[p];
                 triangles |= 1 << i;
                 for (k, &v) in tri.v.iter().enumerate() {
-                    let q = scene.positions[v as usize];
-                    (corner[k][0][i], corner[k][1][i], corner[k][2][i]) = q.into();
+                    vertex[k][i] = v;
+                    prefetch(scene.positions.as_ptr().wrapping_add(v as usize));
                 }
                 if let Some(n) = tri.n {
                     has_normals |= 1 << i;
                     for (k, &v) in n.iter().enumerate() {
-                        let q = scene.normals[v as usize];
-                        (normal[k][0][i], normal[k][1][i], normal[k][2][i]) = q.into();
+                        normal_index[k][i] = v;
+                        prefetch(scene.normals.as_ptr().wrapping_add(v as usize));
                     }
                 }
                 light[i] = tri.light;
@@ -607,8 +619,25 @@ impl<'a, 'b, 't, S: Simd> Kernel<'a, 'b, 't, S> {
                 radius[i] = sp.radius;
                 sp.material as usize
             };
-            (albedo[0][i], albedo[1][i], albedo[2][i]) = self.it.albedo[material].into();
-            black |= (self.it.black[material] as LaneBits) << i;
+        }
+        let mut rest = lanes;
+        while rest != 0 {
+            let i = rest.trailing_zeros() as usize;
+            rest &= rest - 1;
+            if triangles >> i & 1 != 0 {
+                for (k, v) in vertex.iter().enumerate() {
+                    let q = scene.positions[v[i] as usize];
+                    (corner[k][0][i], corner[k][1][i], corner[k][2][i]) = q.into();
+                }
+            }
+            if has_normals >> i & 1 != 0 {
+                for (k, v) in normal_index.iter().enumerate() {
+                    let q = scene.normals[v[i] as usize];
+                    (normal[k][0][i], normal[k][1][i], normal[k][2][i]) = q.into();
+                }
+            }
+            (albedo[0][i], albedo[1][i], albedo[2][i]) = self.it.albedo[material[i]].into();
+            black |= (self.it.black[material[i]] as LaneBits) << i;
         }
         let b1 = F32s::from_array(s, hits.b1);
         let b2 = F32s::from_array(s, hits.b2);
@@ -660,8 +689,7 @@ impl<'a, 'b, 't, S: Simd> Kernel<'a, 'b, 't, S> {
         let dist = (si.p - from).dot(si.ng) / cos;
         let ahead = dist.gt(zero) & dist.is_finite();
         let p = from + w * dist;
-        let p_error =
-            si.p_error + p.abs() * self.f(gamma(1)) + (w * dist).abs() * self.f(gamma(5));
+        let p_error = si.p_error + p.abs() * self.f(gamma(1)) + (w * dist).abs() * self.f(gamma(5));
         // Triangles: the point must lie in the hit triangle; exact axes stay.
         let [p0, p1, p2] = hit.corners;
         let inside = triangle_contains(s, p0, p1, p2, p);
@@ -946,7 +974,13 @@ struct AreaSample<S: Simd> {
 
 /// `AreaLight::sample_li` from points `p` with numbers `(u1, u2)`.
 #[inline(always)]
-fn sample_area<S: Simd>(s: S, a: &AreaLight, p: Vec3s<S>, u1: F32s<S>, u2: F32s<S>) -> AreaSample<S> {
+fn sample_area<S: Simd>(
+    s: S,
+    a: &AreaLight,
+    p: Vec3s<S>,
+    u1: F32s<S>,
+    u2: F32s<S>,
+) -> AreaSample<S> {
     let half = F32s::splat(s, 0.5);
     let zero = F32s::splat(s, 0.0);
     // `uniform_parallelogram(u, ZERO, ex, ey)`: ZERO + (u.x − ½)·ex + (u.y − ½)·ey.
@@ -962,7 +996,7 @@ fn sample_area<S: Simd>(s: S, a: &AreaLight, p: Vec3s<S>, u1: F32s<S>, u2: F32s<
     let cos_light = -wi.dot(Vec3s::splat(s, a.normal));
     let area = a.area();
     valid = valid & cos_light.gt(zero);
-    if !(area > 0.0) || a.radiance == Color::ZERO {
+    if area.is_nan() || area <= 0.0 || a.radiance == Color::ZERO {
         valid = valid & zero.lt(zero);
     }
     let pdf = dist * dist / (F32s::splat(s, area) * cos_light);
@@ -987,7 +1021,7 @@ fn intersect_area<S: Simd>(s: S, a: &AreaLight, p: Vec3s<S>, wi: Vec3s<S>) -> (M
     let mut met = denom.lt(zero) & dist.gt(zero) & dist.is_finite();
     let m = a.ex.cross(a.ey);
     let m2 = m.length_squared();
-    if !(m2 > 0.0) {
+    if m2.is_nan() || m2 <= 0.0 {
         return (met & zero.lt(zero), dist);
     }
     let (ex, ey, mv, m2v) = (
@@ -1017,8 +1051,8 @@ fn triangle_points<S: Simd>(
     let (e1, e2) = (p1 - p0, p2 - p0);
     let (t1, t2) = (e1 * b1, e2 * b2);
     let p = p0 + (t1 + t2);
-    let p_error = p.abs() * F32s::splat(s, gamma(2))
-        + (t1.abs() + t2.abs()) * F32s::splat(s, gamma(4));
+    let p_error =
+        p.abs() * F32s::splat(s, gamma(2)) + (t1.abs() + t2.abs()) * F32s::splat(s, gamma(4));
     let exact = exact_axes(p0, p1, p2);
     let zero = F32s::splat(s, 0.0);
     let p_error = Vec3s::new(
@@ -1176,7 +1210,11 @@ fn next_float_down<S: Simd>(s: S, v: F32s<S>) -> F32s<S> {
 /// `sampling::concentric_disk` in lanes, operation for operation.
 #[inline(always)]
 fn concentric_disk_lanes<S: Simd>(s: S, u1: F32s<S>, u2: F32s<S>) -> (F32s<S>, F32s<S>) {
-    let (zero, one, two) = (F32s::splat(s, 0.0), F32s::splat(s, 1.0), F32s::splat(s, 2.0));
+    let (zero, one, two) = (
+        F32s::splat(s, 0.0),
+        F32s::splat(s, 1.0),
+        F32s::splat(s, 2.0),
+    );
     let (ox, oy) = (two * u1 - one, two * u2 - one);
     let centre = ox.eq(zero) & oy.eq(zero);
     let x_major = ox.abs().gt(oy.abs());

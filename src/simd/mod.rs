@@ -18,6 +18,7 @@ mod portable;
 mod x86;
 
 use std::ops::{Add, BitAnd, BitOr, Div, Mul, Neg, Not, Sub};
+use std::sync::atomic::{AtomicU8, Ordering};
 
 pub use portable::Portable;
 #[cfg(target_arch = "x86_64")]
@@ -33,12 +34,13 @@ pub type LaneBits = u32;
 pub const ALL_LANES: LaneBits = (1 << LANES) - 1;
 
 /// An instruction set's lane operations. Implementors are zero-sized tokens that
-/// exist only where the instruction set does; the functions are `unsafe` because
-/// they assume it.
+/// exist only where the instruction set does.
 ///
 /// # Safety
 /// An implementor's token may only be constructed after checking that the CPU
-/// supports its instructions.
+/// supports its instructions. Every function assumes the CPU has them (the lane
+/// types call them only after a token was made).
+#[allow(clippy::missing_safety_doc)]
 pub unsafe trait Simd: Copy + Send + Sync + 'static {
     /// Whether AVX2 code (e.g. the single-ray BVH box test) may run here.
     const AVX2: bool;
@@ -507,6 +509,20 @@ impl<S: Simd> Neg for Vec3s<S> {
     }
 }
 
+/// Asks the cache for the line holding `*p` (a hint: never faults, does nothing
+/// off x86-64). Lanes that look up scene data for their hits issue these first,
+/// so the misses of sixteen lanes overlap.
+#[inline(always)]
+pub fn prefetch<T>(p: *const T) {
+    #[cfg(target_arch = "x86_64")]
+    // SAFETY: a prefetch never faults, whatever the address.
+    unsafe {
+        std::arch::x86_64::_mm_prefetch::<{ std::arch::x86_64::_MM_HINT_T0 }>(p.cast())
+    };
+    #[cfg(not(target_arch = "x86_64"))]
+    let _ = p;
+}
+
 /// Code to run with the best instruction set: `run::<S>(token)` is compiled for
 /// each set, with that set's features enabled for the whole of it.
 pub trait SimdTask {
@@ -514,35 +530,68 @@ pub trait SimdTask {
     fn run<S: Simd>(self, s: S) -> Self::Output;
 }
 
-/// Runs `task` with the widest instruction set this CPU has.
-#[inline]
-pub fn dispatch<T: SimdTask>(task: T) -> T::Output {
-    #[cfg(target_arch = "x86_64")]
-    {
-        if let Some(s) = Avx512::detect() {
-            // SAFETY: the token proves AVX-512 is present.
-            return unsafe { run_avx512(task, s) };
-        }
-        if let Some(s) = Avx2::detect() {
-            // SAFETY: the token proves AVX2 is present.
-            return unsafe { run_avx2(task, s) };
-        }
-    }
-    task.run(Portable)
+/// The instruction sets [`dispatch`] chooses from, narrowest first.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord)]
+pub enum InstructionSet {
+    Portable,
+    Avx2,
+    Avx512,
 }
 
-/// Which instruction set [`dispatch`] uses on this CPU.
-pub fn instruction_set() -> &'static str {
+impl std::fmt::Display for InstructionSet {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(match self {
+            InstructionSet::Portable => "portable",
+            InstructionSet::Avx2 => "AVX2",
+            InstructionSet::Avx512 => "AVX-512",
+        })
+    }
+}
+
+/// The widest instruction set [`dispatch`] may use (tests compare each with the
+/// others; they must agree bit for bit).
+static LIMIT: AtomicU8 = AtomicU8::new(InstructionSet::Avx512 as u8);
+
+/// Caps the instruction set [`dispatch`] uses, process-wide.
+pub fn limit_instruction_set(widest: InstructionSet) {
+    LIMIT.store(widest as u8, Ordering::Relaxed);
+}
+
+/// The instruction set [`dispatch`] runs with now: the widest this CPU has,
+/// within [`limit_instruction_set`]'s cap.
+pub fn instruction_set() -> InstructionSet {
+    let limit = LIMIT.load(Ordering::Relaxed);
     #[cfg(target_arch = "x86_64")]
     {
-        if Avx512::detect().is_some() {
-            return "AVX-512";
+        if limit >= InstructionSet::Avx512 as u8 && Avx512::detect().is_some() {
+            return InstructionSet::Avx512;
         }
-        if Avx2::detect().is_some() {
-            return "AVX2";
+        if limit >= InstructionSet::Avx2 as u8 && Avx2::detect().is_some() {
+            return InstructionSet::Avx2;
         }
     }
-    "portable"
+    let _ = limit;
+    InstructionSet::Portable
+}
+
+/// Runs `task` with [`instruction_set`].
+#[inline]
+pub fn dispatch<T: SimdTask>(task: T) -> T::Output {
+    match instruction_set() {
+        #[cfg(target_arch = "x86_64")]
+        InstructionSet::Avx512 => {
+            let s = Avx512::detect().expect("detected above");
+            // SAFETY: the token proves AVX-512 is present.
+            unsafe { run_avx512(task, s) }
+        }
+        #[cfg(target_arch = "x86_64")]
+        InstructionSet::Avx2 => {
+            let s = Avx2::detect().expect("detected above");
+            // SAFETY: the token proves AVX2 is present.
+            unsafe { run_avx2(task, s) }
+        }
+        _ => task.run(Portable),
+    }
 }
 
 #[cfg(target_arch = "x86_64")]
@@ -607,7 +656,13 @@ mod tests {
         same((-a).to_array(), &|x, _| -x);
         same(a.copysign(b).to_array(), &|x, y| x.copysign(y));
         let m = a.lt(b);
-        same(F32s::select(m, a, b).to_array(), &|x, y| if x < y { x } else { y });
+        same(F32s::select(m, a, b).to_array(), &|x, y| {
+            if x < y {
+                x
+            } else {
+                y
+            }
+        });
         let fin = a.is_finite();
         let want = (0..LANES)
             .filter(|&i| vals[i].is_finite())
@@ -625,7 +680,8 @@ mod tests {
                 vals[i].is_sign_negative()
             );
         }
-        let w: [u64; LANES] = std::array::from_fn(|i| 0x9E37_79B9_7F4A_7C15u64.wrapping_mul(i as u64 + 1));
+        let w: [u64; LANES] =
+            std::array::from_fn(|i| 0x9E37_79B9_7F4A_7C15u64.wrapping_mul(i as u64 + 1));
         let x: [u64; LANES] = std::array::from_fn(|i| 0xD1B5_4A32_D192_ED03u64 ^ (i as u64) << 40);
         let (wa, xa) = (U64s::from_array(s, w), U64s::from_array(s, x));
         for i in 0..LANES {
@@ -653,7 +709,10 @@ mod tests {
             assert_eq!((u + v).to_array()[i], ua[i].wrapping_add(va[i]));
             assert_eq!((u & v).to_array()[i], ua[i] & va[i]);
             assert_eq!(u.xor(v).to_array()[i], ua[i] ^ va[i]);
-            assert_eq!((u & v).to_f32().to_array()[i], (ua[i] & va[i] & 0xff_ffff) as f32);
+            assert_eq!(
+                (u & v).to_f32().to_array()[i],
+                (ua[i] & va[i] & 0xff_ffff) as f32
+            );
         }
     }
 

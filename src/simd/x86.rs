@@ -176,7 +176,10 @@ unsafe impl Simd for Avx512 {
     #[inline(always)]
     unsafe fn w_load(a: &[u64; LANES]) -> [__m512i; 2] {
         let p = a.as_ptr();
-        [_mm512_loadu_si512(p.cast()), _mm512_loadu_si512(p.add(8).cast())]
+        [
+            _mm512_loadu_si512(p.cast()),
+            _mm512_loadu_si512(p.add(8).cast()),
+        ]
     }
     #[inline(always)]
     unsafe fn w_store(v: [__m512i; 2], a: &mut [u64; LANES]) {
@@ -252,7 +255,12 @@ type W4 = [__m256i; 4];
 
 macro_rules! quad {
     ($f:path, $a:expr, $b:expr) => {
-        [$f($a[0], $b[0]), $f($a[1], $b[1]), $f($a[2], $b[2]), $f($a[3], $b[3])]
+        [
+            $f($a[0], $b[0]),
+            $f($a[1], $b[1]),
+            $f($a[2], $b[2]),
+            $f($a[3], $b[3]),
+        ]
     };
 }
 
@@ -313,7 +321,10 @@ unsafe impl Simd for Avx2 {
     }
     #[inline(always)]
     unsafe fn f_load(a: &[f32; LANES]) -> F2 {
-        [_mm256_loadu_ps(a.as_ptr()), _mm256_loadu_ps(a.as_ptr().add(8))]
+        [
+            _mm256_loadu_ps(a.as_ptr()),
+            _mm256_loadu_ps(a.as_ptr().add(8)),
+        ]
     }
     #[inline(always)]
     unsafe fn f_store(v: F2, a: &mut [f32; LANES]) {

@@ -140,12 +140,6 @@ impl Accel for Bvh {
         active: crate::simd::LaneBits,
         hits: &mut crate::accel::HitPacket,
     ) {
-        if std::env::var_os("EMBER_SINGLE").is_some() {
-            for i in (0..16).filter(|&i| active >> i & 1 != 0) {
-                hits.set(i, self.intersect(&rays.ray(i)));
-            }
-            return;
-        }
         crate::simd::dispatch(packet::IntersectPacket {
             bvh: self,
             rays,
@@ -159,11 +153,6 @@ impl Accel for Bvh {
         rays: &crate::accel::RayPacket,
         active: crate::simd::LaneBits,
     ) -> crate::simd::LaneBits {
-        if std::env::var_os("EMBER_SINGLE").is_some() {
-            return (0..16)
-                .filter(|&i| active >> i & 1 != 0 && self.occluded(&rays.ray(i)))
-                .fold(0, |m, i| m | 1 << i);
-        }
         crate::simd::dispatch(packet::OccludedPacket {
             bvh: self,
             rays,

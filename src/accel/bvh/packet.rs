@@ -139,7 +139,7 @@ impl Bvh {
             let mut entry_of = [zero; WIDTH];
             let mut order = [(0.0f32, 0u8, 0 as LaneBits); WIDTH];
             let mut n = 0;
-            for c in 0..WIDTH {
+            for (c, entry_c) in entry_of.iter_mut().enumerate() {
                 if node.lo[0][c] > node.hi[0][c] {
                     continue; // an empty slot
                 }
@@ -148,7 +148,7 @@ impl Bvh {
                 if entered == 0 {
                     continue;
                 }
-                entry_of[c] = t0;
+                *entry_c = t0;
                 let key = if ANY {
                     0.0
                 } else {
@@ -233,12 +233,12 @@ fn box_test<S: Simd>(
     let o = [rays.o.x, rays.o.y, rays.o.z];
     let mut t0 = F32s::splat(s, 0.0);
     let mut t1 = t_max;
-    for a in 0..3 {
+    for (a, ((o, inv), neg)) in o.iter().zip(&rays.inv).zip(&rays.neg).enumerate() {
         let (lo, hi) = (F32s::splat(s, node.lo[a][c]), F32s::splat(s, node.hi[a][c]));
-        let near = F32s::select(rays.neg[a], hi, lo);
-        let far = F32s::select(rays.neg[a], lo, hi);
-        t0 = ((near - o[a]) * rays.inv[a]).max(t0);
-        t1 = ((far - o[a]) * rays.inv[a]).min(t1);
+        let near = F32s::select(*neg, hi, lo);
+        let far = F32s::select(*neg, lo, hi);
+        t0 = ((near - *o) * *inv).max(t0);
+        t1 = ((far - *o) * *inv).min(t1);
     }
     (t0.le(t1 * F32s::splat(s, EXIT_SLACK)).bits(), t0)
 }
