@@ -57,6 +57,8 @@ typedef struct skip_context {
   ember_rtc_context ctx;
   const ember_scene *scene;
   uint32_t skip;
+  /* Packets: the primitive each ray skips, by ray id (NULL for single rays). */
+  const uint32_t *skips;
 } skip_context;
 
 static void lock_device(ember_device *d) {
@@ -293,6 +295,7 @@ static void fill_ray(struct RTCRay *r, const ember_ray *in) {
  * RTCHitN_* helpers exist only for C++): rays hold org xyz, tnear, dir xyz, time, tfar;
  * hits Ng xyz, u, v, primID, geomID, in that order, each as n consecutive lanes. */
 #define EMBER_RAYN(ray, k, n, i) (((const float *)(ray))[(k) * (n) + (i)])
+#define EMBER_RAYN_ID(ray, n, i) (((const unsigned *)(ray))[10 * (n) + (i)])
 #define EMBER_HITN_PRIM(hit, n, i) (((const unsigned *)(hit))[5 * (n) + (i)])
 #define EMBER_HITN_GEOM(hit, n, i) (((const unsigned *)(hit))[6 * (n) + (i)])
 
@@ -324,11 +327,12 @@ static void skip_filter(const struct RTCFilterFunctionNArguments *args) {
   const skip_context *sc = (const skip_context *)args->context;
   for (unsigned i = 0; i < args->N; i++) {
     if (args->valid[i] != -1) continue;
+    uint32_t skip = sc->skips ? sc->skips[EMBER_RAYN_ID(args->ray, args->N, i)] : sc->skip;
     unsigned geom = EMBER_HITN_GEOM(args->hit, args->N, i);
     unsigned prim = EMBER_HITN_PRIM(args->hit, args->N, i);
     if (geom == EMBER_TRI_GEOM_ID) {
-      if (prim == sc->skip) args->valid[i] = 0;
-    } else if (sc->scene->ntri + prim == sc->skip &&
+      if (prim == skip) args->valid[i] = 0;
+    } else if (sc->scene->ntri + prim == skip &&
                !far_side_of_own_sphere(sc->scene, prim, args, i)) {
       args->valid[i] = 0;
     }
@@ -371,6 +375,7 @@ int ember_intersect1(const ember_scene *s, const ember_ray *ray, ember_hit *hit)
   skip_context sc;
   sc.scene = s;
   sc.skip = ray->skip;
+  sc.skips = NULL;
   int filtered = ray->skip != EMBER_NO_PRIM;
 #if RTC_VERSION_MAJOR >= 4
   rtcInitRayQueryContext(&sc.ctx);
@@ -466,6 +471,7 @@ int ember_occluded1(const ember_scene *s, const ember_ray *ray) {
   skip_context sc;
   sc.scene = s;
   sc.skip = ray->skip;
+  sc.skips = NULL;
   int filtered = ray->skip != EMBER_NO_PRIM;
 #if RTC_VERSION_MAJOR >= 4
   rtcInitRayQueryContext(&sc.ctx);
@@ -481,4 +487,93 @@ int ember_occluded1(const ember_scene *s, const ember_ray *ray) {
 #endif
   /* A hit is reported by tfar = -inf; no hit data is filled. */
   return r.tfar == -INFINITY;
+}
+
+/* Sixteen rays as one Embree packet, each skipping its own primitive: the lanes of
+ * `active` are traced, ray ids are lane numbers (the filter finds a lane's skip by
+ * its id). */
+static void fill_packet16(const ember_ray *rays, uint32_t active, struct RTCRay16 *r,
+                          int valid[16], uint32_t skips[16]) {
+  for (unsigned i = 0; i < 16; i++) {
+    struct RTCRay one;
+    fill_ray(&one, &rays[i]);
+    valid[i] = (active >> i & 1) ? -1 : 0;
+    skips[i] = rays[i].skip;
+    r->org_x[i] = one.org_x;
+    r->org_y[i] = one.org_y;
+    r->org_z[i] = one.org_z;
+    r->tnear[i] = one.tnear;
+    r->dir_x[i] = one.dir_x;
+    r->dir_y[i] = one.dir_y;
+    r->dir_z[i] = one.dir_z;
+    r->time[i] = 0.0f;
+    r->tfar[i] = one.tfar;
+    r->mask[i] = one.mask;
+    r->id[i] = i;
+    r->flags[i] = 0;
+  }
+}
+
+void ember_intersect16(const ember_scene *s, const ember_ray *rays, uint32_t active,
+                       ember_hit *hits) {
+  union {
+    struct RTCRayHit16 rh;
+    char room[sizeof(struct RTCRayHit16) + EMBER_HIT_SLACK];
+  } record;
+  struct RTCRayHit16 *rhp = &record.rh;
+  int valid[16];
+  uint32_t skips[16];
+  fill_packet16(rays, active, &rhp->ray, valid, skips);
+  for (unsigned i = 0; i < 16; i++) {
+    rhp->hit.geomID[i] = RTC_INVALID_GEOMETRY_ID;
+    rhp->hit.primID[i] = RTC_INVALID_GEOMETRY_ID;
+    rhp->hit.instID[0][i] = RTC_INVALID_GEOMETRY_ID;
+  }
+  skip_context sc;
+  sc.scene = s;
+  sc.skip = EMBER_NO_PRIM;
+  sc.skips = skips;
+#if RTC_VERSION_MAJOR >= 4
+  rtcInitRayQueryContext(&sc.ctx);
+  struct RTCIntersectArguments args;
+  rtcInitIntersectArguments(&args);
+  args.context = &sc.ctx;
+  args.filter = skip_filter;
+  rtcIntersect16(valid, s->scene, rhp, &args);
+#else
+  rtcInitIntersectContext(&sc.ctx);
+  sc.ctx.filter = skip_filter;
+  rtcIntersect16(valid, s->scene, &sc.ctx, rhp);
+#endif
+  for (unsigned i = 0; i < 16; i++)
+    if (active >> i & 1)
+      fill_hit(s, rhp->hit.geomID[i], rhp->hit.primID[i], rhp->ray.tfar[i], rhp->hit.Ng_x[i],
+               rhp->hit.Ng_y[i], rhp->hit.Ng_z[i], rhp->hit.u[i], rhp->hit.v[i], &hits[i]);
+}
+
+uint32_t ember_occluded16(const ember_scene *s, const ember_ray *rays, uint32_t active) {
+  struct RTCRay16 r;
+  int valid[16];
+  uint32_t skips[16];
+  fill_packet16(rays, active, &r, valid, skips);
+  skip_context sc;
+  sc.scene = s;
+  sc.skip = EMBER_NO_PRIM;
+  sc.skips = skips;
+#if RTC_VERSION_MAJOR >= 4
+  rtcInitRayQueryContext(&sc.ctx);
+  struct RTCOccludedArguments args;
+  rtcInitOccludedArguments(&args);
+  args.context = &sc.ctx;
+  args.filter = skip_filter;
+  rtcOccluded16(valid, s->scene, &r, &args);
+#else
+  rtcInitIntersectContext(&sc.ctx);
+  sc.ctx.filter = skip_filter;
+  rtcOccluded16(valid, s->scene, &sc.ctx, &r);
+#endif
+  uint32_t occluded = 0;
+  for (unsigned i = 0; i < 16; i++)
+    if ((active >> i & 1) && r.tfar[i] == -INFINITY) occluded |= 1u << i;
+  return occluded;
 }

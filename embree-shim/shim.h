@@ -103,6 +103,16 @@ int ember_occluded1(const ember_scene *scene, const ember_ray *ray);
 int ember_intersect_packet(const ember_scene *scene, int width, const ember_ray *rays,
                            size_t n, ember_hit *hits);
 
+/* Nearest hits of the lanes of `active` (bit i: rays[i], rays holds 16) traced as one
+ * rtcIntersect16 packet, each ray skipping its own primitive as ember_intersect1 does;
+ * fills hits[i] of the active lanes. */
+void ember_intersect16(const ember_scene *scene, const ember_ray *rays, uint32_t active,
+                       ember_hit *hits);
+
+/* The active lanes (bit i: rays[i], rays holds 16) that are occluded, traced as one
+ * rtcOccluded16 packet with each ray's skip applied. */
+uint32_t ember_occluded16(const ember_scene *scene, const ember_ray *rays, uint32_t active);
+
 #ifdef __cplusplus
 }
 #endif

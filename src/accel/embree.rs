@@ -10,9 +10,10 @@ compile_error!(
 );
 
 pub use super::EmbreeMode;
-use super::{Accel, AccelError, EmbreeQuality};
+use super::{Accel, AccelError, EmbreeQuality, HitPacket, RayPacket};
 use crate::geometry::Ray;
 use crate::scene::{PrimHit, Scene};
+use crate::simd::{LaneBits, LANES};
 use std::ffi::{CStr, CString};
 use std::os::raw::c_char;
 use std::ptr::NonNull;
@@ -324,6 +325,10 @@ fn quality_code(q: EmbreeQuality) -> i32 {
     }) as i32
 }
 
+fn packet_to_ffi(rays: &RayPacket) -> [ffi::ember_ray; LANES] {
+    std::array::from_fn(|i| to_ffi(&rays.ray(i)))
+}
+
 fn to_ffi(ray: &Ray) -> ffi::ember_ray {
     ffi::ember_ray {
         org: ray.o.to_array(),
@@ -347,6 +352,31 @@ impl Accel for EmbreeAccel {
         let r = to_ffi(ray);
         // SAFETY: as in `intersect`.
         unsafe { ffi::ember_occluded1(self.scene.as_ptr(), &r) != 0 }
+    }
+
+    /// One `rtcIntersect16` packet.
+    fn intersect_packet(&self, rays: &RayPacket, active: LaneBits, hits: &mut HitPacket) {
+        let packet = packet_to_ffi(rays);
+        let mut out = [NO_HIT; LANES];
+        // SAFETY: the scene is live; both arrays hold the 16 lanes the shim reads and writes.
+        unsafe {
+            ffi::ember_intersect16(
+                self.scene.as_ptr(),
+                packet.as_ptr(),
+                active,
+                out.as_mut_ptr(),
+            )
+        };
+        for i in (0..LANES).filter(|&i| active >> i & 1 != 0) {
+            hits.set(i, prim_hit(&out[i]));
+        }
+    }
+
+    /// One `rtcOccluded16` packet.
+    fn occluded_packet(&self, rays: &RayPacket, active: LaneBits) -> LaneBits {
+        let packet = packet_to_ffi(rays);
+        // SAFETY: as in `intersect_packet`.
+        unsafe { ffi::ember_occluded16(self.scene.as_ptr(), packet.as_ptr(), active) }
     }
 
     fn name(&self) -> String {

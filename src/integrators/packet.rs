@@ -61,6 +61,8 @@ pub struct PacketPathIntegrator<'a> {
     mis: bool,
     roulette: Roulette,
     lights: Vec<AreaLight>,
+    /// The triangles of area lights' surfaces, and their light.
+    light_prims: Vec<(u32, u32)>,
     /// Per material: albedo, and whether it scatters nothing (light surfaces).
     albedo: Vec<Color>,
     black: Vec<bool>,
@@ -110,6 +112,10 @@ impl<'a> PacketPathIntegrator<'a> {
             mis: s.strategy == DirectStrategy::Mis,
             roulette: s.roulette,
             lights: lights.collect(),
+            light_prims: (0..scene.triangles.len() as u32)
+                .map(|i| (i, scene.triangles[i as usize].light))
+                .filter(|&(_, light)| light != NO_LIGHT)
+                .collect(),
             albedo: albedo.collect(),
             black: scene.materials.iter().map(Material::is_black).collect(),
         })
@@ -511,18 +517,14 @@ impl<'a, 'b, 't, S: Simd> Kernel<'a, 'b, 't, S> {
             (at - prev).dot(w),
             self.f(f32::INFINITY),
         );
-        let mut hit_light = [NO_LIGHT; LANES];
-        let ntri = self.it.scene.triangles.len();
-        let mut rest = hit_lanes & lanes;
-        while rest != 0 {
-            let i = rest.trailing_zeros() as usize;
-            rest &= rest - 1;
-            if let Some(tri) = self.it.scene.triangles.get(hits.prim[i] as usize) {
-                hit_light[i] = tri.light;
-            }
+        // The light whose surface each lane hit, from the lights' primitive ids (no
+        // scene lookup: the triangle records are not in cache yet).
+        let prims = U32s::from_array(s, hits.prim);
+        let mut hit_light = U32s::splat(s, NO_LIGHT);
+        for &(prim, light) in &self.it.light_prims {
+            let on = prims.eq(U32s::splat(s, prim)) & self.mask(hit_lanes);
+            hit_light = U32s::select(on, U32s::splat(s, light), hit_light);
         }
-        debug_assert!(ntri <= self.it.scene.num_prims());
-        let hit_light = U32s::from_array(s, hit_light);
         let mut best_t = self.f(f32::INFINITY);
         let mut best: LaneBits = 0;
         let mut best_light = U32s::splat(s, 0);
