@@ -18,7 +18,7 @@ use glam::Vec3;
 fn rays(scene: &ember::scene::Scene, n: usize) -> Vec<Ray> {
     let mut rng = Sampler::from_seed(17);
     let ntri = scene.triangles.len();
-    let mut point = |rng: &mut Sampler| {
+    let point = |rng: &mut Sampler| {
         let i = ((rng.next_f32() * ntri as f32) as usize).min(ntri - 1);
         let [a, b, c] = scene.triangle_positions(i);
         let (u, v) = (rng.next_f32(), rng.next_f32());
