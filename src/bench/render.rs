@@ -1,10 +1,12 @@
 //! `ember bench render`: samples per second of whole renders (load, build and render
-//! timed apart), the median of several repetitions per scene.
+//! timed apart), the median of several repetitions per scene and engine; the engines
+//! of a scene are measured in turn within each repetition, so a drift of the
+//! machine's speed weighs on them alike.
 
 use super::table::Table;
 use super::{create_out_dir, Report};
 use crate::accel::{AccelKind, BvhBuilder};
-use crate::render::{RenderJob, RenderSettings};
+use crate::render::{Engine, RenderJob, RenderSettings};
 use crate::scene::collada;
 use anyhow::Result;
 use std::path::{Path, PathBuf};
@@ -18,6 +20,8 @@ pub struct RenderBenchOptions {
     /// Repetitions per scene; the median render is reported.
     pub repeat: u32,
     pub accel: AccelKind,
+    /// Engines to compare, each a row.
+    pub engines: Vec<Engine>,
 }
 
 impl RenderBenchOptions {
@@ -39,6 +43,7 @@ impl Default for RenderBenchOptions {
             max_depth: 5,
             repeat: 3,
             accel: AccelKind::Native(BvhBuilder::Sah),
+            engines: vec![Engine::Auto, Engine::Scalar],
         }
     }
 }
@@ -51,6 +56,9 @@ pub const HEIGHT: u32 = 360;
 #[derive(Clone, Debug)]
 pub struct RenderBenchRow {
     pub scene: String,
+    /// The engine asked for, and what ran ("packets (AVX-512)", "scalar").
+    pub engine: Engine,
+    pub ran: String,
     pub spp: u32,
     pub max_depth: u32,
     pub render_s: f64,
@@ -64,54 +72,75 @@ pub struct RenderBenchReport {
 }
 
 pub fn run(opts: &RenderBenchOptions) -> Result<RenderBenchReport> {
-    let rows = opts
-        .scenes
-        .iter()
-        .map(|p| measure(p, opts))
-        .collect::<Result<_>>()?;
+    let mut rows = Vec::new();
+    for p in &opts.scenes {
+        rows.extend(measure(p, opts)?);
+    }
     Ok(RenderBenchReport { rows })
 }
 
-fn measure(path: &Path, opts: &RenderBenchOptions) -> Result<RenderBenchRow> {
-    let settings = RenderSettings {
+/// One row per engine for the scene at `path`.
+fn measure(path: &Path, opts: &RenderBenchOptions) -> Result<Vec<RenderBenchRow>> {
+    let base = RenderSettings {
         spp: opts.spp,
         max_depth: opts.max_depth,
         strategy: None,
         ..Default::default()
     };
-    let mut runs = Vec::new();
+    let mut runs = vec![Vec::new(); opts.engines.len()];
+    let mut ran = vec![String::new(); opts.engines.len()];
     for _ in 0..opts.repeat.max(1) {
-        let t0 = Instant::now();
-        let scene = collada::load(path)?;
-        let load_s = t0.elapsed().as_secs_f64();
-        let t1 = Instant::now();
-        let job = RenderJob::new(scene, opts.accel, WIDTH, HEIGHT)?;
-        let build_s = t1.elapsed().as_secs_f64();
-        let t2 = Instant::now();
-        let out = job.render(&settings);
-        let render_s = t2.elapsed().as_secs_f64();
-        runs.push((render_s, load_s, build_s, out.total_samples()));
+        for (k, &engine) in opts.engines.iter().enumerate() {
+            let settings = RenderSettings {
+                engine,
+                ..base.clone()
+            };
+            let t0 = Instant::now();
+            let scene = collada::load(path)?;
+            let load_s = t0.elapsed().as_secs_f64();
+            let t1 = Instant::now();
+            let job = RenderJob::new(scene, opts.accel, WIDTH, HEIGHT)?;
+            let build_s = t1.elapsed().as_secs_f64();
+            ran[k] = if settings.uses_packets(&job) {
+                format!("packets ({})", crate::simd::instruction_set())
+            } else {
+                "scalar".into()
+            };
+            let t2 = Instant::now();
+            let out = job.render(&settings);
+            let render_s = t2.elapsed().as_secs_f64();
+            runs[k].push((render_s, load_s, build_s, out.total_samples()));
+        }
     }
-    runs.sort_by(|a, b| a.0.total_cmp(&b.0));
-    let (render_s, load_s, build_s, samples) = runs[runs.len() / 2];
-    Ok(RenderBenchRow {
-        scene: path
-            .file_name()
-            .map(|s| s.to_string_lossy().into_owned())
-            .unwrap_or_default(),
-        spp: opts.spp,
-        max_depth: opts.max_depth,
-        render_s,
-        load_s,
-        build_s,
-        samples,
-    })
+    let scene = path
+        .file_name()
+        .map(|s| s.to_string_lossy().into_owned())
+        .unwrap_or_default();
+    let rows = runs.into_iter().zip(ran).zip(&opts.engines);
+    Ok(rows
+        .map(|((mut runs, ran), &engine)| {
+            runs.sort_by(|a, b| a.0.total_cmp(&b.0));
+            let (render_s, load_s, build_s, samples) = runs[runs.len() / 2];
+            RenderBenchRow {
+                scene: scene.clone(),
+                engine,
+                ran,
+                spp: opts.spp,
+                max_depth: opts.max_depth,
+                render_s,
+                load_s,
+                build_s,
+                samples,
+            }
+        })
+        .collect())
 }
 
 impl RenderBenchReport {
     pub fn table(&self) -> Table {
         let mut t = Table::new([
             "scene",
+            "engine",
             "spp",
             "-m",
             "render-only M samples/s",
@@ -124,6 +153,7 @@ impl RenderBenchReport {
             let n = r.samples as f64;
             t.push(vec![
                 r.scene.clone(),
+                format!("{} → {}", r.engine, r.ran),
                 r.spp.to_string(),
                 r.max_depth.to_string(),
                 format!("{:.2}", n / r.render_s / 1e6),

@@ -264,6 +264,9 @@ pub enum BenchCommand {
         /// Backend (auto: as for a render).
         #[arg(long, value_parser = named::<Backend>(), default_value_t = Backend::Auto)]
         accel: Backend,
+        /// Engines to compare, in turn within each repetition (a row each).
+        #[arg(long, value_parser = named::<Engine>(), value_delimiter = ',', default_value = "auto,scalar")]
+        engines: Vec<Engine>,
         /// Output folder (render.csv, render.md).
         #[arg(long, default_value = "bench-out/render")]
         out: PathBuf,

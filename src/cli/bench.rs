@@ -110,6 +110,7 @@ fn run_on_pool(which: BenchCommand) -> Result<()> {
             max_depth,
             repeats,
             accel: a,
+            engines,
             out,
             ..
         } => bench_render(
@@ -123,6 +124,7 @@ fn run_on_pool(which: BenchCommand) -> Result<()> {
                 max_depth,
                 repeat: repeats.max(1),
                 accel: AccelKind::new(a, BvhBuilder::default(), EmbreeQuality::default()),
+                engines,
             },
             out,
         ),
