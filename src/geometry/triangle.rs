@@ -364,15 +364,20 @@ impl<S: Simd> TriangleRays<S> {
         let pos = (e0.gt(zero) | e1.gt(zero) | e2.gt(zero)).bits();
         let rounded = (e0.eq(zero) | e1.eq(zero) | e2.eq(zero)).bits();
         let mixed = neg & pos;
+        let candidates = active & !mixed & !rounded;
+        let exact = active & rounded & !mixed;
+        if candidates | exact == 0 {
+            // Every lane passes outside an edge: the usual answer, known before the division.
+            return (0, zero, zero, zero);
+        }
         let det = e0 + e1 + e2;
         let t_scaled = e0 * z0 + e1 * z1 + e2 * z2;
         let inv_det = F32s::splat(s, 1.0) / det;
         let mut t = t_scaled * inv_det;
         let in_range = t.ge(self.t_lo) & t.le(t_max) & !det.eq(zero);
-        let mut hit = in_range.bits() & active & !mixed & !rounded;
+        let mut hit = in_range.bits() & candidates;
         let mut b1 = e1 * inv_det;
         let mut b2 = e2 * inv_det;
-        let exact = active & rounded & !mixed;
         if exact != 0 {
             (hit, t, b1, b2) = self.exact_lanes(s, corners, t_max, exact, (hit, t, b1, b2));
         }
