@@ -11,6 +11,7 @@ pub use memory::{available_bytes, render_bytes};
 pub use progressive::{pass_seed, pass_spp, render_passes, Film};
 pub use stop::{StopReason, StopToken};
 
+use crate::camera::Camera;
 use crate::color::{is_finite, luminance};
 use crate::film::{heat_map, Image};
 use crate::integrators::packet::{PacketPathIntegrator, TileWork};
@@ -159,26 +160,22 @@ impl RenderSettings {
     /// Why these settings must render `job` one path at a time, if they must: the
     /// packet engine covers plain radiance renders by path tracing of what
     /// `packet::unsupported` accepts.
-    pub fn packet_blocker(&self, job: &RenderJob) -> Option<&'static str> {
+    pub fn packet_blocker(&self, scene: &Scene, camera: &Camera) -> Option<&'static str> {
         if self.shading != Shading::Radiance {
             return Some("debug shading (--shading)");
         }
         if self.adaptive.is_some() {
             return Some("adaptive sampling (-a)");
         }
-        if self.estimator_for(&job.scene) != Estimator::Path {
+        if self.estimator_for(scene) != Estimator::Path {
             return Some("light tracing");
         }
-        crate::integrators::packet::unsupported(
-            &job.scene,
-            &job.camera,
-            &self.path_settings(&job.scene),
-        )
+        crate::integrators::packet::unsupported(scene, camera, &self.path_settings(scene))
     }
 
     /// Whether `job` renders by packets with these settings.
     pub fn uses_packets(&self, job: &RenderJob) -> bool {
-        self.engine != Engine::Scalar && self.packet_blocker(job).is_none()
+        self.engine != Engine::Scalar && self.packet_blocker(&job.scene, &job.camera).is_none()
     }
 
     pub fn path_settings(&self, scene: &Scene) -> PathSettings {

@@ -193,7 +193,7 @@ impl RenderRequest {
         let t1 = Instant::now();
         let job = pool.install(|| RenderJob::with_camera(scene, kind, camera))?;
         if self.settings.engine == Engine::Packet {
-            if let Some(why) = self.settings.packet_blocker(&job) {
+            if let Some(why) = self.settings.packet_blocker(&job.scene, &job.camera) {
                 bail!(
                     "--engine packet: {} needs the scalar engine ({why}); use --engine auto or scalar",
                     self.scene_path.display()
@@ -595,6 +595,20 @@ pub(super) fn info(path: &Path, w: u32, h: u32) -> Result<()> {
         auto.kind,
         auto.reason
     )?;
+    // What the default render (`ember SCENE`) would run on, packets or single paths.
+    let camera = ember::camera::Camera::new(&scene.camera, &scene.bounds, w, h);
+    let defaults = RenderSettings {
+        estimator: None,
+        strategy: None,
+        ..RenderSettings::default()
+    };
+    match defaults.packet_blocker(&scene, &camera) {
+        None => ember::outln!(
+            "--engine auto (the default) runs packets of 16 paths ({})",
+            ember::simd::instruction_set()
+        )?,
+        Some(why) => ember::outln!("--engine auto (the default) runs one path at a time: {why}")?,
+    }
     Ok(())
 }
 
