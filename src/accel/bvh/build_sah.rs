@@ -151,7 +151,11 @@ impl SplitRule for SahBinnedBuilder {
         }
         let (bounds, cb) = (&node.bounds, node.centroids);
         let extent = cb.max - cb.min;
-        let count = (prims.len() / 2).clamp(8, BINS);
+        // Embree's rule: 4 bins and one more per 20 primitives. Most nodes are
+        // small, and their bins cost more than their few primitives; n/2 bins
+        // (at least 8) built the 1M mesh's binary tree about a third slower, for
+        // an SAH cost 0.6% lower.
+        let count = (4 + prims.len() / 20).min(BINS);
         let binning = Binning {
             min: cb.min.to_array(),
             scale: [0, 1, 2].map(|a| {
@@ -164,7 +168,8 @@ impl SplitRule for SahBinnedBuilder {
             count,
         };
         let (cost, axis, boundary) = match count {
-            ..=8 => best_split::<8>(prims, binning),
+            ..=4 => best_split::<4>(prims, binning),
+            5..=8 => best_split::<8>(prims, binning),
             9..=16 => best_split::<16>(prims, binning),
             _ => best_split::<BINS>(prims, binning),
         }?;
