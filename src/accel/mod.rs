@@ -8,7 +8,7 @@ pub mod embree;
 mod prims;
 
 pub use brute::BruteForce;
-pub use bvh::{Bvh, BvhStats};
+pub use bvh::{Bvh, BvhStats, NodeLayout};
 
 use crate::geometry::Ray;
 use crate::names::{display_from_table, Named};

@@ -7,8 +7,10 @@
 //! incoherent rays mostly wait for node and leaf memory.
 
 use super::build::MAX_DEPTH;
-use super::wide::{BoxTest, ChildRef, WideNode, WideRay, EXIT_SLACK, WIDTH};
-use super::Bvh;
+use super::wide::{
+    BoxTest, ChildRef, FloatNode, QuantizedNode, WideNode, WideRay, EXIT_SLACK, WIDTH,
+};
+use super::{Bvh, Nodes};
 use crate::accel::prims::{PrimRay, TriBlock};
 use crate::accel::TraversalStats;
 use crate::geometry::Ray;
@@ -26,44 +28,61 @@ struct Pending {
 const STACK: usize = MAX_DEPTH * (WIDTH - 1) + 1;
 
 impl Bvh {
-    /// Dispatches to the SIMD traversal when the CPU has it.
+    /// Dispatches to the loop for the tree's node layout.
     #[inline(always)]
     pub(super) fn traverse<const ANY: bool, const COUNT: bool>(
         &self,
         ray: &Ray,
         stats: &mut TraversalStats,
     ) -> Option<PrimHit> {
+        match &self.nodes {
+            Nodes::Float(nodes) => self.traverse_nodes::<FloatNode, ANY, COUNT>(nodes, ray, stats),
+            Nodes::Quantized(nodes) => {
+                self.traverse_nodes::<QuantizedNode, ANY, COUNT>(nodes, ray, stats)
+            }
+        }
+    }
+
+    /// Dispatches to the SIMD traversal when the CPU has it.
+    #[inline(always)]
+    fn traverse_nodes<N: WideNode, const ANY: bool, const COUNT: bool>(
+        &self,
+        nodes: &[N],
+        ray: &Ray,
+        stats: &mut TraversalStats,
+    ) -> Option<PrimHit> {
         #[cfg(target_arch = "x86_64")]
         if super::wide::simd_available() {
             // SAFETY: AVX2 was detected on this CPU.
-            return unsafe { self.traverse_avx2::<ANY, COUNT>(ray, stats) };
+            return unsafe { self.traverse_avx2::<N, ANY, COUNT>(nodes, ray, stats) };
         }
-        self.traverse_with::<super::wide::ScalarBoxes, ANY, COUNT>(ray, stats)
+        self.traverse_with::<super::wide::ScalarBoxes, N, ANY, COUNT>(nodes, ray, stats)
     }
 
     #[cfg(target_arch = "x86_64")]
     #[target_feature(enable = "avx2")]
-    unsafe fn traverse_avx2<const ANY: bool, const COUNT: bool>(
+    unsafe fn traverse_avx2<N: WideNode, const ANY: bool, const COUNT: bool>(
         &self,
+        nodes: &[N],
         ray: &Ray,
         stats: &mut TraversalStats,
     ) -> Option<PrimHit> {
-        self.traverse_with::<super::wide::Avx2Boxes, ANY, COUNT>(ray, stats)
+        self.traverse_with::<super::wide::Avx2Boxes, N, ANY, COUNT>(nodes, ray, stats)
     }
 
     /// Asks the cache for every line of child `c` (a wide node or a leaf block).
     /// Incoherent rays on large meshes spend most of their time waiting for these.
     #[inline(always)]
-    fn prefetch(&self, c: ChildRef) {
+    fn prefetch<N>(&self, nodes: &[N], c: ChildRef) {
         #[cfg(target_arch = "x86_64")]
         {
             use std::arch::x86_64::{_mm_prefetch, _MM_HINT_T0};
             let (p, bytes) = if c.is_leaf() {
-                let p = self.blocks.as_ptr().wrapping_add(c.index as usize);
+                let p = self.blocks.as_ptr().wrapping_add(c.index() as usize);
                 (p.cast::<i8>(), std::mem::size_of::<TriBlock>())
             } else {
-                let p = self.nodes.as_ptr().wrapping_add(c.index as usize);
-                (p.cast::<i8>(), std::mem::size_of::<WideNode>())
+                let p = nodes.as_ptr().wrapping_add(c.index() as usize);
+                (p.cast::<i8>(), std::mem::size_of::<N>())
             };
             // Blocks are 16-byte aligned, so the last byte may sit one line further.
             for offset in (0..bytes).step_by(64).chain([bytes - 1]) {
@@ -73,14 +92,15 @@ impl Bvh {
             }
         }
         #[cfg(not(target_arch = "x86_64"))]
-        let _ = c;
+        let _ = (nodes, c);
     }
 
     /// The one traversal loop. `ANY` stops at the first hit (shadow rays);
     /// `COUNT` records the work done into `stats` (compiled out otherwise).
     #[inline(always)]
-    pub(super) fn traverse_with<B: BoxTest, const ANY: bool, const COUNT: bool>(
+    pub(super) fn traverse_with<B: BoxTest, N: WideNode, const ANY: bool, const COUNT: bool>(
         &self,
+        nodes: &[N],
         ray: &Ray,
         stats: &mut TraversalStats,
     ) -> Option<PrimHit> {
@@ -98,7 +118,7 @@ impl Bvh {
         let mut entry = [0.0f32; WIDTH];
         loop {
             if !cur.is_leaf() {
-                let node = &self.nodes[cur.index as usize];
+                let node = &nodes[cur.index() as usize];
                 if COUNT {
                     stats.nodes += 1;
                 }
@@ -109,21 +129,21 @@ impl Bvh {
                 // slightly slower: 0.69 vs 0.72 of Embree, incoherent, 1M mesh.)
                 let mut ahead = mask;
                 while ahead != 0 {
-                    self.prefetch(node.children[ahead.trailing_zeros() as usize]);
+                    self.prefetch(nodes, node.child(ahead.trailing_zeros() as usize));
                     ahead &= ahead - 1;
                 }
                 if mask != 0 {
                     let first = mask.trailing_zeros() as usize;
                     mask &= mask - 1;
                     if mask == 0 {
-                        cur = node.children[first];
+                        cur = node.child(first);
                         continue;
                     }
                     // Push every entered child, then sort the pushed run so the
                     // nearest is on top, and take it.
                     let base = sp;
                     stack[sp] = MaybeUninit::new(Pending {
-                        child: node.children[first],
+                        child: node.child(first),
                         entry: entry[first],
                     });
                     sp += 1;
@@ -131,7 +151,7 @@ impl Bvh {
                         let c = mask.trailing_zeros() as usize;
                         mask &= mask - 1;
                         let p = Pending {
-                            child: node.children[c],
+                            child: node.child(c),
                             entry: entry[c],
                         };
                         let mut j = sp;
@@ -154,9 +174,9 @@ impl Bvh {
                 }
             } else {
                 if COUNT {
-                    stats.prims += cur.count;
+                    stats.prims += cur.count();
                 }
-                let block = &self.blocks[cur.index as usize];
+                let block = &self.blocks[cur.index() as usize];
                 if ANY {
                     if let Some(hit) = block.intersect_any(&self.spheres, &prim_ray, t_max) {
                         return Some(hit);

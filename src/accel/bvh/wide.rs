@@ -2,6 +2,9 @@
 //! per axis (structure of arrays), so one SIMD pass tests a ray against every
 //! child box and yields the entry distances used to visit them nearest first.
 //! The builder's binary tree is collapsed into this layout by [`super::collapse`].
+//! Two node layouts share it ([`WideNode`]): boxes as `f32` ([`FloatNode`]) or
+//! quantised to a byte per coordinate ([`QuantizedNode`]), see `Bvh::build` for
+//! which a tree gets.
 //!
 //! Why 8 wide: against 4 wide (SSE box test, `WIDTH = 4`; both builds otherwise
 //! equal), interleaved runs on this machine (AMD EPYC, CPU time, 1 thread, native
@@ -16,6 +19,9 @@
 use crate::geometry::ray::gamma;
 use crate::geometry::{Aabb, Ray};
 
+pub(crate) use super::float_node::FloatNode;
+pub(crate) use super::quantized_node::QuantizedNode;
+
 /// Children per node.
 pub(crate) const WIDTH: usize = 8;
 
@@ -23,47 +29,44 @@ pub(crate) const WIDTH: usize = 8;
 /// ray touches (pbrt's `1 + 2γ(3)`).
 pub(crate) const EXIT_SLACK: f32 = 1.0 + 2.0 * gamma(3);
 
-/// A reference to a child: an inner node (`count == 0`, `index` into the wide
-/// nodes) or a leaf (`count` primitives in block `index`).
+/// A reference to a child in 32 bits: an inner node (`count() == 0`, `index()`
+/// into the wide nodes) or a leaf (`count()` primitives in block `index()`).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
-pub(crate) struct ChildRef {
-    pub index: u32,
-    pub count: u32,
-}
+pub(crate) struct ChildRef(u32);
 
 impl ChildRef {
+    /// Leaves hold at most one block of 4, so the count takes 3 bits.
+    const COUNT_BITS: u32 = 3;
+
+    pub fn node(index: u32) -> Self {
+        assert!(index < 1 << (32 - Self::COUNT_BITS), "too many nodes");
+        ChildRef(index << Self::COUNT_BITS)
+    }
+
+    pub fn leaf(block: u32, count: u32) -> Self {
+        assert!(block < 1 << (32 - Self::COUNT_BITS), "too many leaf blocks");
+        assert!((1..=4).contains(&count));
+        ChildRef(block << Self::COUNT_BITS | count)
+    }
+
     #[inline(always)]
     pub fn is_leaf(self) -> bool {
-        self.count != 0
+        self.count() != 0
     }
-}
 
-/// `lo[a][c]`, `hi[a][c]`: the bounds of child `c` on axis `a`. Unused slots hold
-/// the empty box (`+∞`, `−∞`), which every ray misses.
-#[derive(Clone, Copy, Debug, PartialEq)]
-#[repr(C, align(32))]
-pub(crate) struct WideNode {
-    pub lo: [[f32; WIDTH]; 3],
-    pub hi: [[f32; WIDTH]; 3],
-    pub children: [ChildRef; WIDTH],
-}
-
-impl Default for WideNode {
-    fn default() -> Self {
-        WideNode {
-            lo: [[f32::INFINITY; WIDTH]; 3],
-            hi: [[f32::NEG_INFINITY; WIDTH]; 3],
-            children: [ChildRef::default(); WIDTH],
-        }
+    #[inline(always)]
+    pub fn index(self) -> u32 {
+        self.0 >> Self::COUNT_BITS
     }
-}
 
-impl WideNode {
-    pub fn child_bounds(&self, c: usize) -> Aabb {
-        Aabb::new(
-            glam::Vec3::new(self.lo[0][c], self.lo[1][c], self.lo[2][c]),
-            glam::Vec3::new(self.hi[0][c], self.hi[1][c], self.hi[2][c]),
-        )
+    #[inline(always)]
+    pub fn count(self) -> u32 {
+        self.0 & ((1 << Self::COUNT_BITS) - 1)
+    }
+
+    /// The same reference with its index moved by `shift` (a subtree appended).
+    pub fn shifted(self, shift: u32) -> Self {
+        ChildRef(self.0 + (shift << Self::COUNT_BITS))
     }
 }
 
@@ -93,106 +96,66 @@ impl WideRay {
     }
 }
 
+/// A wide node layout: up to [`WIDTH`] children, slots in use from slot 0, and
+/// the test of one ray against all their boxes. Both versions of the test give
+/// the same bits; the AVX2 one may only run where [`simd_available`].
+pub(crate) trait WideNode:
+    Copy + Default + PartialEq + std::fmt::Debug + Send + Sync
+{
+    /// A node over `children` (1 to [`WIDTH`]), each with its exact box.
+    fn new(children: &[(Aabb, ChildRef)]) -> Self;
+
+    /// The child in slot `c` (a slot in use).
+    fn child(&self, c: usize) -> ChildRef;
+
+    /// The slots in use.
+    fn children_mut(&mut self) -> &mut [ChildRef];
+
+    /// The box traversal tests for child `c` (contains the exact one).
+    fn child_bounds(&self, c: usize) -> Aabb;
+
+    /// Slots in use.
+    fn len(&self) -> usize;
+
+    /// The mask of entered children (slots in use only), with their entry
+    /// distances written to `entry`. `f32::max`/`min` return the non-NaN operand.
+    fn hits_scalar(&self, ray: &WideRay, t_max: f32, entry: &mut [f32; WIDTH]) -> u32;
+
+    /// [`WideNode::hits_scalar`] in AVX2, the same bits.
+    ///
+    /// # Safety
+    /// Only from code compiled with `avx2`, on a CPU that has it.
+    #[cfg(target_arch = "x86_64")]
+    unsafe fn hits_avx2(&self, ray: &WideRay, t_max: f32, entry: &mut [f32; WIDTH]) -> u32;
+}
+
 /// One ray against all child boxes of a node: returns the mask of entered
 /// children and writes their entry distances.
 pub(crate) trait BoxTest {
-    fn hits(ray: &WideRay, node: &WideNode, t_max: f32, entry: &mut [f32; WIDTH]) -> u32;
+    fn hits<N: WideNode>(ray: &WideRay, node: &N, t_max: f32, entry: &mut [f32; WIDTH]) -> u32;
 }
 
-/// Portable version; `f32::max`/`min` return the non-NaN operand.
+/// The portable box test.
 pub(crate) struct ScalarBoxes;
 
 impl BoxTest for ScalarBoxes {
     #[inline(always)]
-    fn hits(ray: &WideRay, node: &WideNode, t_max: f32, entry: &mut [f32; WIDTH]) -> u32 {
-        let mut mask = 0;
-        for (c, entry_c) in entry.iter_mut().enumerate() {
-            let mut t0 = ray.t_min;
-            let mut t1 = t_max;
-            for a in 0..3 {
-                let (lo, hi) = (node.lo[a][c], node.hi[a][c]);
-                let (near, far) = if ray.neg[a] { (hi, lo) } else { (lo, hi) };
-                t0 = t0.max((near - ray.o[a]) * ray.inv[a]);
-                t1 = t1.min((far - ray.o[a]) * ray.inv[a]);
-            }
-            *entry_c = t0;
-            if t0 <= t1 * EXIT_SLACK {
-                mask |= 1 << c;
-            }
-        }
-        mask
+    fn hits<N: WideNode>(ray: &WideRay, node: &N, t_max: f32, entry: &mut [f32; WIDTH]) -> u32 {
+        node.hits_scalar(ray, t_max, entry)
     }
 }
 
-/// AVX2 version, eight children per register. `_mm256_max_ps(a, b)` and
-/// `_mm256_min_ps(a, b)` return `b` when either operand is NaN, so NaN slab
-/// distances (first operand) leave the accumulated interval as it was, exactly
-/// like the scalar version.
+/// The AVX2 box test, all children in one pass.
 #[cfg(target_arch = "x86_64")]
 pub(crate) struct Avx2Boxes;
 
 #[cfg(target_arch = "x86_64")]
 impl BoxTest for Avx2Boxes {
     #[inline(always)]
-    fn hits(ray: &WideRay, node: &WideNode, t_max: f32, entry: &mut [f32; WIDTH]) -> u32 {
-        use std::arch::x86_64::*;
-        const _: () = assert!(WIDTH == 8 || WIDTH == 4);
-        if WIDTH == 4 {
-            return hits4(ray, node, t_max, entry);
-        }
+    fn hits<N: WideNode>(ray: &WideRay, node: &N, t_max: f32, entry: &mut [f32; WIDTH]) -> u32 {
         // SAFETY: only reached from functions compiled with `avx2` after runtime
-        // detection (see `simd_available`); WideNode is 32-byte aligned and each
-        // row is 32 bytes, so the aligned loads are in bounds.
-        unsafe {
-            let mut t0 = _mm256_set1_ps(ray.t_min);
-            let mut t1 = _mm256_set1_ps(t_max);
-            for a in 0..3 {
-                let (near, far) = if ray.neg[a] {
-                    (&node.hi[a], &node.lo[a])
-                } else {
-                    (&node.lo[a], &node.hi[a])
-                };
-                let o = _mm256_set1_ps(ray.o[a]);
-                let inv = _mm256_set1_ps(ray.inv[a]);
-                let tn = _mm256_mul_ps(_mm256_sub_ps(_mm256_load_ps(near.as_ptr()), o), inv);
-                let tf = _mm256_mul_ps(_mm256_sub_ps(_mm256_load_ps(far.as_ptr()), o), inv);
-                t0 = _mm256_max_ps(tn, t0);
-                t1 = _mm256_min_ps(tf, t1);
-            }
-            let inside =
-                _mm256_cmp_ps::<_CMP_LE_OQ>(t0, _mm256_mul_ps(t1, _mm256_set1_ps(EXIT_SLACK)));
-            _mm256_storeu_ps(entry.as_mut_ptr(), t0);
-            _mm256_movemask_ps(inside) as u32
-        }
-    }
-}
-
-/// The SSE version for 4-wide nodes (the same operations on four lanes).
-#[cfg(target_arch = "x86_64")]
-#[inline(always)]
-fn hits4(ray: &WideRay, node: &WideNode, t_max: f32, entry: &mut [f32; WIDTH]) -> u32 {
-    use std::arch::x86_64::*;
-    // SAFETY: SSE is part of x86-64; each row holds WIDTH = 4 floats at a 16-byte
-    // aligned offset of the 32-byte aligned node.
-    unsafe {
-        let mut t0 = _mm_set1_ps(ray.t_min);
-        let mut t1 = _mm_set1_ps(t_max);
-        for a in 0..3 {
-            let (near, far) = if ray.neg[a] {
-                (&node.hi[a], &node.lo[a])
-            } else {
-                (&node.lo[a], &node.hi[a])
-            };
-            let o = _mm_set1_ps(ray.o[a]);
-            let inv = _mm_set1_ps(ray.inv[a]);
-            let tn = _mm_mul_ps(_mm_sub_ps(_mm_load_ps(near.as_ptr()), o), inv);
-            let tf = _mm_mul_ps(_mm_sub_ps(_mm_load_ps(far.as_ptr()), o), inv);
-            t0 = _mm_max_ps(tn, t0);
-            t1 = _mm_min_ps(tf, t1);
-        }
-        let inside = _mm_cmple_ps(t0, _mm_mul_ps(t1, _mm_set1_ps(EXIT_SLACK)));
-        _mm_storeu_ps(entry.as_mut_ptr(), t0);
-        _mm_movemask_ps(inside) as u32
+        // detection (see `simd_available`).
+        unsafe { node.hits_avx2(ray, t_max, entry) }
     }
 }
 
@@ -211,31 +174,31 @@ pub(crate) fn simd_available() -> bool {
 }
 
 #[cfg(test)]
-mod tests {
+pub(crate) mod tests {
+    //! Tests every node layout must pass; each layout's file runs them.
     use super::*;
     use crate::sampling::Sampler;
     use glam::Vec3;
 
-    fn node_with(boxes: &[Aabb]) -> WideNode {
-        let mut n = WideNode::default();
-        for (c, b) in boxes.iter().enumerate() {
-            for a in 0..3 {
-                n.lo[a][c] = b.min[a];
-                n.hi[a][c] = b.max[a];
-            }
-        }
-        n
+    pub fn node_with<N: WideNode>(boxes: &[Aabb]) -> N {
+        let children: Vec<(Aabb, ChildRef)> = boxes
+            .iter()
+            .enumerate()
+            .map(|(c, &b)| (b, ChildRef::leaf(c as u32, 1)))
+            .collect();
+        N::new(&children)
     }
 
     /// Scalar and SIMD agree bit for bit; returns the mask.
-    fn both(r: &Ray, node: &WideNode, t_max: f32) -> u32 {
+    pub fn both<N: WideNode>(r: &Ray, node: &N, t_max: f32) -> u32 {
         let wr = WideRay::new(r);
         let mut e = [0.0; WIDTH];
         let m = ScalarBoxes::hits(&wr, node, t_max, &mut e);
         #[cfg(target_arch = "x86_64")]
         if simd_available() {
             let mut e2 = [0.0; WIDTH];
-            let m2 = Avx2Boxes::hits(&wr, node, t_max, &mut e2);
+            // SAFETY: AVX2 was detected.
+            let m2 = unsafe { avx2_hits(&wr, node, t_max, &mut e2) };
             assert_eq!(m, m2, "{r:?}");
             for c in 0..WIDTH {
                 if m & 1 << c != 0 {
@@ -246,16 +209,26 @@ mod tests {
         m
     }
 
-    fn two_boxes() -> WideNode {
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx2")]
+    unsafe fn avx2_hits<N: WideNode>(
+        wr: &WideRay,
+        node: &N,
+        t_max: f32,
+        entry: &mut [f32; WIDTH],
+    ) -> u32 {
+        Avx2Boxes::hits(wr, node, t_max, entry)
+    }
+
+    fn two_boxes<N: WideNode>() -> N {
         node_with(&[
             Aabb::new(Vec3::ZERO, Vec3::ONE),
             Aabb::new(Vec3::new(2.0, 0.0, 0.0), Vec3::new(3.0, 1.0, 1.0)),
         ])
     }
 
-    #[test]
-    fn slab_test_orders_and_culls() {
-        let n = two_boxes();
+    pub fn slab_test_orders_and_culls<N: WideNode>() {
+        let n: N = two_boxes();
         let r = Ray::new(Vec3::new(-1.0, 0.5, 0.5), Vec3::X);
         let mut e = [0.0; WIDTH];
         let m = ScalarBoxes::hits(&WideRay::new(&r), &n, f32::INFINITY, &mut e);
@@ -268,9 +241,8 @@ mod tests {
         assert_eq!(both(&miss, &n, f32::INFINITY), 0);
     }
 
-    #[test]
-    fn slab_test_handles_parallel_rays_on_faces() {
-        let n = two_boxes();
+    pub fn slab_test_handles_parallel_rays_on_faces<N: WideNode>() {
+        let n: N = two_boxes();
         for d in [Vec3::new(0.0, 0.0, 1.0), Vec3::new(-0.0, 0.0, 1.0)] {
             let r = Ray::new(Vec3::new(0.0, 0.5, -1.0), d);
             assert_eq!(both(&r, &n, f32::INFINITY), 1);
@@ -288,9 +260,10 @@ mod tests {
         assert_eq!(both(&inside, &n, f32::INFINITY), 1);
     }
 
-    /// Random boxes against random, axis-aligned, face-grazing and corner rays.
-    #[test]
-    fn simd_box_test_matches_scalar_on_random_and_adversarial_rays() {
+    /// Random boxes against random, axis-aligned, face-grazing and corner rays:
+    /// SIMD and scalar agree, and every ray that enters a child's exact box (by
+    /// the float slab test of an exact node) enters the node's box for it.
+    pub fn simd_box_test_matches_scalar_on_random_and_adversarial_rays<N: WideNode>() {
         let mut rng = Sampler::from_seed(5);
         let mut v = || Vec3::new(rng.next_f32(), rng.next_f32(), rng.next_f32()) * 4.0 - 2.0;
         for _ in 0..2000 {
@@ -300,7 +273,9 @@ mod tests {
                     Aabb::new(a.min(b), a.max(b))
                 })
                 .collect();
-            let n = node_with(&boxes[..1 + (v().x.abs() * 3.5) as usize % WIDTH]);
+            let boxes = &boxes[..1 + (v().x.abs() * 3.5) as usize % WIDTH];
+            let n: N = node_with(boxes);
+            let exact: FloatNode = node_with(boxes);
             let corner = boxes[0].max;
             let rays = [
                 Ray::new(v(), v()),
@@ -314,8 +289,11 @@ mod tests {
                 Ray::new(corner, v()),
             ];
             for r in rays {
-                both(&r, &n, f32::INFINITY);
-                both(&r, &n, 1.0);
+                for t_max in [f32::INFINITY, 1.0] {
+                    let m = both(&r, &n, t_max);
+                    let m_exact = both(&r, &exact, t_max);
+                    assert_eq!(m & m_exact, m_exact, "{r:?} {boxes:?}");
+                }
             }
         }
     }
