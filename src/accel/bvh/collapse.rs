@@ -79,14 +79,7 @@ pub(crate) fn collapse<N: WideNode>(
     let mut shape = Shape::default();
     let root = tree.child(0, 0, &mut shape);
     let mut blocks = huge_pages::huge_page_vec(shape.leaves.len());
-    shape
-        .leaves
-        .par_iter()
-        .map(|&(first, count)| {
-            let (first, count) = (first as usize, count as usize);
-            TriBlock::new(scene, &order[first..first + count])
-        })
-        .collect_into_vec(&mut blocks);
+    TriBlock::make_all(scene, &shape.leaves, order, &mut blocks);
     let nodes = huge_pages::on_huge_pages(&shape.nodes);
     WideTree {
         nodes,

@@ -76,12 +76,14 @@ fn grid(lo: f32, hi: f32) -> (f32, f32) {
 /// The grid points of each box on one axis: the highest at or below `lo[c]` and
 /// the lowest at or above `hi[c]`, all within `[origin, origin + 255·scale]`.
 ///
-/// The position `(x − origin)·scale⁻¹` is computed in `f64` (no overflow at the
-/// ends of the `f32` range; the reciprocal of a power of two is exact, so only
-/// the subtraction rounds, by far less than one grid step), and its floor or
-/// ceiling is then at most one point off the exact one; one step checked
-/// through [`dequantize`] corrects that. Plain loops over the lanes, which the
-/// compiler turns into SIMD.
+/// The position `(x − origin)·scale⁻¹` (the reciprocal of a power of two is
+/// exact, so only the subtraction rounds, by far less than one grid step) has a
+/// floor or ceiling at most one point off the exact one; one step checked
+/// through [`dequantize`] corrects that. In `f32` and without branches, lane by
+/// lane, so the compiler makes SIMD of it; every box is then checked, and the
+/// rare ones this misses (near the ends of the float range, where the
+/// subtraction or `q·scale` overflows) are walked to their point one step at a
+/// time.
 fn quantize(
     origin: f32,
     scale: f32,
@@ -91,20 +93,19 @@ fn quantize(
     if scale == 0.0 {
         return ([0; WIDTH], [0; WIDTH]);
     }
-    let inverse = 1.0 / f64::from(scale);
-    let position = |x: f32| ((f64::from(x) - f64::from(origin)) * inverse).clamp(0.0, 255.0);
+    let inverse = 1.0 / scale;
     let mut q_lo = [0u8; WIDTH];
     let mut q_hi = [0u8; WIDTH];
     for c in 0..WIDTH {
         // Truncation is the floor of a non-negative position.
-        let mut q = position(lo[c]) as u8;
-        q -= u8::from(q > 0 && dequantize(origin, scale, q) > lo[c]);
-        q_lo[c] = q;
-        let p = position(hi[c]);
-        let mut q = p as u8;
-        q += u8::from(f64::from(q) < p);
-        q += u8::from(q < 255 && dequantize(origin, scale, q) < hi[c]);
-        q_hi[c] = q;
+        let q = ((lo[c] - origin) * inverse).clamp(0.0, 255.0) as i32;
+        let q = q - i32::from(q > 0 && dequantize(origin, scale, q as u8) > lo[c]);
+        q_lo[c] = q as u8;
+        let p = ((hi[c] - origin) * inverse).clamp(0.0, 255.0);
+        let q = p as i32;
+        let q = q + i32::from((q as f32) < p);
+        let q = q + i32::from(q < 255 && dequantize(origin, scale, q as u8) < hi[c]);
+        q_hi[c] = q as u8;
     }
     let contains = |c: usize, q_lo: &[u8; WIDTH], q_hi: &[u8; WIDTH]| {
         dequantize(origin, scale, q_lo[c]) <= lo[c] && dequantize(origin, scale, q_hi[c]) >= hi[c]
