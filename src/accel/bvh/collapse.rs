@@ -105,9 +105,16 @@ struct Plan {
 /// subtree that fills at most `j + 1` slots of its parent.
 type Costs = [f32; WIDTH];
 
+/// A planned subtree: its costs, and how many slots it can fill at most (its
+/// binary leaves, at most [`WIDTH`]); more slots cost what that many do.
+struct Planned {
+    costs: Costs,
+    slots: usize,
+}
+
 /// Plans binary node `i` and its subtree, whose plans are `plan` (the subtree's
-/// nodes are the contiguous range starting at `i`); returns its costs.
-fn plan_subtree(nodes: &[BvhNode], i: usize, plan: &mut [Plan]) -> Costs {
+/// nodes are the contiguous range starting at `i`).
+fn plan_subtree(nodes: &[BvhNode], i: usize, plan: &mut [Plan]) -> Planned {
     let node = &nodes[i];
     let area = node.bounds().surface_area();
     if node.count() > 0 {
@@ -115,7 +122,10 @@ fn plan_subtree(nodes: &[BvhNode], i: usize, plan: &mut [Plan]) -> Costs {
             prims: node.count() as u8,
             ..Plan::default()
         };
-        return [area * INTERSECTION_COST; WIDTH];
+        return Planned {
+            costs: [area * INTERSECTION_COST; WIDTH],
+            slots: 1,
+        };
     }
     let [first, second] = children_of(nodes, i);
     let parallel = plan.len() > PARALLEL_PLAN;
@@ -133,31 +143,34 @@ fn plan_subtree(nodes: &[BvhNode], i: usize, plan: &mut [Plan]) -> Costs {
         )
     };
     let prims = first_plan[0].prims.saturating_add(second_plan[0].prims);
-    let (p, costs) = plan_node(area, prims, &a, &b);
+    let (p, planned) = plan_node(area, prims, &a, &b);
     own[0] = p;
-    costs
+    planned
 }
 
-/// The plan and costs of an inner node of surface area `area` over `prims`
-/// primitives, whose children cost `a` and `b`.
-fn plan_node(area: f32, prims: u8, a: &Costs, b: &Costs) -> (Plan, Costs) {
-    // shared[j], with the slots of the first child: j + 1 slots split between both.
+/// The plan of an inner node of surface area `area` over `prims` primitives,
+/// whose children are `a` and `b`.
+fn plan_node(area: f32, prims: u8, a: &Planned, b: &Planned) -> (Plan, Planned) {
+    let slots = (a.slots + b.slots).min(WIDTH);
+    // shared[j], with the slots of the first child: j + 1 slots split between
+    // both, each child given no more than it can fill.
     let mut shared = [(f32::INFINITY, 0u8); WIDTH];
-    for (j, best) in shared.iter_mut().enumerate().skip(1) {
-        for k in 0..j {
-            let cost = a[k] + b[j - 1 - k];
+    for (j, best) in shared.iter_mut().enumerate().take(slots).skip(1) {
+        for k in j.saturating_sub(b.slots)..j.min(a.slots) {
+            let cost = a.costs[k] + b.costs[j - 1 - k];
             if cost < best.0 {
                 *best = (cost, k as u8 + 1);
             }
         }
     }
+    let full = shared[slots - 1];
     let mut plan = Plan {
-        node_split: shared[WIDTH - 1].1,
+        node_split: full.1,
         prims,
         ..Plan::default()
     };
     let mut costs = [0.0; WIDTH];
-    let wide_node = area * TRAVERSAL_COST + shared[WIDTH - 1].0;
+    let wide_node = area * TRAVERSAL_COST + full.0;
     let leaf = if u32::from(prims) <= BLOCK {
         area * INTERSECTION_COST
     } else {
@@ -173,7 +186,7 @@ fn plan_node(area: f32, prims: u8, a: &Costs, b: &Costs) -> (Plan, Costs) {
             costs[j] = costs[j - 1];
         }
     }
-    (plan, costs)
+    (plan, Planned { costs, slots })
 }
 
 fn children_of(nodes: &[BvhNode], i: usize) -> [usize; 2] {

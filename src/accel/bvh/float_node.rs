@@ -1,4 +1,4 @@
-//! Wide nodes with their child boxes as `f32`: 224 bytes for 8 children. The
+//! Wide nodes with their child boxes as `f32`: 448 bytes for 16 children. The
 //! layout of trees small enough to stay in the caches, where a box test that
 //! reads its bounds directly beats the quantised one (see `Bvh::build`).
 
@@ -83,37 +83,43 @@ impl WideNode for FloatNode {
         mask
     }
 
-    /// Eight children per register. `_mm256_max_ps(a, b)` and `_mm256_min_ps(a, b)`
-    /// return `b` when either operand is NaN, so NaN slab distances (first
-    /// operand) leave the accumulated interval as it was, like the scalar test.
+    /// Eight children per register (16-wide nodes take two passes).
+    /// `_mm256_max_ps(a, b)` and `_mm256_min_ps(a, b)` return `b` when either
+    /// operand is NaN, so NaN slab distances (first operand) leave the
+    /// accumulated interval as it was, like the scalar test.
     #[cfg(target_arch = "x86_64")]
     #[inline(always)]
     unsafe fn hits_avx2(&self, ray: &WideRay, t_max: f32, entry: &mut [f32; WIDTH]) -> u32 {
         use std::arch::x86_64::*;
-        const _: () = assert!(WIDTH == 8 || WIDTH == 4);
+        const _: () = assert!(WIDTH == 16 || WIDTH == 8 || WIDTH == 4);
         if WIDTH == 4 {
             return hits4(self, ray, t_max, entry);
         }
-        // SAFETY (of the loads): the node is 32-byte aligned and each row is 32
-        // bytes.
-        let mut t0 = _mm256_set1_ps(ray.t_min);
-        let mut t1 = _mm256_set1_ps(t_max);
-        for a in 0..3 {
-            let (near, far) = if ray.neg[a] {
-                (&self.hi[a], &self.lo[a])
-            } else {
-                (&self.lo[a], &self.hi[a])
-            };
-            let o = _mm256_set1_ps(ray.o[a]);
-            let inv = _mm256_set1_ps(ray.inv[a]);
-            let tn = _mm256_mul_ps(_mm256_sub_ps(_mm256_load_ps(near.as_ptr()), o), inv);
-            let tf = _mm256_mul_ps(_mm256_sub_ps(_mm256_load_ps(far.as_ptr()), o), inv);
-            t0 = _mm256_max_ps(tn, t0);
-            t1 = _mm256_min_ps(tf, t1);
+        let mut mask = 0;
+        for half in 0..WIDTH / 8 {
+            let lanes = half * 8;
+            // The node is 32-byte aligned and each run of eight bounds is 32 bytes.
+            let mut t0 = _mm256_set1_ps(ray.t_min);
+            let mut t1 = _mm256_set1_ps(t_max);
+            for a in 0..3 {
+                let (near, far) = if ray.neg[a] {
+                    (&self.hi[a], &self.lo[a])
+                } else {
+                    (&self.lo[a], &self.hi[a])
+                };
+                let o = _mm256_set1_ps(ray.o[a]);
+                let inv = _mm256_set1_ps(ray.inv[a]);
+                let bn = _mm256_load_ps(near[lanes..].as_ptr());
+                let bf = _mm256_load_ps(far[lanes..].as_ptr());
+                t0 = _mm256_max_ps(_mm256_mul_ps(_mm256_sub_ps(bn, o), inv), t0);
+                t1 = _mm256_min_ps(_mm256_mul_ps(_mm256_sub_ps(bf, o), inv), t1);
+            }
+            let slack = _mm256_mul_ps(t1, _mm256_set1_ps(EXIT_SLACK));
+            let inside = _mm256_cmp_ps::<_CMP_LE_OQ>(t0, slack);
+            _mm256_storeu_ps(entry[lanes..].as_mut_ptr(), t0);
+            mask |= (_mm256_movemask_ps(inside) as u32) << lanes;
         }
-        let inside = _mm256_cmp_ps::<_CMP_LE_OQ>(t0, _mm256_mul_ps(t1, _mm256_set1_ps(EXIT_SLACK)));
-        _mm256_storeu_ps(entry.as_mut_ptr(), t0);
-        _mm256_movemask_ps(inside) as u32
+        mask
     }
 }
 

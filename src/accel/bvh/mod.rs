@@ -69,9 +69,9 @@ enum Nodes {
 /// How a tree stores the boxes of its nodes' children.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum NodeLayout {
-    /// `f32` bounds ([`FloatNode`], 224 bytes a node).
+    /// `f32` bounds ([`FloatNode`], 448 bytes a 16-wide node).
     Float,
-    /// Bounds quantised to a byte per coordinate ([`QuantizedNode`], 128 bytes).
+    /// Bounds quantised to a byte per coordinate ([`QuantizedNode`], 192 bytes).
     Quantized,
 }
 

@@ -1,5 +1,5 @@
-//! Wide nodes with their child boxes quantised to a byte per coordinate: 128
-//! bytes for 8 children. The layout of large trees, whose traversal waits on
+//! Wide nodes with their child boxes quantised to a byte per coordinate: 192
+//! bytes for 16 children. The layout of large trees, whose traversal waits on
 //! memory (see `Bvh::build`).
 
 #[cfg(doc)]
@@ -10,7 +10,7 @@ use crate::geometry::Aabb;
 /// A wide node with its child boxes quantised to 8 bits per coordinate (Embree's
 /// compressed nodes, Ylitie et al.'s CWBVH): on axis `a`, child `c` spans
 /// `[dequantize(a, lo[a][c]), dequantize(a, hi[a][c])]`. Large meshes are memory
-/// bound, and this is 128 bytes (two cache lines) where a [`FloatNode`] takes 224.
+/// bound, and this is 192 bytes (three cache lines) where a [`FloatNode`] takes 448.
 ///
 /// Quantised boxes are conservative, bit for bit as traversal computes them: the
 /// build checks each bound through [`dequantize`] itself and moves it outwards
@@ -30,6 +30,7 @@ pub(crate) struct QuantizedNode {
 }
 
 const _: () = assert!(WIDTH != 8 || std::mem::size_of::<QuantizedNode>() == 128);
+const _: () = assert!(WIDTH != 16 || std::mem::size_of::<QuantizedNode>() == 192);
 
 /// A node without children (no ray enters it): a placeholder while building.
 impl Default for QuantizedNode {
@@ -201,42 +202,47 @@ impl WideNode for QuantizedNode {
         mask & self.used
     }
 
-    /// Eight children per register, dequantised in the lanes with the scalar
-    /// operations; NaN slab distances are ignored as in `FloatNode`'s test.
+    /// Eight children per register (16-wide nodes take two passes), dequantised
+    /// in the lanes with the scalar operations; NaN slab distances are ignored
+    /// as in `FloatNode`'s test.
     #[cfg(target_arch = "x86_64")]
     #[inline(always)]
     unsafe fn hits_avx2(&self, ray: &WideRay, t_max: f32, entry: &mut [f32; WIDTH]) -> u32 {
         use std::arch::x86_64::*;
-        const _: () = assert!(WIDTH == 8 || WIDTH == 4);
+        const _: () = assert!(WIDTH == 16 || WIDTH == 8 || WIDTH == 4);
         if WIDTH == 4 {
             return hits4(self, ray, t_max, entry);
         }
-        // Each row of quantised bounds is 8 bytes, read by one 8-byte load.
-        let mut t0 = _mm256_set1_ps(ray.t_min);
-        let mut t1 = _mm256_set1_ps(t_max);
-        for a in 0..3 {
-            let (near, far) = if ray.neg[a] {
-                (&self.hi[a], &self.lo[a])
-            } else {
-                (&self.lo[a], &self.hi[a])
-            };
-            let origin = _mm256_set1_ps(self.origin[a]);
-            let scale = _mm256_set1_ps(self.scale[a]);
-            // `dequantize` in eight lanes: exact conversion, multiply, add.
-            let bound = |row: &[u8; WIDTH]| {
-                let q = _mm256_cvtepu8_epi32(_mm_loadl_epi64(row.as_ptr().cast()));
-                _mm256_add_ps(origin, _mm256_mul_ps(_mm256_cvtepi32_ps(q), scale))
-            };
-            let o = _mm256_set1_ps(ray.o[a]);
-            let inv = _mm256_set1_ps(ray.inv[a]);
-            let tn = _mm256_mul_ps(_mm256_sub_ps(bound(near), o), inv);
-            let tf = _mm256_mul_ps(_mm256_sub_ps(bound(far), o), inv);
-            t0 = _mm256_max_ps(tn, t0);
-            t1 = _mm256_min_ps(tf, t1);
+        let mut mask = 0;
+        for half in 0..WIDTH / 8 {
+            let lanes = half * 8;
+            // Each run of eight quantised bounds is read by one 8-byte load.
+            let mut t0 = _mm256_set1_ps(ray.t_min);
+            let mut t1 = _mm256_set1_ps(t_max);
+            for a in 0..3 {
+                let (near, far) = if ray.neg[a] {
+                    (&self.hi[a], &self.lo[a])
+                } else {
+                    (&self.lo[a], &self.hi[a])
+                };
+                let origin = _mm256_set1_ps(self.origin[a]);
+                let scale = _mm256_set1_ps(self.scale[a]);
+                let o = _mm256_set1_ps(ray.o[a]);
+                let inv = _mm256_set1_ps(ray.inv[a]);
+                // `dequantize` in eight lanes: exact conversion, multiply, add.
+                let qn = _mm256_cvtepu8_epi32(_mm_loadl_epi64(near[lanes..].as_ptr().cast()));
+                let qf = _mm256_cvtepu8_epi32(_mm_loadl_epi64(far[lanes..].as_ptr().cast()));
+                let bn = _mm256_add_ps(origin, _mm256_mul_ps(_mm256_cvtepi32_ps(qn), scale));
+                let bf = _mm256_add_ps(origin, _mm256_mul_ps(_mm256_cvtepi32_ps(qf), scale));
+                t0 = _mm256_max_ps(_mm256_mul_ps(_mm256_sub_ps(bn, o), inv), t0);
+                t1 = _mm256_min_ps(_mm256_mul_ps(_mm256_sub_ps(bf, o), inv), t1);
+            }
+            let slack = _mm256_mul_ps(t1, _mm256_set1_ps(EXIT_SLACK));
+            let inside = _mm256_cmp_ps::<_CMP_LE_OQ>(t0, slack);
+            _mm256_storeu_ps(entry[lanes..].as_mut_ptr(), t0);
+            mask |= (_mm256_movemask_ps(inside) as u32) << lanes;
         }
-        let inside = _mm256_cmp_ps::<_CMP_LE_OQ>(t0, _mm256_mul_ps(t1, _mm256_set1_ps(EXIT_SLACK)));
-        _mm256_storeu_ps(entry.as_mut_ptr(), t0);
-        _mm256_movemask_ps(inside) as u32 & self.used
+        mask & self.used
     }
 }
 
