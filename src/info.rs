@@ -86,11 +86,10 @@ fn write_meshes(out: &mut String, scene: &Scene) -> std::fmt::Result {
 /// The native BVH's shape: nodes, depth, leaf sizes, SAH cost and build time.
 pub fn bvh_info(name: &str, s: &crate::accel::bvh::BvhStats, build_ms: f64) -> String {
     format!(
-        "{name}: {} nodes ({}-wide, {} boxes), {} leaves of {:.2} primitives on average \
-         (at most 4), depth {}, SAH cost {:.2}, built in {build_ms:.1} ms\n",
+        "{name}: {} nodes ({}-wide), {} leaves of {:.2} primitives on average (at most 4), \
+         depth {}, SAH cost {:.2}, built in {build_ms:.1} ms\n",
         s.nodes,
         s.width,
-        if s.quantized { "quantised" } else { "f32" },
         s.leaves,
         s.prims as f64 / s.leaves.max(1) as f64,
         s.max_depth,

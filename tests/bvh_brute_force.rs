@@ -4,7 +4,7 @@
 mod bvh_common;
 
 use bvh_common::*;
-use ember::accel::{Accel, BruteForce, Bvh, BvhBuilder, NodeLayout};
+use ember::accel::{Accel, BruteForce, Bvh, BvhBuilder};
 use ember::geometry::Ray;
 use ember::sampling::{uniform_sphere, Sampler};
 use ember::scene::Scene;
@@ -204,7 +204,8 @@ fn empty_and_fully_degenerate_scenes_never_hit() {
     );
     let ray = Ray::new(Vec3::ZERO, Vec3::X);
     for scene in [&empty, &degenerate] {
-        for (_, bvh) in natives(scene) {
+        for builder in builders() {
+            let bvh = Bvh::build(scene, builder);
             assert!(bvh.intersect(&ray).is_none() && !bvh.occluded(&ray));
             assert_eq!(bvh.stats().prims, 0);
         }
@@ -219,7 +220,8 @@ fn identical_centroids_build_bounded_leaves() {
     let n = 1000;
     let positions = vec![Vec3::ZERO, Vec3::X, Vec3::Y];
     let scene = scene_from(positions, vec![[0, 1, 2]; n], vec![]);
-    for (_, bvh) in natives(&scene) {
+    for builder in builders() {
+        let bvh = Bvh::build(&scene, builder);
         let s = bvh.stats();
         assert_eq!(s.prims, n);
         assert!(s.leaves >= n / 8, "{s:?}");
@@ -242,22 +244,16 @@ fn trees_are_the_same_whatever_the_thread_count() {
         spheres: 30,
     };
     let scene = make_soup(&spec);
-    for (builder, layout) in builders()
-        .into_iter()
-        .flat_map(|b| NodeLayout::ALL.map(|l| (b, l)))
-    {
+    for builder in builders() {
         let build_with = |threads: usize| {
             let pool = rayon::ThreadPoolBuilder::new()
                 .num_threads(threads)
                 .build()
                 .unwrap();
-            pool.install(|| Bvh::build_with_layout(&scene, builder, layout))
+            pool.install(|| Bvh::build(&scene, builder))
         };
         let (one, four) = (build_with(1), build_with(4));
-        assert!(
-            one == four,
-            "{builder:?} {layout:?} differs between 1 and 4 threads"
-        );
+        assert!(one == four, "{builder:?} differs between 1 and 4 threads");
         let s = one.stats();
         assert_eq!(
             s.prims,
@@ -336,16 +332,17 @@ fn closed_mesh_is_watertight_from_inside() {
         Vec3::new(-0.3, 0.3, 0.3),
     ];
     let brute = BruteForce::new(&scene);
-    let bvhs = natives(&scene);
+    let bvhs = builders().map(|b| Bvh::build(&scene, b));
     let mut rays = 0;
     for o in origins {
         for &a in &aims {
             let ray = Ray::new(o, a - o);
             assert!(brute.occluded(&ray), "brute force: leak through {ray:?}");
-            for (name, bvh) in &bvhs {
+            for bvh in &bvhs {
                 assert!(
                     bvh.intersect(&ray).is_some(),
-                    "{name}: leak through {ray:?}"
+                    "{}: leak through {ray:?}",
+                    bvh.name()
                 );
             }
             rays += 1;
@@ -371,7 +368,7 @@ fn flat_grid_has_no_cracks_at_edges_and_vertices() {
         }
     }
     let scene = scene_from(positions, tris, vec![]);
-    let bvhs = natives(&scene);
+    let bvhs = builders().map(|b| Bvh::build(&scene, b));
     let brute = BruteForce::new(&scene);
     let mut checked = 0;
     for i in 1..2 * n {
@@ -385,10 +382,10 @@ fn flat_grid_has_no_cracks_at_edges_and_vertices() {
             ] {
                 let ray = Ray::new(p - 3.0 * d, d);
                 assert!(brute.intersect(&ray).is_some(), "brute: crack at {p}");
-                for (name, bvh) in &bvhs {
+                for bvh in &bvhs {
                     let h = bvh
                         .intersect(&ray)
-                        .unwrap_or_else(|| panic!("{name}: crack at {p}"));
+                        .unwrap_or_else(|| panic!("{}: crack at {p}", bvh.name()));
                     assert!((h.t - 3.0).abs() < 1e-5);
                 }
                 checked += 1;

@@ -15,7 +15,7 @@
 
 use ember::accel::bvh::Bvh;
 use ember::accel::embree::EmbreeAccel;
-use ember::accel::{Accel, BvhBuilder, EmbreeQuality, NodeLayout};
+use ember::accel::{Accel, BvhBuilder, EmbreeQuality};
 use ember::bench::meshes;
 use ember::camera::Camera;
 use ember::geometry::triangle::intersect_triangle;
@@ -587,52 +587,30 @@ const MAX_EXCUSED_RATE: f64 = 8.5e-4;
 /// Rays per scene against the native BVH.
 const NATIVE_RAYS: usize = 1_000_000;
 
-/// Embree against both native builders over one ray set (the SAH tree in both node
-/// layouts): Embree traces each ray once.
+/// Embree against both native builders over one ray set: Embree traces each ray once.
 fn crosscheck_native(label: &str, scene: &Scene) -> Tally {
     let embree = EmbreeAccel::build(scene, EmbreeQuality::Medium).expect("Embree builds");
-    let natives = [
-        (
-            BvhBuilder::Midpoint,
-            NodeLayout::for_prims(scene.num_prims()),
-        ),
-        (BvhBuilder::Sah, NodeLayout::Float),
-        (BvhBuilder::Sah, NodeLayout::Quantized),
-    ]
-    .map(|(b, l)| Bvh::build_with_layout(scene, b, l));
+    let natives = [BvhBuilder::Midpoint, BvhBuilder::Sah].map(|b| Bvh::build(scene, b));
     let cam = Camera::new(&scene.camera, &scene.bounds, 640, 480);
     let tallies = (0..NATIVE_RAYS)
         .into_par_iter()
         .map(|i| {
             let ray = make_ray(scene, &cam, &natives[1], 0xc0ffee, i);
-            natives
-                .each_ref()
-                .map(|native| compare_ray(scene, &ray, &embree, native))
+            let tally = |native: &Bvh| compare_ray(scene, &ray, &embree, native);
+            [tally(&natives[0]), tally(&natives[1])]
         })
         .reduce(
-            || std::array::from_fn(|_| Tally::default()),
-            |a, b| {
-                let mut b = b.into_iter();
-                a.map(|x| x.merge(b.next().expect("one tally per tree")))
-            },
+            || [Tally::default(), Tally::default()],
+            |[a0, a1], [b0, b1]| [a0.merge(b0), a1.merge(b1)],
         );
     for (native, tally) in natives.iter().zip(&tallies) {
-        let layout = if native.stats().quantized {
-            "quantised"
-        } else {
-            "f32"
-        };
-        eprintln!(
-            "{label}: Embree vs {}, {layout} boxes: {}",
-            native.name(),
-            tally.summary()
-        );
+        eprintln!("{label}: Embree vs {}: {}", native.name(), tally.summary());
         for e in &tally.examples {
             eprintln!("  {e}");
         }
     }
-    let [a, b, c] = tallies;
-    a.merge(b).merge(c)
+    let [a, b] = tallies;
+    a.merge(b)
 }
 
 fn course_scenes() -> Vec<std::path::PathBuf> {

@@ -8,7 +8,7 @@ pub mod embree;
 mod prims;
 
 pub use brute::BruteForce;
-pub use bvh::{Bvh, BvhStats, NodeLayout};
+pub use bvh::{Bvh, BvhStats};
 
 use crate::geometry::Ray;
 use crate::names::{display_from_table, Named};

@@ -3,7 +3,7 @@
 
 #![allow(dead_code)]
 
-use ember::accel::{Accel, BruteForce, Bvh, BvhBuilder, NodeLayout};
+use ember::accel::{Accel, BruteForce, Bvh, BvhBuilder};
 use ember::geometry::sphere::{intersect_sphere, intersect_sphere_leaving};
 use ember::geometry::triangle::intersect_triangle;
 use ember::geometry::{Aabb, Ray};
@@ -56,16 +56,6 @@ impl Tolerance {
 
 pub fn builders() -> [BvhBuilder; 2] {
     [BvhBuilder::Sah, BvhBuilder::Midpoint]
-}
-
-/// Every native tree over `scene`: both builders, each in both node layouts, with
-/// a name for failure messages.
-pub fn natives(scene: &Scene) -> Vec<(String, Bvh)> {
-    builders()
-        .into_iter()
-        .flat_map(|b| NodeLayout::ALL.map(|l| (b, l)))
-        .map(|(b, l)| (format!("{b:?} {l:?}"), Bvh::build_with_layout(scene, b, l)))
-        .collect()
 }
 
 /// A scene holding only geometry (materials are irrelevant to intersection).
@@ -250,7 +240,8 @@ pub fn check_against_brute(scene: &Scene, rays: &[Ray]) {
     let brute = BruteForce::new(scene);
     let tol = Tolerance::for_scene(scene);
     let want: Vec<Option<PrimHit>> = rays.par_iter().map(|r| brute.intersect(r)).collect();
-    for (name, bvh) in natives(scene) {
+    for builder in builders() {
+        let bvh = Bvh::build(scene, builder);
         let failures: Vec<String> = rays
             .par_iter()
             .zip(&want)
@@ -263,7 +254,7 @@ pub fn check_against_brute(scene: &Scene, rays: &[Ray]) {
         assert!(
             failures.is_empty(),
             "{}: {} of {} rays disagree with brute force; first: {}",
-            name,
+            bvh.name(),
             failures.len(),
             rays.len(),
             failures[0]
@@ -452,21 +443,24 @@ pub fn check_against_oracle(scene: &Scene, rays: &[Ray]) {
     use rayon::prelude::*;
     let oracle = SegmentOracle::new(scene);
     let tol = Tolerance::for_scene(scene);
-    let bvhs = natives(scene);
+    let bvhs = builders().map(|b| Bvh::build(scene, b));
     let failures: Vec<String> = rays
         .par_iter()
         .filter_map(|ray| {
-            let got: Vec<Option<PrimHit>> = bvhs.iter().map(|(_, b)| b.intersect(ray)).collect();
+            let got = bvhs.each_ref().map(|b| b.intersect(ray));
             let limit = got.iter().fold(0.0f32, |l, g| {
                 l.max(g.map_or(ray.t_max, |h| {
                     (h.t + 2.0 * tol.slack(ray, h.t)).min(ray.t_max)
                 }))
             });
             let want = oracle.nearest(ray, limit);
-            bvhs.iter().zip(got).find_map(|((name, bvh), g)| {
+            bvhs.iter().zip(got).find_map(|(bvh, g)| {
                 let nearest = compare_nearest(scene, &tol, ray, g, want);
                 let occluded = compare_occluded(&tol, ray, bvh.occluded(ray), want);
-                nearest.and(occluded).err().map(|e| format!("{name}: {e}"))
+                nearest
+                    .and(occluded)
+                    .err()
+                    .map(|e| format!("{}: {e}", bvh.name()))
             })
         })
         .collect();

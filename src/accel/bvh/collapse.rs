@@ -36,8 +36,8 @@ const BLOCK: u32 = 4;
 
 /// The collapsed tree: nodes (root at 0 unless the root is a leaf), leaf blocks,
 /// and the reference traversal starts from.
-pub(crate) struct WideTree<N> {
-    pub nodes: Vec<N>,
+pub(crate) struct WideTree {
+    pub nodes: Vec<WideNode>,
     pub blocks: Vec<TriBlock>,
     pub root: ChildRef,
 }
@@ -45,27 +45,15 @@ pub(crate) struct WideTree<N> {
 /// The wide tree before its leaf blocks are made: each leaf as the range
 /// `(first, count)` of primitive slots its block will hold. Blocks are much
 /// bigger; they are made afterwards in parallel, straight into their vector.
-struct Shape<N> {
-    nodes: Vec<N>,
+#[derive(Default)]
+struct Shape {
+    nodes: Vec<WideNode>,
     leaves: Vec<(u32, u32)>,
-}
-
-impl<N> Default for Shape<N> {
-    fn default() -> Self {
-        Shape {
-            nodes: Vec::new(),
-            leaves: Vec::new(),
-        }
-    }
 }
 
 /// Collapses the builder's depth-first binary nodes into wide nodes.
 /// `order[slot]` is the primitive id in leaf slot `slot`.
-pub(crate) fn collapse<N: WideNode>(
-    nodes: &[BvhNode],
-    scene: &Scene,
-    order: &[u32],
-) -> WideTree<N> {
+pub(crate) fn collapse(nodes: &[BvhNode], scene: &Scene, order: &[u32]) -> WideTree {
     if nodes.is_empty() {
         return WideTree {
             nodes: Vec::new(),
@@ -208,7 +196,7 @@ struct Slots {
 impl Collapse<'_> {
     /// The reference to binary node `m` as one slot at wide depth `depth`: a leaf
     /// or a wide node, converted with its descendants into `shape`.
-    fn child<N: WideNode>(&self, m: usize, depth: u32, shape: &mut Shape<N>) -> ChildRef {
+    fn child(&self, m: usize, depth: u32, shape: &mut Shape) -> ChildRef {
         if self.is_leaf(m) {
             self.leaf(m, &mut shape.leaves)
         } else {
@@ -249,7 +237,7 @@ impl Collapse<'_> {
 
     /// Emits binary inner node `i` as a wide node at wide depth `depth`, with its
     /// descendants; returns its index.
-    fn convert<N: WideNode>(&self, i: usize, depth: u32, shape: &mut Shape<N>) -> u32 {
+    fn convert(&self, i: usize, depth: u32, shape: &mut Shape) -> u32 {
         let mut slots = Slots {
             nodes: [0; WIDTH],
             len: 0,
@@ -261,10 +249,10 @@ impl Collapse<'_> {
         let kids = &slots.nodes[..slots.len];
         let me = shape.nodes.len();
         // A placeholder until the children's references are known.
-        shape.nodes.push(N::default());
+        shape.nodes.push(WideNode::default());
         let mut children = [(Aabb::EMPTY, ChildRef::default()); WIDTH];
         if depth < PARALLEL_DEPTH {
-            let subtrees: Vec<Shape<N>> = kids
+            let subtrees: Vec<Shape> = kids
                 .par_iter()
                 .map(|&k| {
                     let mut sub = Shape::default();
@@ -289,7 +277,7 @@ impl Collapse<'_> {
         for (slot, &k) in kids.iter().enumerate() {
             children[slot].0 = self.nodes[k].bounds();
         }
-        shape.nodes[me] = N::new(&children[..kids.len()]);
+        shape.nodes[me] = WideNode::new(&children[..kids.len()]);
         me as u32
     }
 
@@ -301,7 +289,7 @@ impl Collapse<'_> {
 
 /// Appends `sub` (converted on its own) to `shape`, shifting its node and block
 /// indices; returns the reference to its root.
-fn append_shifted<N: WideNode>(shape: &mut Shape<N>, sub: Shape<N>) -> ChildRef {
+fn append_shifted(shape: &mut Shape, sub: Shape) -> ChildRef {
     let node_shift = shape.nodes.len() as u32;
     let block_shift = shape.leaves.len() as u32;
     shape.nodes.extend(sub.nodes.into_iter().map(|mut node| {

@@ -7,10 +7,8 @@ mod build;
 mod build_midpoint;
 mod build_sah;
 mod collapse;
-mod float_node;
 mod huge_pages;
 mod node;
-mod quantized_node;
 mod traverse;
 mod wide;
 
@@ -23,7 +21,7 @@ use build_midpoint::MidpointBuilder;
 use build_sah::SahBinnedBuilder;
 use collapse::collapse;
 use rayon::prelude::*;
-use wide::{ChildRef, FloatNode, QuantizedNode, WideNode, WIDTH};
+use wide::{ChildRef, WideNode, WIDTH};
 
 /// Shape and quality of a built tree (the wide traversal layout), for `ember
 /// info` and benchmarks.
@@ -43,15 +41,13 @@ pub struct BvhStats {
     pub sah_cost: f32,
     /// Children per node.
     pub width: usize,
-    /// Whether child boxes are quantised (large trees) or `f32`.
-    pub quantized: bool,
 }
 
 /// Equality compares the whole layout: two builds are equal when they produced
 /// the same tree.
 #[derive(PartialEq)]
 pub struct Bvh {
-    nodes: Nodes,
+    nodes: Vec<WideNode>,
     blocks: Vec<TriBlock>,
     spheres: SphereStore,
     root: ChildRef,
@@ -59,54 +55,8 @@ pub struct Bvh {
     stats: BvhStats,
 }
 
-/// The wide nodes of a tree, in the layout its size calls for.
-#[derive(PartialEq)]
-enum Nodes {
-    Float(Vec<FloatNode>),
-    Quantized(Vec<QuantizedNode>),
-}
-
-/// How a tree stores the boxes of its nodes' children.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum NodeLayout {
-    /// `f32` bounds ([`FloatNode`], 448 bytes a 16-wide node).
-    Float,
-    /// Bounds quantised to a byte per coordinate ([`QuantizedNode`], 192 bytes).
-    Quantized,
-}
-
-impl NodeLayout {
-    pub const ALL: [NodeLayout; 2] = [NodeLayout::Float, NodeLayout::Quantized];
-
-    /// What [`Bvh::build`] gives a tree over `prims` primitives. Small trees stay in
-    /// the caches, where `f32` boxes are quicker to test (CBbunny, 28.6k triangles:
-    /// incoherent rays 8% and camera rays 20% slower with quantised nodes); large
-    /// ones wait on memory, where half the bytes per node win.
-    pub fn for_prims(prims: usize) -> NodeLayout {
-        if prims > QUANTIZED_FROM_PRIMS {
-            NodeLayout::Quantized
-        } else {
-            NodeLayout::Float
-        }
-    }
-}
-
-const QUANTIZED_FROM_PRIMS: usize = 100_000;
-
 impl Bvh {
-    /// The tree of `builder` over `scene`'s hittable primitives, in the node
-    /// layout its size calls for ([`NodeLayout::for_prims`]).
     pub fn build(scene: &Scene, builder: BvhBuilder) -> Bvh {
-        Self::build_as(scene, builder, None)
-    }
-
-    /// [`Bvh::build`] with the node layout chosen by the caller (the same tree,
-    /// only its boxes stored otherwise): for tests and benchmarks.
-    pub fn build_with_layout(scene: &Scene, builder: BvhBuilder, layout: NodeLayout) -> Bvh {
-        Self::build_as(scene, builder, Some(layout))
-    }
-
-    fn build_as(scene: &Scene, builder: BvhBuilder, layout: Option<NodeLayout>) -> Bvh {
         let mut build_prims: Vec<BuildPrim> = hittable_prims_as(scene, BuildPrim::new);
         let binary = match builder {
             BvhBuilder::Sah => build_nodes(&SahBinnedBuilder::default(), &mut build_prims),
@@ -114,30 +64,17 @@ impl Bvh {
         };
         let order: Vec<PrimId> = build_prims.par_iter().map(|p| p.id).collect();
         drop(build_prims);
-        let (nodes, blocks, root) = match layout.unwrap_or(NodeLayout::for_prims(order.len())) {
-            NodeLayout::Quantized => {
-                let tree = collapse::<QuantizedNode>(&binary, scene, &order);
-                (Nodes::Quantized(tree.nodes), tree.blocks, tree.root)
-            }
-            NodeLayout::Float => {
-                let tree = collapse::<FloatNode>(&binary, scene, &order);
-                (Nodes::Float(tree.nodes), tree.blocks, tree.root)
-            }
-        };
+        let tree = collapse(&binary, scene, &order);
         let root_bounds = binary.first().map(|n| n.bounds());
         let mut bvh = Bvh {
-            nodes,
-            blocks,
+            nodes: tree.nodes,
+            blocks: tree.blocks,
             spheres: SphereStore::new(scene),
-            root,
+            root: tree.root,
             builder,
             stats: BvhStats::default(),
         };
-        let root_area = root_bounds.map_or(0.0, |b| b.surface_area());
-        bvh.stats = match &bvh.nodes {
-            Nodes::Float(nodes) => bvh.tree_stats(nodes, root_area),
-            Nodes::Quantized(nodes) => bvh.tree_stats(nodes, root_area),
-        };
+        bvh.stats = bvh.tree_stats(root_bounds.map_or(0.0, |b| b.surface_area()));
         bvh
     }
 
@@ -145,10 +82,9 @@ impl Bvh {
         self.stats
     }
 
-    fn tree_stats<N: WideNode>(&self, nodes: &[N], root_area: f32) -> BvhStats {
+    fn tree_stats(&self, root_area: f32) -> BvhStats {
         let mut stats = BvhStats {
             width: WIDTH,
-            quantized: matches!(self.nodes, Nodes::Quantized(_)),
             ..BvhStats::default()
         };
         if self.blocks.is_empty() {
@@ -173,7 +109,7 @@ impl Bvh {
             }
             stats.nodes += 1;
             cost += area * f64::from(build_sah::TRAVERSAL_COST);
-            let node = &nodes[r.index() as usize];
+            let node = &self.nodes[r.index() as usize];
             for c in 0..node.len() {
                 let b = node.child_bounds(c);
                 stack.push((node.child(c), depth + 1, rel(b.surface_area())));
@@ -211,12 +147,8 @@ impl Accel for Bvh {
 
     /// Only what traversal reads: nodes, leaf blocks and spheres.
     fn memory_bytes(&self) -> usize {
-        let nodes = match &self.nodes {
-            Nodes::Float(n) => n.capacity() * std::mem::size_of::<FloatNode>(),
-            Nodes::Quantized(n) => n.capacity() * std::mem::size_of::<QuantizedNode>(),
-        };
         std::mem::size_of::<Self>()
-            + nodes
+            + self.nodes.capacity() * std::mem::size_of::<WideNode>()
             + self.blocks.capacity() * std::mem::size_of::<TriBlock>()
             + self.spheres.memory_bytes()
     }

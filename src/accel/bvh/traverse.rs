@@ -7,10 +7,8 @@
 //! incoherent rays mostly wait for node and leaf memory.
 
 use super::build::MAX_DEPTH;
-use super::wide::{
-    BoxTest, ChildRef, FloatNode, QuantizedNode, WideNode, WideRay, EXIT_SLACK, WIDTH,
-};
-use super::{Bvh, Nodes};
+use super::wide::{BoxTest, ChildRef, WideNode, WideRay, EXIT_SLACK, WIDTH};
+use super::Bvh;
 use crate::accel::prims::{PrimRay, TriBlock};
 use crate::accel::TraversalStats;
 use crate::geometry::Ray;
@@ -28,52 +26,35 @@ struct Pending {
 const STACK: usize = MAX_DEPTH * (WIDTH - 1) + 1;
 
 impl Bvh {
-    /// Dispatches to the loop for the tree's node layout.
+    /// Dispatches to the SIMD traversal when the CPU has it.
     #[inline(always)]
     pub(super) fn traverse<const ANY: bool, const COUNT: bool>(
         &self,
         ray: &Ray,
         stats: &mut TraversalStats,
     ) -> Option<PrimHit> {
-        match &self.nodes {
-            Nodes::Float(nodes) => self.traverse_nodes::<FloatNode, ANY, COUNT>(nodes, ray, stats),
-            Nodes::Quantized(nodes) => {
-                self.traverse_nodes::<QuantizedNode, ANY, COUNT>(nodes, ray, stats)
-            }
-        }
-    }
-
-    /// Dispatches to the SIMD traversal when the CPU has it.
-    #[inline(always)]
-    fn traverse_nodes<N: WideNode, const ANY: bool, const COUNT: bool>(
-        &self,
-        nodes: &[N],
-        ray: &Ray,
-        stats: &mut TraversalStats,
-    ) -> Option<PrimHit> {
         #[cfg(target_arch = "x86_64")]
         if super::wide::simd_available() {
             // SAFETY: AVX2 was detected on this CPU.
-            return unsafe { self.traverse_avx2::<N, ANY, COUNT>(nodes, ray, stats) };
+            return unsafe { self.traverse_avx2::<ANY, COUNT>(ray, stats) };
         }
-        self.traverse_with::<super::wide::ScalarBoxes, N, ANY, COUNT>(nodes, ray, stats)
+        self.traverse_with::<super::wide::ScalarBoxes, ANY, COUNT>(ray, stats)
     }
 
     #[cfg(target_arch = "x86_64")]
     #[target_feature(enable = "avx2")]
-    unsafe fn traverse_avx2<N: WideNode, const ANY: bool, const COUNT: bool>(
+    unsafe fn traverse_avx2<const ANY: bool, const COUNT: bool>(
         &self,
-        nodes: &[N],
         ray: &Ray,
         stats: &mut TraversalStats,
     ) -> Option<PrimHit> {
-        self.traverse_with::<super::wide::Avx2Boxes, N, ANY, COUNT>(nodes, ray, stats)
+        self.traverse_with::<super::wide::Avx2Boxes, ANY, COUNT>(ray, stats)
     }
 
     /// Asks the cache for every line of child `c` (a wide node or a leaf block).
     /// Incoherent rays on large meshes spend most of their time waiting for these.
     #[inline(always)]
-    fn prefetch<N>(&self, nodes: &[N], c: ChildRef) {
+    fn prefetch(&self, c: ChildRef) {
         #[cfg(target_arch = "x86_64")]
         {
             use std::arch::x86_64::{_mm_prefetch, _MM_HINT_T0};
@@ -81,8 +62,8 @@ impl Bvh {
                 let p = self.blocks.as_ptr().wrapping_add(c.index() as usize);
                 (p.cast::<i8>(), std::mem::size_of::<TriBlock>())
             } else {
-                let p = nodes.as_ptr().wrapping_add(c.index() as usize);
-                (p.cast::<i8>(), std::mem::size_of::<N>())
+                let p = self.nodes.as_ptr().wrapping_add(c.index() as usize);
+                (p.cast::<i8>(), std::mem::size_of::<WideNode>())
             };
             // Blocks are 16-byte aligned, so the last byte may sit one line further.
             for offset in (0..bytes).step_by(64).chain([bytes - 1]) {
@@ -92,15 +73,14 @@ impl Bvh {
             }
         }
         #[cfg(not(target_arch = "x86_64"))]
-        let _ = (nodes, c);
+        let _ = c;
     }
 
     /// The one traversal loop. `ANY` stops at the first hit (shadow rays);
     /// `COUNT` records the work done into `stats` (compiled out otherwise).
     #[inline(always)]
-    pub(super) fn traverse_with<B: BoxTest, N: WideNode, const ANY: bool, const COUNT: bool>(
+    pub(super) fn traverse_with<B: BoxTest, const ANY: bool, const COUNT: bool>(
         &self,
-        nodes: &[N],
         ray: &Ray,
         stats: &mut TraversalStats,
     ) -> Option<PrimHit> {
@@ -118,7 +98,7 @@ impl Bvh {
         let mut entry = [0.0f32; WIDTH];
         loop {
             if !cur.is_leaf() {
-                let node = &nodes[cur.index() as usize];
+                let node = &self.nodes[cur.index() as usize];
                 if COUNT {
                     stats.nodes += 1;
                 }
@@ -129,7 +109,7 @@ impl Bvh {
                 // slightly slower: 0.69 vs 0.72 of Embree, incoherent, 1M mesh.)
                 let mut ahead = mask;
                 while ahead != 0 {
-                    self.prefetch(nodes, node.child(ahead.trailing_zeros() as usize));
+                    self.prefetch(node.child(ahead.trailing_zeros() as usize));
                     ahead &= ahead - 1;
                 }
                 if mask != 0 {
