@@ -143,13 +143,16 @@ fn plan_node(area: f32, prims: u8, a: &Planned, b: &Planned) -> (Plan, Planned) 
     // shared[j], with the slots of the first child: j + 1 slots split between
     // both, each child given no more than it can fill.
     let mut shared = [(f32::INFINITY, 0u8); WIDTH];
-    for (j, best) in shared.iter_mut().enumerate().take(slots).skip(1) {
+    for (j, slot) in shared.iter_mut().enumerate().take(slots).skip(1) {
+        // The best so far in locals: through the array, each update waited on the last.
+        let mut best = (f32::INFINITY, 0u8);
         for k in j.saturating_sub(b.slots)..j.min(a.slots) {
             let cost = a.costs[k] + b.costs[j - 1 - k];
             if cost < best.0 {
-                *best = (cost, k as u8 + 1);
+                best = (cost, k as u8 + 1);
             }
         }
+        *slot = best;
     }
     let full = shared[slots - 1];
     let mut plan = Plan {
@@ -166,7 +169,7 @@ fn plan_node(area: f32, prims: u8, a: &Planned, b: &Planned) -> (Plan, Planned) 
     };
     costs[0] = wide_node.min(leaf);
     plan.split[0] = u8::from(leaf > wide_node);
-    for j in 1..WIDTH {
+    for j in 1..slots {
         if shared[j].0 < costs[j - 1] {
             costs[j] = shared[j].0;
             plan.split[j] = shared[j].1;
@@ -174,6 +177,9 @@ fn plan_node(area: f32, prims: u8, a: &Planned, b: &Planned) -> (Plan, Planned) 
             costs[j] = costs[j - 1];
         }
     }
+    // More slots than the subtree can fill cost what it costs in all it can.
+    let filled = costs[slots - 1];
+    costs[slots..].fill(filled);
     (plan, Planned { costs, slots })
 }
 
