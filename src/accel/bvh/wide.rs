@@ -2,15 +2,16 @@
 //! per axis (structure of arrays), so one SIMD pass tests a ray against every
 //! child box and yields the entry distances used to visit them nearest first.
 //! The builder's binary tree is collapsed into this layout by [`super::collapse`].
+//!
 //! Why 16 wide: against 8 wide (trees otherwise built alike, interleaved in one
 //! process on this machine, AMD EPYC, 1 thread), the 998k-triangle mesh traced
 //! incoherent rays 1.14× and shadow rays 1.15× faster, with 5.7 instead of 7.6
 //! node visits per incoherent ray: its traversal waits on memory, and a level
 //! less is a dependent cache miss less. CBbunny (in cache): incoherent 1.08×,
-//! shadow 1.11×, camera 0.98×. A 16-wide node is two AVX2 passes. (Before the
-//! quantised nodes and the SAH-optimal collapse, 8 wide had beaten 4 wide: 1.7×
-//! the nodes and rays visiting more of them.) The width is this one constant;
-//! 4, 8 and 16 keep compiling.
+//! shadow 1.11×, camera 0.98×. A 16-wide node is two AVX2 passes. (With the
+//! earlier greedy collapse, 8 wide had beaten 4 wide: 4 wide made 1.7× the
+//! nodes and rays visited more of them.) The width is this one constant; 4, 8
+//! and 16 keep compiling.
 //!
 //! Child boxes quantised to a byte per coordinate (Embree's compressed nodes;
 //! 192 instead of 448 bytes a node, bounds checked to contain the exact ones)
