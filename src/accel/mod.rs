@@ -162,7 +162,7 @@ impl AccelKind {
         match self {
             AccelKind::Auto { bvh, embree } => choose_auto_for(
                 scene.num_prims(),
-                cfg!(any(feature = "embree", feature = "embree4")),
+                cfg!(any(feature = "embree", feature = "embree4")).then_some(AUTO_EMBREE_MIN_PRIMS),
                 bvh,
                 embree,
             ),
@@ -363,14 +363,15 @@ pub fn tracing_pool(
 }
 
 /// `--accel auto`: scenes with at least this many primitives go to Embree (when
-/// compiled in), smaller ones to the native BVH. It comes from `ember bench accel`
-/// runs, native and robust Embree interleaved on displaced spheres of several sizes
-/// (BENCHMARKS.md, "Where `--accel auto` switches"; `scripts/benchmarks` prints the
-/// measured crossover beside this value). The sweep behind 85,000 had the native
-/// tree ahead on CBbunny (28.6k) and behind from 249k; a short run on a loaded
-/// machine found Embree ahead from about 12k, so the value is due to be reset from
-/// the full run once the wide native BVH (issue 8) has landed.
-pub const AUTO_EMBREE_MIN_PRIMS: usize = 85_000;
+/// compiled in), smaller ones to the native BVH; `None`: the native BVH at every
+/// size. It comes from `ember bench accel` runs, native and robust Embree
+/// interleaved on displaced spheres of several sizes (BENCHMARKS.md, "Where
+/// `--accel auto` switches"; `scripts/benchmarks` prints the measured crossover
+/// beside this value). With the 16-wide native tree, native SAH traced incoherent,
+/// shadow and camera rays faster than robust Embree on every mesh measured, 12k to
+/// 4M triangles, at 1 and 2 threads: there is no crossover to switch at. (The
+/// earlier 8-wide tree fell behind from about 10k–250k primitives; this was 85,000.)
+pub const AUTO_EMBREE_MIN_PRIMS: Option<usize> = None;
 
 /// What `--accel auto` picks for a scene, and why (for `ember info`).
 #[derive(Clone, Debug, PartialEq, Eq)]
@@ -386,35 +387,42 @@ pub fn choose_auto(scene: &Scene) -> AutoChoice {
     AccelKind::default().resolve(scene)
 }
 
+/// `crossover`: `None` without Embree in this build, else the crossover to use.
 fn choose_auto_for(
     prims: usize,
-    embree_available: bool,
+    crossover: Option<Option<usize>>,
     bvh: BvhBuilder,
     quality: EmbreeQuality,
 ) -> AutoChoice {
     let native = AccelKind::Native(bvh);
-    if !embree_available {
+    let Some(crossover) = crossover else {
         return AutoChoice {
             kind: native,
             reason: "this build has no Embree".into(),
         };
-    }
-    if prims >= AUTO_EMBREE_MIN_PRIMS {
-        AutoChoice {
-            kind: AccelKind::embree(quality),
-            reason: format!(
-                "{prims} primitives, at or above the crossover of {AUTO_EMBREE_MIN_PRIMS} \
-                 from which Embree traced faster (BENCHMARKS.md)"
-            ),
-        }
-    } else {
-        AutoChoice {
+    };
+    match crossover {
+        None => AutoChoice {
             kind: native,
             reason: format!(
-                "{prims} primitives, below the crossover of {AUTO_EMBREE_MIN_PRIMS} \
+                "{prims} primitives; the native BVH traced faster than robust Embree on \
+                 every scene measured, so auto never switches (BENCHMARKS.md)"
+            ),
+        },
+        Some(from) if prims >= from => AutoChoice {
+            kind: AccelKind::embree(quality),
+            reason: format!(
+                "{prims} primitives, at or above the crossover of {from} \
                  from which Embree traced faster (BENCHMARKS.md)"
             ),
-        }
+        },
+        Some(from) => AutoChoice {
+            kind: native,
+            reason: format!(
+                "{prims} primitives, below the crossover of {from} \
+                 from which Embree traced faster (BENCHMARKS.md)"
+            ),
+        },
     }
 }
 
@@ -461,20 +469,25 @@ mod tests {
     #[test]
     fn auto_picks_by_primitive_count() {
         let (sah, med) = (BvhBuilder::Sah, EmbreeQuality::Medium);
-        let small = choose_auto_for(14, true, sah, med);
+        let at = Some(Some(85_000));
+        let small = choose_auto_for(14, at, sah, med);
         assert_eq!(small.kind, AccelKind::Native(BvhBuilder::Sah));
         assert!(small.reason.contains("14 primitives"), "{}", small.reason);
-        let big = choose_auto_for(AUTO_EMBREE_MIN_PRIMS, true, sah, med);
+        let big = choose_auto_for(85_000, at, sah, med);
         assert_eq!(big.kind, AccelKind::embree(EmbreeQuality::Medium));
-        let without = choose_auto_for(10 * AUTO_EMBREE_MIN_PRIMS, false, sah, med);
+        let without = choose_auto_for(850_000, None, sah, med);
         assert_eq!(without.kind, AccelKind::Native(BvhBuilder::Sah));
+        let never = choose_auto_for(usize::MAX, Some(None), sah, med);
+        assert_eq!(never.kind, AccelKind::Native(BvhBuilder::Sah));
+        assert!(never.reason.contains("never switches"), "{}", never.reason);
     }
 
     #[test]
     fn auto_keeps_the_requested_builder_and_quality() {
-        let mid = choose_auto_for(10, true, BvhBuilder::Midpoint, EmbreeQuality::High);
+        let at = Some(Some(85_000));
+        let mid = choose_auto_for(10, at, BvhBuilder::Midpoint, EmbreeQuality::High);
         assert_eq!(mid.kind, AccelKind::Native(BvhBuilder::Midpoint));
-        let high = choose_auto_for(1 << 20, true, BvhBuilder::Midpoint, EmbreeQuality::High);
+        let high = choose_auto_for(1 << 20, at, BvhBuilder::Midpoint, EmbreeQuality::High);
         assert_eq!(high.kind, AccelKind::embree(EmbreeQuality::High));
         assert_eq!(high.kind.to_string(), "Embree high robust");
     }

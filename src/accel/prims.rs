@@ -154,6 +154,46 @@ impl SphereStore {
 }
 
 impl TriBlock {
+    /// The blocks of `leaves` into `blocks` (emptied first, its capacity kept when
+    /// it suffices), in parallel: leaf `(first, count)` holds the primitives
+    /// `order[first..first + count]`. Leaves follow the tree, so their triangles
+    /// are scattered over the scene: each run of leaves asks the cache for the
+    /// triangles of the leaves a few steps ahead, and for their corners once the
+    /// triangles are in.
+    pub fn make_all(
+        scene: &Scene,
+        leaves: &[(u32, u32)],
+        order: &[PrimId],
+        blocks: &mut Vec<TriBlock>,
+    ) {
+        const RUN: usize = 512;
+        const AHEAD: usize = 16;
+        let ids = |l: usize| {
+            let (first, count) = leaves[l];
+            &order[first as usize..(first + count) as usize]
+        };
+        blocks.clear();
+        blocks.reserve_exact(leaves.len());
+        blocks.spare_capacity_mut()[..leaves.len()]
+            .par_chunks_mut(RUN)
+            .enumerate()
+            .for_each(|(run, out)| {
+                let start = run * RUN;
+                for (k, slot) in out.iter_mut().enumerate() {
+                    let l = start + k;
+                    if l + AHEAD < leaves.len() {
+                        ask_cache_for_triangles(scene, ids(l + AHEAD), false);
+                    }
+                    if l + AHEAD / 2 < leaves.len() {
+                        ask_cache_for_triangles(scene, ids(l + AHEAD / 2), true);
+                    }
+                    slot.write(TriBlock::new(scene, ids(l)));
+                }
+            });
+        // SAFETY: the loop above wrote every one of the first `leaves.len()` slots.
+        unsafe { blocks.set_len(leaves.len()) };
+    }
+
     /// The primitives `ids` (at most four, hittable) of `scene`.
     pub fn new(scene: &Scene, ids: &[PrimId]) -> Self {
         let ntri = scene.triangles.len();
@@ -307,6 +347,37 @@ impl TriBlock {
     }
 }
 
+/// Prefetches the index records of the triangles among `ids`, or with
+/// `corners`, their corner positions (reading the records, which should be in
+/// the cache by then).
+#[inline(always)]
+fn ask_cache_for_triangles(scene: &Scene, ids: &[PrimId], corners: bool) {
+    #[cfg(target_arch = "x86_64")]
+    {
+        use std::arch::x86_64::{_mm_prefetch, _MM_HINT_T0};
+        let prefetch = |p: *const i8| {
+            // SAFETY: a prefetch never faults; the addresses are in bounds anyway.
+            unsafe { _mm_prefetch::<_MM_HINT_T0>(p) }
+        };
+        for &id in ids {
+            let Some(t) = scene.triangles.get(id as usize) else {
+                continue;
+            };
+            if !corners {
+                prefetch((t as *const crate::scene::Triangle).cast());
+                continue;
+            }
+            for &v in &t.v {
+                if let Some(p) = scene.positions.get(v as usize) {
+                    prefetch((p as *const Vec3).cast());
+                }
+            }
+        }
+    }
+    #[cfg(not(target_arch = "x86_64"))]
+    let _ = (scene, ids, corners);
+}
+
 /// Ids of the primitives that can ever be hit (finite, non-degenerate), with
 /// their bounds. Both the BVH and the brute-force oracle start from this list,
 /// so they agree on what exists.
@@ -315,25 +386,33 @@ pub(crate) fn hittable_prims(scene: &Scene) -> Vec<(PrimId, Aabb)> {
 }
 
 /// [`hittable_prims`] made into records by `record(id, bounds)` on the way (no
-/// list in between); checked in parallel, the list is in id order.
+/// list in between); in parallel, one pass over the scene, the list in id order.
 pub(crate) fn hittable_prims_as<T: Send>(
     scene: &Scene,
     record: impl Fn(PrimId, Aabb) -> T + Sync,
 ) -> Vec<T> {
-    let hittable: Vec<bool> = (0..scene.num_prims())
+    let n = scene.num_prims();
+    let (mut records, mut hittable) = (Vec::with_capacity(n), Vec::with_capacity(n));
+    // Each primitive's check and bounds read the same memory, while it is cached.
+    (0..n)
         .into_par_iter()
-        .map(|i| is_hittable(scene, i))
-        .collect();
-    let make = |i: usize| record(i as PrimId, scene.prim_bounds(i as PrimId));
+        .map(|i| {
+            let h = is_hittable(scene, i);
+            let bounds = if h {
+                scene.prim_bounds(i as PrimId)
+            } else {
+                Aabb::EMPTY
+            };
+            (record(i as PrimId, bounds), h)
+        })
+        .unzip_into_vecs(&mut records, &mut hittable);
     if hittable.iter().all(|&h| h) {
-        // The usual case: an indexed map collects straight into the list,
-        // where a filter would gather pieces and copy them.
-        return (0..hittable.len()).into_par_iter().map(make).collect();
+        return records;
     }
-    (0..hittable.len())
+    records
         .into_par_iter()
-        .filter(|&i| hittable[i])
-        .map(make)
+        .zip(hittable)
+        .filter_map(|(r, h)| h.then_some(r))
         .collect()
 }
 

@@ -349,15 +349,18 @@ impl AccelBenchReport {
 
     /// One line on [`AccelBenchReport::crossover`] against the crossover `--accel auto` uses.
     pub fn crossover_note(&self) -> String {
-        let now = accel::AUTO_EMBREE_MIN_PRIMS;
+        let now = match accel::AUTO_EMBREE_MIN_PRIMS {
+            Some(p) => format!("--accel auto switches at {p}"),
+            None => "--accel auto never switches to Embree".to_string(),
+        };
         match self.crossover() {
             Some(p) => format!(
                 "Robust Embree is ahead of native SAH (incoherent and shadow rays, every thread count) \
-                 on every measured scene from {p} primitives up; --accel auto switches at {now}."
+                 on every measured scene from {p} primitives up; {now}."
             ),
             None => format!(
                 "Native SAH keeps up with robust Embree on the largest measured scene \
-                 (incoherent or shadow rays); --accel auto switches at {now}."
+                 (incoherent or shadow rays); {now}."
             ),
         }
     }

@@ -7,6 +7,7 @@ mod build;
 mod build_midpoint;
 mod build_sah;
 mod collapse;
+mod huge_pages;
 mod node;
 mod packet;
 mod traverse;
@@ -64,9 +65,7 @@ impl Bvh {
         };
         let order: Vec<PrimId> = build_prims.par_iter().map(|p| p.id).collect();
         drop(build_prims);
-        let mut tree = collapse(&binary, scene, &order);
-        tree.nodes.shrink_to_fit();
-        tree.blocks.shrink_to_fit();
+        let tree = collapse(&binary, scene, &order);
         let root_bounds = binary.first().map(|n| n.bounds());
         let mut bvh = Bvh {
             nodes: tree.nodes,
@@ -105,18 +104,16 @@ impl Bvh {
             stats.max_depth = stats.max_depth.max(depth);
             if r.is_leaf() {
                 stats.leaves += 1;
-                stats.prims += r.count as usize;
+                stats.prims += r.count() as usize;
                 cost += area * f64::from(build_sah::INTERSECTION_COST);
                 continue;
             }
             stats.nodes += 1;
             cost += area * f64::from(build_sah::TRAVERSAL_COST);
-            let node = &self.nodes[r.index as usize];
-            for c in 0..WIDTH {
+            let node = &self.nodes[r.index() as usize];
+            for c in 0..node.len() {
                 let b = node.child_bounds(c);
-                if !b.is_empty() {
-                    stack.push((node.children[c], depth + 1, rel(b.surface_area())));
-                }
+                stack.push((node.child(c), depth + 1, rel(b.surface_area())));
             }
         }
         stats.sah_cost = if root_area > 0.0 { cost as f32 } else { 0.0 };

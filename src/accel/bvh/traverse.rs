@@ -59,10 +59,10 @@ impl Bvh {
         {
             use std::arch::x86_64::{_mm_prefetch, _MM_HINT_T0};
             let (p, bytes) = if c.is_leaf() {
-                let p = self.blocks.as_ptr().wrapping_add(c.index as usize);
+                let p = self.blocks.as_ptr().wrapping_add(c.index() as usize);
                 (p.cast::<i8>(), std::mem::size_of::<TriBlock>())
             } else {
-                let p = self.nodes.as_ptr().wrapping_add(c.index as usize);
+                let p = self.nodes.as_ptr().wrapping_add(c.index() as usize);
                 (p.cast::<i8>(), std::mem::size_of::<WideNode>())
             };
             // Blocks are 16-byte aligned, so the last byte may sit one line further.
@@ -110,7 +110,7 @@ impl Bvh {
         let mut entry = [0.0f32; WIDTH];
         loop {
             if !cur.is_leaf() {
-                let node = &self.nodes[cur.index as usize];
+                let node = &self.nodes[cur.index() as usize];
                 if COUNT {
                     stats.nodes += 1;
                 }
@@ -121,21 +121,21 @@ impl Bvh {
                 // slightly slower: 0.69 vs 0.72 of Embree, incoherent, 1M mesh.)
                 let mut ahead = mask;
                 while ahead != 0 {
-                    self.prefetch(node.children[ahead.trailing_zeros() as usize]);
+                    self.prefetch(node.child(ahead.trailing_zeros() as usize));
                     ahead &= ahead - 1;
                 }
                 if mask != 0 {
                     let first = mask.trailing_zeros() as usize;
                     mask &= mask - 1;
                     if mask == 0 {
-                        cur = node.children[first];
+                        cur = node.child(first);
                         continue;
                     }
                     // Push every entered child, then sort the pushed run so the
                     // nearest is on top, and take it.
                     let base = sp;
                     stack[sp] = MaybeUninit::new(Pending {
-                        child: node.children[first],
+                        child: node.child(first),
                         entry: entry[first],
                     });
                     sp += 1;
@@ -143,7 +143,7 @@ impl Bvh {
                         let c = mask.trailing_zeros() as usize;
                         mask &= mask - 1;
                         let p = Pending {
-                            child: node.children[c],
+                            child: node.child(c),
                             entry: entry[c],
                         };
                         let mut j = sp;
@@ -166,9 +166,9 @@ impl Bvh {
                 }
             } else {
                 if COUNT {
-                    stats.prims += cur.count;
+                    stats.prims += cur.count();
                 }
-                let block = &self.blocks[cur.index as usize];
+                let block = &self.blocks[cur.index() as usize];
                 if ANY {
                     if let Some(hit) = block.intersect_any(&self.spheres, &prim_ray, t_max) {
                         return Some(hit);

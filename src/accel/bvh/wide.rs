@@ -3,38 +3,73 @@
 //! child box and yields the entry distances used to visit them nearest first.
 //! The builder's binary tree is collapsed into this layout by [`super::collapse`].
 //!
-//! Why 8 wide: against 4 wide (SSE box test, `WIDTH = 4`; both builds otherwise
-//! equal), interleaved runs on this machine (AMD EPYC, CPU time, 1 thread, native
-//! over Embree robust) gave on the 998k-triangle mesh incoherent 0.71-0.73 vs
-//! 0.66-0.69, shadow 0.71-0.74 vs 0.62-0.68, camera 1.13-1.15 vs 0.98-1.00, and on
-//! CBbunny incoherent 1.05-1.20 vs 0.91-0.93, shadow 1.00-1.24 vs 0.79-0.93. With
-//! 4 wide the tree has 1.7× the nodes (131k vs 79k) and a higher SAH cost (24.0 vs
-//! 16.9), so rays visit more nodes; 8 wide wastes lanes (4.3 children per node on
-//! average) but one AVX2 pass costs about what an SSE pass does. The width is this
-//! one constant plus the SIMD test (both widths are kept compiling).
+//! Why 16 wide: against 8 wide (trees otherwise built alike, interleaved in one
+//! process on this machine, AMD EPYC, 1 thread), the 998k-triangle mesh traced
+//! incoherent rays 1.14× and shadow rays 1.15× faster, with 5.7 instead of 7.6
+//! node visits per incoherent ray: its traversal waits on memory, and a level
+//! less is a dependent cache miss less. CBbunny (in cache): incoherent 1.08×,
+//! shadow 1.11×, camera 0.98×. A 16-wide node is two AVX2 passes. (With the
+//! earlier greedy collapse, 8 wide had beaten 4 wide: 4 wide made 1.7× the
+//! nodes and rays visited more of them.) The width is this one constant; 4, 8
+//! and 16 keep compiling.
+//!
+//! Child boxes quantised to a byte per coordinate (Embree's compressed nodes;
+//! 192 instead of 448 bytes a node, bounds checked to contain the exact ones)
+//! were measured and dropped: at 16 wide, against these `f32` nodes on displaced
+//! spheres (interleaved, 1 thread, loaded machine), incoherent rays were
+//! 0.79-0.89× as fast from 30k to 500k triangles and 0.99-1.05× from 1M to 4M,
+//! shadow rays 0.82-1.20×, camera rays 0.66-0.95× throughout: decoding costs
+//! more than the bytes save once a level less has cut the misses. (At 8 wide
+//! they had won on the 1M mesh.)
 
 use crate::geometry::ray::gamma;
 use crate::geometry::{Aabb, Ray};
 
 /// Children per node.
-pub(crate) const WIDTH: usize = 8;
+pub(crate) const WIDTH: usize = 16;
 
 /// Slack on the exit distance so rounding in the slab test never culls a box the
 /// ray touches (pbrt's `1 + 2γ(3)`).
 pub(crate) const EXIT_SLACK: f32 = 1.0 + 2.0 * gamma(3);
 
-/// A reference to a child: an inner node (`count == 0`, `index` into the wide
-/// nodes) or a leaf (`count` primitives in block `index`).
+/// A reference to a child in 32 bits: an inner node (`count() == 0`, `index()`
+/// into the wide nodes) or a leaf (`count()` primitives in block `index()`).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
-pub(crate) struct ChildRef {
-    pub index: u32,
-    pub count: u32,
-}
+pub(crate) struct ChildRef(u32);
 
 impl ChildRef {
+    /// Leaves hold at most one block of 4, so the count takes 3 bits.
+    const COUNT_BITS: u32 = 3;
+
+    pub fn node(index: u32) -> Self {
+        assert!(index < 1 << (32 - Self::COUNT_BITS), "too many nodes");
+        ChildRef(index << Self::COUNT_BITS)
+    }
+
+    pub fn leaf(block: u32, count: u32) -> Self {
+        assert!(block < 1 << (32 - Self::COUNT_BITS), "too many leaf blocks");
+        assert!((1..=4).contains(&count));
+        ChildRef(block << Self::COUNT_BITS | count)
+    }
+
     #[inline(always)]
     pub fn is_leaf(self) -> bool {
-        self.count != 0
+        self.count() != 0
+    }
+
+    #[inline(always)]
+    pub fn index(self) -> u32 {
+        self.0 >> Self::COUNT_BITS
+    }
+
+    #[inline(always)]
+    pub fn count(self) -> u32 {
+        self.0 & ((1 << Self::COUNT_BITS) - 1)
+    }
+
+    /// The same reference with its index moved by `shift` (a subtree appended).
+    pub fn shifted(self, shift: u32) -> Self {
+        ChildRef(self.0 + (shift << Self::COUNT_BITS))
     }
 }
 
@@ -43,11 +78,12 @@ impl ChildRef {
 #[derive(Clone, Copy, Debug, PartialEq)]
 #[repr(C, align(32))]
 pub(crate) struct WideNode {
-    pub lo: [[f32; WIDTH]; 3],
-    pub hi: [[f32; WIDTH]; 3],
-    pub children: [ChildRef; WIDTH],
+    lo: [[f32; WIDTH]; 3],
+    hi: [[f32; WIDTH]; 3],
+    children: [ChildRef; WIDTH],
 }
 
+/// A node without children (no ray enters it).
 impl Default for WideNode {
     fn default() -> Self {
         WideNode {
@@ -59,11 +95,136 @@ impl Default for WideNode {
 }
 
 impl WideNode {
+    /// A node over `children` (1 to [`WIDTH`]), each with its exact box.
+    pub fn new(children: &[(Aabb, ChildRef)]) -> Self {
+        assert!(!children.is_empty() && children.len() <= WIDTH);
+        let mut node = WideNode::default();
+        for (c, &(b, child)) in children.iter().enumerate() {
+            for a in 0..3 {
+                node.lo[a][c] = b.min[a];
+                node.hi[a][c] = b.max[a];
+            }
+            node.children[c] = child;
+        }
+        node
+    }
+
+    /// The child in slot `c` (a slot in use).
+    #[inline(always)]
+    pub fn child(&self, c: usize) -> ChildRef {
+        self.children[c]
+    }
+
+    /// The slots in use.
+    pub fn children_mut(&mut self) -> &mut [ChildRef] {
+        let len = self.len();
+        &mut self.children[..len]
+    }
+
     pub fn child_bounds(&self, c: usize) -> Aabb {
         Aabb::new(
             glam::Vec3::new(self.lo[0][c], self.lo[1][c], self.lo[2][c]),
             glam::Vec3::new(self.hi[0][c], self.hi[1][c], self.hi[2][c]),
         )
+    }
+
+    /// Slots in use (children fill the slots from slot 0).
+    pub fn len(&self) -> usize {
+        (0..WIDTH)
+            .take_while(|&c| self.lo[0][c] <= self.hi[0][c])
+            .count()
+    }
+
+    /// The portable box test; `f32::max`/`min` return the non-NaN operand.
+    #[inline(always)]
+    fn hits_scalar(&self, ray: &WideRay, t_max: f32, entry: &mut [f32; WIDTH]) -> u32 {
+        let mut mask = 0;
+        for (c, entry_c) in entry.iter_mut().enumerate() {
+            let mut t0 = ray.t_min;
+            let mut t1 = t_max;
+            for a in 0..3 {
+                let (lo, hi) = (self.lo[a][c], self.hi[a][c]);
+                let (near, far) = if ray.neg[a] { (hi, lo) } else { (lo, hi) };
+                t0 = t0.max((near - ray.o[a]) * ray.inv[a]);
+                t1 = t1.min((far - ray.o[a]) * ray.inv[a]);
+            }
+            *entry_c = t0;
+            if t0 <= t1 * EXIT_SLACK {
+                mask |= 1 << c;
+            }
+        }
+        mask
+    }
+
+    /// Eight children per register (16-wide nodes take two passes).
+    /// `_mm256_max_ps(a, b)` and `_mm256_min_ps(a, b)` return `b` when either
+    /// operand is NaN, so NaN slab distances (first operand) leave the
+    /// accumulated interval as it was, like the scalar test.
+    #[cfg(target_arch = "x86_64")]
+    #[inline(always)]
+    ///
+    /// # Safety
+    /// Only from code compiled with `avx2`, on a CPU that has it.
+    unsafe fn hits_avx2(&self, ray: &WideRay, t_max: f32, entry: &mut [f32; WIDTH]) -> u32 {
+        use std::arch::x86_64::*;
+        const _: () = assert!(WIDTH == 16 || WIDTH == 8 || WIDTH == 4);
+        if WIDTH == 4 {
+            return hits4(self, ray, t_max, entry);
+        }
+        let mut mask = 0;
+        for half in 0..WIDTH / 8 {
+            let lanes = half * 8;
+            // The node is 32-byte aligned and each run of eight bounds is 32 bytes.
+            let mut t0 = _mm256_set1_ps(ray.t_min);
+            let mut t1 = _mm256_set1_ps(t_max);
+            for a in 0..3 {
+                let (near, far) = if ray.neg[a] {
+                    (&self.hi[a], &self.lo[a])
+                } else {
+                    (&self.lo[a], &self.hi[a])
+                };
+                let o = _mm256_set1_ps(ray.o[a]);
+                let inv = _mm256_set1_ps(ray.inv[a]);
+                let bn = _mm256_load_ps(near[lanes..].as_ptr());
+                let bf = _mm256_load_ps(far[lanes..].as_ptr());
+                t0 = _mm256_max_ps(_mm256_mul_ps(_mm256_sub_ps(bn, o), inv), t0);
+                t1 = _mm256_min_ps(_mm256_mul_ps(_mm256_sub_ps(bf, o), inv), t1);
+            }
+            let slack = _mm256_mul_ps(t1, _mm256_set1_ps(EXIT_SLACK));
+            let inside = _mm256_cmp_ps::<_CMP_LE_OQ>(t0, slack);
+            _mm256_storeu_ps(entry[lanes..].as_mut_ptr(), t0);
+            mask |= (_mm256_movemask_ps(inside) as u32) << lanes;
+        }
+        mask
+    }
+}
+
+/// The SSE version for 4-wide nodes (the same operations on four lanes).
+#[cfg(target_arch = "x86_64")]
+#[inline(always)]
+fn hits4(node: &WideNode, ray: &WideRay, t_max: f32, entry: &mut [f32; WIDTH]) -> u32 {
+    use std::arch::x86_64::*;
+    // SAFETY: SSE is part of x86-64; each row holds WIDTH = 4 floats at a 16-byte
+    // aligned offset of the 32-byte aligned node.
+    unsafe {
+        let mut t0 = _mm_set1_ps(ray.t_min);
+        let mut t1 = _mm_set1_ps(t_max);
+        for a in 0..3 {
+            let (near, far) = if ray.neg[a] {
+                (&node.hi[a], &node.lo[a])
+            } else {
+                (&node.lo[a], &node.hi[a])
+            };
+            let o = _mm_set1_ps(ray.o[a]);
+            let inv = _mm_set1_ps(ray.inv[a]);
+            let tn = _mm_mul_ps(_mm_sub_ps(_mm_load_ps(near.as_ptr()), o), inv);
+            let tf = _mm_mul_ps(_mm_sub_ps(_mm_load_ps(far.as_ptr()), o), inv);
+            t0 = _mm_max_ps(tn, t0);
+            t1 = _mm_min_ps(tf, t1);
+        }
+        let inside = _mm_cmple_ps(t0, _mm_mul_ps(t1, _mm_set1_ps(EXIT_SLACK)));
+        _mm_storeu_ps(entry.as_mut_ptr(), t0);
+        _mm_movemask_ps(inside) as u32
     }
 }
 
@@ -99,35 +260,17 @@ pub(crate) trait BoxTest {
     fn hits(ray: &WideRay, node: &WideNode, t_max: f32, entry: &mut [f32; WIDTH]) -> u32;
 }
 
-/// Portable version; `f32::max`/`min` return the non-NaN operand.
+/// The portable box test.
 pub(crate) struct ScalarBoxes;
 
 impl BoxTest for ScalarBoxes {
     #[inline(always)]
     fn hits(ray: &WideRay, node: &WideNode, t_max: f32, entry: &mut [f32; WIDTH]) -> u32 {
-        let mut mask = 0;
-        for (c, entry_c) in entry.iter_mut().enumerate() {
-            let mut t0 = ray.t_min;
-            let mut t1 = t_max;
-            for a in 0..3 {
-                let (lo, hi) = (node.lo[a][c], node.hi[a][c]);
-                let (near, far) = if ray.neg[a] { (hi, lo) } else { (lo, hi) };
-                t0 = t0.max((near - ray.o[a]) * ray.inv[a]);
-                t1 = t1.min((far - ray.o[a]) * ray.inv[a]);
-            }
-            *entry_c = t0;
-            if t0 <= t1 * EXIT_SLACK {
-                mask |= 1 << c;
-            }
-        }
-        mask
+        node.hits_scalar(ray, t_max, entry)
     }
 }
 
-/// AVX2 version, eight children per register. `_mm256_max_ps(a, b)` and
-/// `_mm256_min_ps(a, b)` return `b` when either operand is NaN, so NaN slab
-/// distances (first operand) leave the accumulated interval as it was, exactly
-/// like the scalar version.
+/// The AVX2 box test, all children in one pass.
 #[cfg(target_arch = "x86_64")]
 pub(crate) struct Avx2Boxes;
 
@@ -135,64 +278,9 @@ pub(crate) struct Avx2Boxes;
 impl BoxTest for Avx2Boxes {
     #[inline(always)]
     fn hits(ray: &WideRay, node: &WideNode, t_max: f32, entry: &mut [f32; WIDTH]) -> u32 {
-        use std::arch::x86_64::*;
-        const _: () = assert!(WIDTH == 8 || WIDTH == 4);
-        if WIDTH == 4 {
-            return hits4(ray, node, t_max, entry);
-        }
         // SAFETY: only reached from functions compiled with `avx2` after runtime
-        // detection (see `simd_available`); WideNode is 32-byte aligned and each
-        // row is 32 bytes, so the aligned loads are in bounds.
-        unsafe {
-            let mut t0 = _mm256_set1_ps(ray.t_min);
-            let mut t1 = _mm256_set1_ps(t_max);
-            for a in 0..3 {
-                let (near, far) = if ray.neg[a] {
-                    (&node.hi[a], &node.lo[a])
-                } else {
-                    (&node.lo[a], &node.hi[a])
-                };
-                let o = _mm256_set1_ps(ray.o[a]);
-                let inv = _mm256_set1_ps(ray.inv[a]);
-                let tn = _mm256_mul_ps(_mm256_sub_ps(_mm256_load_ps(near.as_ptr()), o), inv);
-                let tf = _mm256_mul_ps(_mm256_sub_ps(_mm256_load_ps(far.as_ptr()), o), inv);
-                t0 = _mm256_max_ps(tn, t0);
-                t1 = _mm256_min_ps(tf, t1);
-            }
-            let inside =
-                _mm256_cmp_ps::<_CMP_LE_OQ>(t0, _mm256_mul_ps(t1, _mm256_set1_ps(EXIT_SLACK)));
-            _mm256_storeu_ps(entry.as_mut_ptr(), t0);
-            _mm256_movemask_ps(inside) as u32
-        }
-    }
-}
-
-/// The SSE version for 4-wide nodes (the same operations on four lanes).
-#[cfg(target_arch = "x86_64")]
-#[inline(always)]
-fn hits4(ray: &WideRay, node: &WideNode, t_max: f32, entry: &mut [f32; WIDTH]) -> u32 {
-    use std::arch::x86_64::*;
-    // SAFETY: SSE is part of x86-64; each row holds WIDTH = 4 floats at a 16-byte
-    // aligned offset of the 32-byte aligned node.
-    unsafe {
-        let mut t0 = _mm_set1_ps(ray.t_min);
-        let mut t1 = _mm_set1_ps(t_max);
-        for a in 0..3 {
-            let (near, far) = if ray.neg[a] {
-                (&node.hi[a], &node.lo[a])
-            } else {
-                (&node.lo[a], &node.hi[a])
-            };
-            let o = _mm_set1_ps(ray.o[a]);
-            let inv = _mm_set1_ps(ray.inv[a]);
-            let tn = _mm_mul_ps(_mm_sub_ps(_mm_load_ps(near.as_ptr()), o), inv);
-            let tf = _mm_mul_ps(_mm_sub_ps(_mm_load_ps(far.as_ptr()), o), inv);
-            t0 = _mm_max_ps(tn, t0);
-            t1 = _mm_min_ps(tf, t1);
-        }
-        let inside = _mm_cmple_ps(t0, _mm_mul_ps(t1, _mm_set1_ps(EXIT_SLACK)));
-        _mm_storeu_ps(entry.as_mut_ptr(), t0);
-        _mm_movemask_ps(inside) as u32
+        // detection (see `simd_available`).
+        unsafe { node.hits_avx2(ray, t_max, entry) }
     }
 }
 
@@ -217,14 +305,12 @@ mod tests {
     use glam::Vec3;
 
     fn node_with(boxes: &[Aabb]) -> WideNode {
-        let mut n = WideNode::default();
-        for (c, b) in boxes.iter().enumerate() {
-            for a in 0..3 {
-                n.lo[a][c] = b.min[a];
-                n.hi[a][c] = b.max[a];
-            }
-        }
-        n
+        let children: Vec<(Aabb, ChildRef)> = boxes
+            .iter()
+            .enumerate()
+            .map(|(c, &b)| (b, ChildRef::leaf(c as u32, 1)))
+            .collect();
+        WideNode::new(&children)
     }
 
     /// Scalar and SIMD agree bit for bit; returns the mask.
@@ -235,7 +321,8 @@ mod tests {
         #[cfg(target_arch = "x86_64")]
         if simd_available() {
             let mut e2 = [0.0; WIDTH];
-            let m2 = Avx2Boxes::hits(&wr, node, t_max, &mut e2);
+            // SAFETY: AVX2 was detected.
+            let m2 = unsafe { avx2_hits(&wr, node, t_max, &mut e2) };
             assert_eq!(m, m2, "{r:?}");
             for c in 0..WIDTH {
                 if m & 1 << c != 0 {
@@ -244,6 +331,17 @@ mod tests {
             }
         }
         m
+    }
+
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx2")]
+    unsafe fn avx2_hits(
+        wr: &WideRay,
+        node: &WideNode,
+        t_max: f32,
+        entry: &mut [f32; WIDTH],
+    ) -> u32 {
+        Avx2Boxes::hits(wr, node, t_max, entry)
     }
 
     fn two_boxes() -> WideNode {
@@ -300,7 +398,8 @@ mod tests {
                     Aabb::new(a.min(b), a.max(b))
                 })
                 .collect();
-            let n = node_with(&boxes[..1 + (v().x.abs() * 3.5) as usize % WIDTH]);
+            let boxes = &boxes[..1 + (v().x.abs() * 3.5) as usize % WIDTH];
+            let n = node_with(boxes);
             let corner = boxes[0].max;
             let rays = [
                 Ray::new(v(), v()),
@@ -314,8 +413,9 @@ mod tests {
                 Ray::new(corner, v()),
             ];
             for r in rays {
-                both(&r, &n, f32::INFINITY);
-                both(&r, &n, 1.0);
+                for t_max in [f32::INFINITY, 1.0] {
+                    both(&r, &n, t_max);
+                }
             }
         }
     }
