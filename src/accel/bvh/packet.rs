@@ -6,7 +6,6 @@
 //! hit already lies before it. Leaves test each primitive against all their rays
 //! at once. Packets that have thinned out to a few rays finish one ray at a time.
 
-use super::build::MAX_DEPTH;
 #[cfg(target_arch = "x86_64")]
 use super::wide::Avx2Boxes;
 use super::wide::{ChildRef, ScalarBoxes, EXIT_SLACK, WIDTH};
@@ -20,8 +19,13 @@ use std::mem::MaybeUninit;
 /// Rays left in a packet at or below which the rest is traced ray by ray.
 const SINGLE_RAY_BELOW: u32 = 4;
 
-/// Every level pushes at most `WIDTH − 1` children.
-const STACK: usize = MAX_DEPTH * (WIDTH - 1) + 1;
+/// Entries of the packet stack (each a lane value: 64 bytes of entry distances).
+/// Every level pushes at most `WIDTH − 1` children, so this holds trees up to
+/// [`PACKET_DEPTH`] levels deep; deeper (degenerate) trees are traced ray by ray.
+/// Sized for the tree rather than for `MAX_DEPTH`, the stack stays a few pages:
+/// a larger frame is probed page by page on every call.
+const STACK: usize = 256;
+const PACKET_DEPTH: usize = (STACK - 1) / (WIDTH - 1);
 
 struct Pending<S: Simd> {
     child: ChildRef,
@@ -86,6 +90,9 @@ impl Bvh {
     ) -> LaneBits {
         if self.blocks.is_empty() || active == 0 {
             return 0;
+        }
+        if self.stats.max_depth > PACKET_DEPTH {
+            return self.finish_alone::<S, ANY>(s, packet, self.root, active, hits);
         }
         let rays = PacketRays::new(s, packet);
         let zero = F32s::splat(s, 0.0);
