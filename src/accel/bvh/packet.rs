@@ -131,7 +131,7 @@ impl Bvh {
                 continue;
             }
             if child.is_leaf() {
-                let block = &self.blocks[child.index as usize];
+                let block = &self.blocks[child.index() as usize];
                 let hit = block.intersect_packet::<S, ANY>(s, &self.spheres, &rays, lanes, hits);
                 if ANY {
                     occluded |= hit;
@@ -141,16 +141,13 @@ impl Bvh {
                 }
                 continue;
             }
-            let node = &self.nodes[child.index as usize];
+            let node = &self.nodes[child.index() as usize];
             // Entered children, nearest last (pushed last, popped first).
             let mut entry_of = [zero; WIDTH];
             let mut order = [(0.0f32, 0u8, 0 as LaneBits); WIDTH];
             let mut n = 0;
-            for (c, entry_c) in entry_of.iter_mut().enumerate() {
-                if node.lo[0][c] > node.hi[0][c] {
-                    continue; // an empty slot
-                }
-                let (entered, t0) = box_test(s, &rays, node, c, hits.t_max);
+            for (c, entry_c) in entry_of.iter_mut().enumerate().take(node.len()) {
+                let (entered, t0) = node.hits_packet(s, &rays, c, hits.t_max);
                 let entered = entered & lanes;
                 if entered == 0 {
                     continue;
@@ -172,7 +169,7 @@ impl Bvh {
             }
             for &(_, c, entered) in &order[..n] {
                 stack[sp] = MaybeUninit::new(Pending {
-                    child: node.children[c as usize],
+                    child: node.child(c as usize),
                     lanes: entered,
                     entry: entry_of[c as usize],
                 });
@@ -225,27 +222,4 @@ impl Bvh {
         }
         occluded
     }
-}
-
-/// The slab test of child `c` against every lane, as `Avx2Boxes` does it for one
-/// ray: the lanes that enter it before their `t_max`, and their entry distances.
-#[inline(always)]
-fn box_test<S: Simd>(
-    s: S,
-    rays: &PacketRays<S>,
-    node: &super::wide::WideNode,
-    c: usize,
-    t_max: F32s<S>,
-) -> (LaneBits, F32s<S>) {
-    let o = [rays.o.x, rays.o.y, rays.o.z];
-    let mut t0 = F32s::splat(s, 0.0);
-    let mut t1 = t_max;
-    for (a, ((o, inv), neg)) in o.iter().zip(&rays.inv).zip(&rays.neg).enumerate() {
-        let (lo, hi) = (F32s::splat(s, node.lo[a][c]), F32s::splat(s, node.hi[a][c]));
-        let near = F32s::select(*neg, hi, lo);
-        let far = F32s::select(*neg, lo, hi);
-        t0 = ((near - *o) * *inv).max(t0);
-        t1 = ((far - *o) * *inv).min(t1);
-    }
-    (t0.le(t1 * F32s::splat(s, EXIT_SLACK)).bits(), t0)
 }

@@ -23,7 +23,9 @@
 //! they had won on the 1M mesh.)
 
 use crate::geometry::ray::gamma;
+use crate::accel::packet::PacketRays;
 use crate::geometry::{Aabb, Ray};
+use crate::simd::{F32s, LaneBits, Simd};
 
 /// Children per node.
 pub(crate) const WIDTH: usize = 16;
@@ -133,6 +135,30 @@ impl WideNode {
         (0..WIDTH)
             .take_while(|&c| self.lo[0][c] <= self.hi[0][c])
             .count()
+    }
+
+    /// The slab test of child `c` against every lane of a packet, as `hits_avx2`
+    /// does it for one ray: the lanes that enter it before their `t_max`, and their
+    /// entry distances.
+    #[inline(always)]
+    pub fn hits_packet<S: Simd>(
+        &self,
+        s: S,
+        rays: &PacketRays<S>,
+        c: usize,
+        t_max: F32s<S>,
+    ) -> (LaneBits, F32s<S>) {
+        let o = [rays.o.x, rays.o.y, rays.o.z];
+        let mut t0 = F32s::splat(s, 0.0);
+        let mut t1 = t_max;
+        for (a, ((o, inv), neg)) in o.iter().zip(&rays.inv).zip(&rays.neg).enumerate() {
+            let (lo, hi) = (F32s::splat(s, self.lo[a][c]), F32s::splat(s, self.hi[a][c]));
+            let near = F32s::select(*neg, hi, lo);
+            let far = F32s::select(*neg, lo, hi);
+            t0 = ((near - *o) * *inv).max(t0);
+            t1 = ((far - *o) * *inv).min(t1);
+        }
+        (t0.le(t1 * F32s::splat(s, EXIT_SLACK)).bits(), t0)
     }
 
     /// The portable box test; `f32::max`/`min` return the non-NaN operand.
