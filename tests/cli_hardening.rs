@@ -314,9 +314,10 @@ fn long_render_of(scene: &str, out: &std::path::Path, extra: &[&str]) -> std::pr
 #[test]
 fn sigint_writes_what_was_rendered_and_no_partial_file() {
     // Plain, in passes, adaptive, and light tracing (auto's choice for CBempty).
+    // Long enough to be stopped: packets render this scene at ~15 M samples/s.
     let lambertian = "CBspheres_lambertian.dae";
     for (scene, name, extra) in [
-        (lambertian, "i.png", &["-s", "4000"][..]),
+        (lambertian, "i.png", &["-s", "40000"][..]),
         (lambertian, "i.exr", &["--checkpoint", "1000"][..]),
         (
             lambertian,
