@@ -3,7 +3,7 @@
 
 pub mod collada;
 
-use crate::geometry::{offset_ray_origin, ray::gamma, Aabb, Ray};
+use crate::geometry::{offset_ray_origin, ray::gamma, sphere::sphere_spawn_origin, Aabb, Ray};
 use crate::lights::{AreaLight, Light};
 use crate::materials::Material;
 use crate::Color;
@@ -121,6 +121,9 @@ pub struct SurfaceInteraction {
     pub prim: PrimId,
     pub material: u32,
     pub light: u32,
+    /// The sphere `(centre, radius)` the point lies on, if it is a sphere's: rays leave
+    /// it from within an ulp of `p` (`sphere_spawn_origin`), not by the error bound.
+    pub sphere: Option<(Vec3, f32)>,
 }
 
 impl SurfaceInteraction {
@@ -131,15 +134,23 @@ impl SurfaceInteraction {
     pub fn spawn_ray(&self, w: Vec3) -> Ray {
         Ray {
             skip: self.prim,
-            ..Ray::new(offset_ray_origin(self.p, self.p_error, self.ng, w), w)
+            ..Ray::new(self.spawn_origin(w), w)
         }
+    }
+
+    /// Where a ray leaving this point toward `w` starts: off the surface by the error
+    /// bound, or for a sphere just on `w`'s side of it.
+    fn spawn_origin(&self, w: Vec3) -> Vec3 {
+        self.sphere
+            .and_then(|(c, r)| sphere_spawn_origin(self.p, self.ng, w.dot(self.ng) > 0.0, c, r))
+            .unwrap_or_else(|| offset_ray_origin(self.p, self.p_error, self.ng, w))
     }
 
     /// The segment from this point towards `target`, `o + t·(target − o)` for
     /// `t ∈ [0, t_end]` (`t_end` just below 1 leaves out a surface at `target`),
     /// spawned like [`spawn_ray`](Self::spawn_ray).
     pub fn spawn_segment(&self, target: Vec3, t_end: f32) -> Ray {
-        let o = offset_ray_origin(self.p, self.p_error, self.ng, target - self.p);
+        let o = self.spawn_origin(target - self.p);
         Ray {
             skip: self.prim,
             ..Ray::segment(o, target - o, t_end)
@@ -358,6 +369,7 @@ impl Scene {
             prim: h.prim,
             material: tri.material,
             light: tri.light,
+            sphere: None,
         }
     }
 
@@ -371,10 +383,9 @@ impl Scene {
         let n = if n == Vec3::ZERO { Vec3::Y } else { n };
         let p = s.centre + s.radius * n;
         // `p = centre ⊕ r·n`: one rounding of the sum (≤ γ₁|p|) plus the error of `r·n`
-        // (normalisation and product, ≤ γ₄·r); the centre itself is exact. A looser bound
-        // (γ₅·(|centre| + r) + γ₅·|p|, 10 ulps far from the origin) only pushes spawned rays
-        // further off the sphere: a mirror ball at 1e5 then reflects from 0.1 outside its
-        // surface (stability case 5).
+        // (normalisation and product, ≤ γ₄·r); the centre itself is exact. Rays leave
+        // from within an ulp of `p` (`sphere_spawn_origin`), not offset by this bound,
+        // which is 2–3 cm at 1e5: more than a resting ball's gap to the floor over ~10 cm.
         let p_error = gamma(2) * p.abs() + Vec3::splat(gamma(4) * s.radius);
         SurfaceInteraction {
             t: h.t,
@@ -386,6 +397,7 @@ impl Scene {
             prim: h.prim,
             material: s.material,
             light: NO_LIGHT,
+            sphere: Some((s.centre, s.radius)),
         }
     }
 
