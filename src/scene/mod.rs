@@ -158,6 +158,41 @@ impl SurfaceInteraction {
     }
 }
 
+/// `p = a ⊕ b`, a point of the triangle with corners `t` and barycentrics `bary`, kept
+/// in it: within half an ulp of an edge, `p` is rounded on each axis to the
+/// float on the side of the exact sum toward the triangle's centroid (the
+/// round-to-nearest sum when that is already there, else one ulp further in).
+/// Rounded to nearest, a floor point within half an ulp of a wall lands on the wall's
+/// plane (and one near the diagonal of a quad in the other triangle): a ray leaving it
+/// may then meet that neighbour at `t ≈ 0`; at 1e5 (half an ulp is 4 mm) that darkened
+/// every edge of a room (stability case 5). Away from the edges `p` stays as rounded:
+/// rounding everything inward would move whole walls' shading points by an ulp.
+fn into_triangle(p: Vec3, a: Vec3, b: Vec3, t: [Vec3; 3], bary: [f32; 3]) -> Vec3 {
+    // Distance to the edge opposite corner k: b_k · 2·area / |edge|; rounding to
+    // nearest moves `p` by at most half an ulp per axis (≤ γ₁|p|).
+    let area2 = (t[1] - t[0]).cross(t[2] - t[0]).length();
+    let edges = [t[2] - t[1], t[2] - t[0], t[1] - t[0]];
+    let margin = (gamma(1) * p.abs()).length();
+    let near_edge = (0..3).any(|k| bary[k] * area2 <= margin * edges[k].length());
+    if !near_edge {
+        return p;
+    }
+    let centroid = (t[0] + t[1] + t[2]) / 3.0;
+    let mut p = p;
+    for i in 0..3 {
+        // TwoSum (Knuth): the exact rounding error of the sum, `a + b = p + e`.
+        let bb = p[i] - a[i];
+        let e = (a[i] - (p[i] - bb)) + (b[i] - bb);
+        let inward = centroid[i] - p[i];
+        if e > 0.0 && inward > 0.0 {
+            p[i] = crate::geometry::ray::next_float_up(p[i]);
+        } else if e < 0.0 && inward < 0.0 {
+            p[i] = crate::geometry::ray::next_float_down(p[i]);
+        }
+    }
+    p
+}
+
 impl Scene {
     /// Adds `light` and, after every triangle so far, the two triangles of its surface
     /// (no bounds change: spec §4 leaves light quads out). Returns the light's index.
@@ -337,6 +372,7 @@ impl Scene {
         let local = h.b1 * e1 + h.b2 * e2;
         let p = p0 + local;
         let p_error = gamma(2) * p.abs() + gamma(4) * ((h.b1 * e1).abs() + (h.b2 * e2).abs());
+        let p = into_triangle(p, p0, local, [p0, p1, p2], [b0, h.b1, h.b2]);
         // On an axis where the three corners agree (a wall, floor or ceiling), both edge
         // terms are exact zeros and `p` is corner 0's own coordinate: no error there, so
         // rays leave such a plane from on it, as they do from a plane through 0. Else a
@@ -401,14 +437,15 @@ impl Scene {
         }
     }
 
-    /// Whether `q`, a point in triangle `i`'s plane, lies in the triangle (dual basis).
-    fn triangle_contains(&self, i: usize, q: Vec3) -> bool {
+    /// Barycentrics `b1, b2` of `q`, a point in triangle `i`'s plane (dual basis), if it
+    /// lies in the triangle.
+    fn barycentrics(&self, i: usize, q: Vec3) -> Option<[f32; 2]> {
         let [p0, p1, p2] = self.triangle_positions(i);
         let (e1, e2, d) = (p1 - p0, p2 - p0, q - p0);
         let m = e1.cross(e2);
         let m2 = m.length_squared();
         let (b1, b2) = (d.cross(e2).dot(m) / m2, e1.cross(d).dot(m) / m2);
-        b1 >= 0.0 && b2 >= 0.0 && b1 + b2 <= 1.0
+        (b1 >= 0.0 && b2 >= 0.0 && b1 + b2 <= 1.0).then_some([b1, b2])
     }
 
     /// `si` (found by a ray spawned from surface point `from` in unit direction `w`) moved
@@ -440,9 +477,11 @@ impl Scene {
         let mut p_error = si.p_error + gamma(1) * p.abs() + gamma(5) * (s * w).abs();
         let mut p = p;
         if i < self.triangles.len() {
-            if !self.triangle_contains(i, p) {
+            let Some([b1, b2]) = self.barycentrics(i, p) else {
                 return *si;
-            }
+            };
+            let corners = self.triangle_positions(i);
+            p = into_triangle(p, from, s * w, corners, [1.0 - b1 - b2, b1, b2]);
             // On an axis where the corners agree the plane's coordinate is exact: keep it.
             let exact = self.exact_axes(i);
             p = Vec3::select(exact, si.p, p);
@@ -459,5 +498,52 @@ impl Scene {
         out.p_error = p_error;
         out.p = p;
         out
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A floor triangle at 1e5 (an ulp is 7.8e-3) whose edge `x = 1e5 + 1` a wall would
+    /// stand on.
+    fn floor_at_1e5() -> Scene {
+        let o = 1e5;
+        let mut s = Scene {
+            positions: vec![
+                Vec3::new(o - 1.0, o, o - 1.0),
+                Vec3::new(o + 1.0, o, o - 1.0),
+                Vec3::new(o + 1.0, o, o + 1.0),
+            ],
+            materials: vec![Material::Black],
+            ..Default::default()
+        };
+        s.triangles.push(Triangle {
+            v: [0, 1, 2],
+            n: None,
+            material: 0,
+            light: NO_LIGHT,
+        });
+        s
+    }
+
+    #[test]
+    fn points_within_half_an_ulp_of_an_edge_stay_in_their_triangle() {
+        let s = floor_at_1e5();
+        let hit = |b1: f32, b2: f32| PrimHit {
+            t: 1.0,
+            prim: 0,
+            b1,
+            b2,
+        };
+        // x = 1e5 + 1 − 1e-3 exactly: to nearest that is the edge itself, on the wall.
+        let near = s.triangle_interaction(0, &hit(0.4995, 0.5));
+        assert!(near.p.x < 1e5 + 1.0, "{}", near.p);
+        assert_eq!(near.p.y, 1e5);
+        assert!(1e5 + 1.0 - near.p.x <= 2.0 * 7.8125e-3, "{}", near.p);
+        // Away from the edges the point is rounded to nearest, as it was.
+        let [p0, p1, p2] = s.triangle_positions(0);
+        let mid = s.triangle_interaction(0, &hit(0.3, 0.3));
+        assert_eq!(mid.p, p0 + (0.3 * (p1 - p0) + 0.3 * (p2 - p0)));
     }
 }
