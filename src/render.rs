@@ -105,8 +105,8 @@ pub enum StopRule {
     /// The course's rule on the pixel's own samples, after `min_samples_if_constant`.
     /// Biased where light is rare (stability case 7); kept for comparison.
     PerPixel,
-    /// `crate::adaptive` (default): a pixel of zeros only when its whole neighbourhood
-    /// looked constant too; a constant non-zero pixel after `min_samples_if_constant`.
+    /// `crate::adaptive` (default): a pixel of zeros after a count set by how often its
+    /// neighbours find light; a constant non-zero pixel after `min_samples_if_constant`.
     Neighbourhood,
 }
 

@@ -303,7 +303,7 @@ pub struct RenderArgs {
     #[arg(short = 'o', value_name = "0|1", default_value_t = 1, value_parser = clap::value_parser!(u8).range(0..=1))]
     pub accumulate: u8,
 
-    /// Adaptive sampling: after every BATCH samples stop a pixel once 1.96·σ/√n ≤ TOL·μ (or at -s). A pixel whose samples are all zero stops only if every pixel within 5 px saw constant values in its first batch, so light found rarely is not missed (README). `-a` alone means 32 0.05.
+    /// Adaptive sampling: after every BATCH samples stop a pixel once 1.96·σ/√n ≤ TOL·μ (or at -s). A pixel whose samples are all zero stops only once n zeros would have a chance of at most 1% if light reached it a quarter as often as it reaches the pixels within 5 px in their first batch, so light found rarely is not missed (README). `-a` alone means 32 0.05.
     #[arg(short = 'a', num_args = 0..=2, action = clap::ArgAction::Set, value_names = ["BATCH", "TOL"])]
     pub adaptive: Option<Vec<String>>,
 

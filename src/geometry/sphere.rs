@@ -7,9 +7,9 @@
 //! where the origin is, not by comparing tiny `t` values: the sign of
 //! `c = |o − c|² − r²` is only trusted outside its rounding error. Inside that
 //! band the origin is taken to be on the surface, whose only hit is the far root
-//! `−2b/a`, and only when the ray clearly heads inward. `offset_ray_origin` puts a
-//! spawned ray on the correct side of the true surface, so it lands either on its
-//! own side or in the band, and never re-hits its own point at `t ≈ 0`.
+//! `−2b/a`, and only when the ray clearly heads inward. `sphere_spawn_origin` puts a
+//! ray leaving the sphere strictly on its side as this test computes it (within an
+//! ulp of the surface point), so it never re-hits its own point at `t ≈ 0`.
 
 use super::ray::gamma;
 use super::Ray;
@@ -26,6 +26,16 @@ pub fn intersect_sphere(ray: &Ray, centre: Vec3, radius: f32) -> Option<f32> {
     intersect(ray, centre, radius, false)
 }
 
+/// `c = |o − centre|² − r²` as the intersection test computes it (> 0 outside), and the
+/// bound on its rounding error within which `o` counts as on the surface.
+#[inline(always)]
+fn side(o: Vec3, centre: Vec3, radius: f32) -> (f32, f32) {
+    let ff = (o - centre).length_squared();
+    let r2 = radius * radius;
+    // A few operations, taken generously.
+    (ff - r2, gamma(8) * (ff + r2))
+}
+
 #[inline(always)]
 fn intersect(ray: &Ray, centre: Vec3, radius: f32, leaving: bool) -> Option<f32> {
     if !sphere_is_hittable(centre, radius) {
@@ -36,10 +46,8 @@ fn intersect(ray: &Ray, centre: Vec3, radius: f32, leaving: bool) -> Option<f32>
     let a = d.length_squared();
     let b = f.dot(d);
     let r2 = radius * radius;
-    let ff = f.length_squared();
-    let c = ff - r2;
-    // Bounds on the rounding error of c and b (a few operations each, taken generously).
-    let c_err = gamma(8) * (ff + r2);
+    let (c, c_err) = side(ray.o, centre, radius);
+    // Bound on the rounding error of b.
     let b_err = gamma(5) * f.abs().dot(d.abs());
     let accept = |t: f32| t > 0.0 && t >= ray.t_min && t <= ray.t_max;
     if c.abs() <= c_err {
@@ -71,8 +79,8 @@ fn intersect(ray: &Ray, centre: Vec3, radius: f32, leaving: bool) -> Option<f32>
 }
 
 /// The hit of a ray spawned from this sphere's own surface (the sphere is the
-/// ray's `skip`). `offset_ray_origin` put its origin strictly on the side of the
-/// true surface the ray heads to: an origin found outside (beyond the rounding of
+/// ray's `skip`). `sphere_spawn_origin` put its origin strictly on the side the ray
+/// heads to: an origin found outside (beyond the rounding of
 /// `c`) left outward, and a convex sphere is never met again; otherwise the ray
 /// heads inward and [`intersect_sphere`] gives the far side. The plain test cannot
 /// tell: far from the world origin a grazing outward ray may clip a sliver of the
@@ -127,6 +135,50 @@ pub fn intersect_sphere_lanes<S: Simd>(
     let t = F32s::select(on_surface, t_surface, t_roots);
     let hit = (on_surface & surface_hit) | (!on_surface & roots_hit);
     (hit.bits() & active, t)
+}
+
+/// The origin of a ray leaving the sphere's surface point `p` (outward unit normal
+/// `n`) to the outside (`outward`) or into it: `p` itself if the intersection test
+/// already finds it strictly on that side, else `p + δ·(±n)` for the first `δ` of
+/// half an ulp of `p`'s largest coordinate (or the test's band, if wider), doubled
+/// until it is (`None` if that takes more than 16 doublings).
+///
+/// `offset_ray_origin` moves every origin by the point's error bound, 2–3 ulps of the
+/// coordinates once rounded away: 2–3 cm at 1e5, where a ball resting on a floor is
+/// that close to it over a disc of ~10 cm, so rays leaving the ball's underside started
+/// below the floor (stability case 5). Here the origin is within about an ulp of `p`,
+/// on the side the sphere test (`intersect_sphere_leaving`, and Embree's skip filter,
+/// which shares its `c` and band) needs: outside the band, nothing of the sphere is
+/// ahead of an outward ray; inside it, only the far side of an inward one.
+pub fn sphere_spawn_origin(
+    p: Vec3,
+    n: Vec3,
+    outward: bool,
+    centre: Vec3,
+    radius: f32,
+) -> Option<Vec3> {
+    let towards = if outward { n } else { -n };
+    let on_side = |o: Vec3| {
+        let (c, c_err) = side(o, centre, radius);
+        if outward {
+            c > c_err
+        } else {
+            c < -c_err
+        }
+    };
+    if on_side(p) {
+        return Some(p);
+    }
+    let band = side(p, centre, radius).1 / (2.0 * radius);
+    let mut delta = (gamma(1) * p.abs().max_element()).max(band);
+    for _ in 0..16 {
+        let o = p + delta * towards;
+        if on_side(o) {
+            return Some(o);
+        }
+        delta *= 2.0;
+    }
+    None
 }
 
 #[cfg(test)]
@@ -197,6 +249,45 @@ mod tests {
                     // Moving the origin δ along the normal moves the far side by ≤ δ/|cos|.
                     let slack = 1e-3 * radius + (o - p).length() / -cos;
                     assert!((t - chord).abs() <= slack, "{t} vs chord {chord}");
+                }
+            }
+        }
+    }
+
+    /// Origins from `sphere_spawn_origin`, as the integrators spawn them, near the
+    /// origin and at 1e5 (where an ulp is 8e-3): within four ulps of the rounded surface
+    /// point (or of twice the test's band), outward rays never meet their sphere, inward ones
+    /// reach its far side.
+    #[test]
+    fn spawn_origins_are_within_a_few_ulps_and_on_the_rays_side() {
+        let mut rng = crate::sampling::Sampler::from_seed(5);
+        for (centre, radius) in [(Vec3::new(0.3, -0.2, 0.1), 0.4), (Vec3::splat(1e5), 0.35)] {
+            let ulp = |v: f32| super::super::ray::next_float_up(v.abs()) - v.abs();
+            for _ in 0..20000 {
+                let n = crate::sampling::uniform_sphere(rng.next_2d());
+                let p = centre + radius * n;
+                let mut w = crate::sampling::uniform_sphere(rng.next_2d());
+                if rng.next_f32() < 0.3 {
+                    w = (w - w.dot(n) * n).normalize() + n * (rng.next_f32() - 0.5) * 2e-3;
+                }
+                let cos = w.normalize().dot(n);
+                let o = sphere_spawn_origin(p, n, cos > 0.0, centre, radius)
+                    .expect("a few doublings reach the ray's side");
+                let near = 4.0 * ulp(p.abs().max_element()).max(gamma(8) * radius);
+                assert!((o - p).length() <= near, "{o} from {p}");
+                let t = intersect_sphere_leaving(&Ray::new(o, w), centre, radius);
+                if cos > 0.0 {
+                    assert_eq!(t, None, "outward from {o} along {w}");
+                } else if cos < -1e-3 {
+                    // The far root from `o` itself, in f64.
+                    let (f, d) = ((o - centre).as_dvec3(), w.as_dvec3());
+                    let (a, b, c) = (d.length_squared(), f.dot(d), f.length_squared());
+                    let far = (-b + (b * b - a * (c - (radius as f64).powi(2))).sqrt()) / a;
+                    let t = t.expect("inward ray must reach the far side");
+                    assert!(
+                        (t as f64 - far).abs() <= 1e-3 * radius as f64,
+                        "{t} vs {far}"
+                    );
                 }
             }
         }

@@ -17,11 +17,12 @@ use super::{DirectStrategy, Roulette};
 use crate::accel::{Accel, HitPacket, RayPacket};
 use crate::camera::Camera;
 use crate::geometry::ray::gamma;
+use crate::geometry::sphere::sphere_spawn_origin;
 use crate::geometry::NO_PRIM;
 use crate::lights::{AreaLight, Light};
 use crate::materials::Material;
 use crate::sampling::{StreamLanes, COS_POLY, SIN_POLY};
-use crate::scene::{Scene, NO_LIGHT};
+use crate::scene::{into_triangle, Scene, NO_LIGHT};
 use crate::simd::{
     dispatch, prefetch, F32s, LaneBits, Mask, Simd, SimdTask, U32s, U64s, Vec3s, ALL_LANES, LANES,
 };
@@ -194,10 +195,11 @@ struct Kernel<'a, 'b, 't, S: Simd> {
 /// What the scene says about each lane's hit.
 struct HitData<S: Simd> {
     si: Hits<S>,
-    /// Triangle lanes (the others hit spheres), their corners, sphere centres.
+    /// Triangle lanes (the others hit spheres), their corners, sphere centres and radii.
     triangles: LaneBits,
     corners: [Vec3s<S>; 3],
     centre: Vec3s<S>,
+    radius: [f32; LANES],
     albedo: Vec3s<S>,
     /// Lanes on a surface that scatters nothing (an area light's).
     black: LaneBits,
@@ -490,9 +492,9 @@ impl<'a, 'b, 't, S: Simd> Kernel<'a, 'b, 't, S> {
         let wo = frame.to_local(wo_world);
         let direct = self.counts(lanes);
         if direct != 0 {
-            self.direct(direct, &hits.prim, si, &frame, wo, hit.albedo);
+            self.direct(direct, &hits.prim, &hit, &frame, wo);
         }
-        ended |= self.scatter(lanes, &hits.prim, si, &frame, wo, wo_world, hit.albedo);
+        ended |= self.scatter(lanes, &hits.prim, &hit, &frame, wo, wo_world);
         ended
     }
 
@@ -645,7 +647,7 @@ impl<'a, 'b, 't, S: Simd> Kernel<'a, 'b, 't, S> {
         let b2 = F32s::from_array(s, hits.b2);
         let corners = corner.map(|c| Vec3s::from_arrays(s, &c));
         let [p0, p1, p2] = corners;
-        let mut si = triangle_points(s, p0, p1, p2, b1, b2);
+        let mut si = triangle_points(s, triangles, p0, p1, p2, b1, b2);
         if has_normals != 0 {
             let [n0, n1, n2] = normal.map(|c| Vec3s::from_arrays(s, &c));
             let (ng, ns) = shading_normals(s, si.ng, n0, n1, n2, b1, b2);
@@ -672,6 +674,7 @@ impl<'a, 'b, 't, S: Simd> Kernel<'a, 'b, 't, S> {
             triangles,
             corners,
             centre,
+            radius,
             albedo: Vec3s::from_arrays(s, &albedo),
             black,
             light,
@@ -694,12 +697,14 @@ impl<'a, 'b, 't, S: Simd> Kernel<'a, 'b, 't, S> {
         let p_error = si.p_error + p.abs() * self.f(gamma(1)) + (w * dist).abs() * self.f(gamma(5));
         // Triangles: the point must lie in the hit triangle; exact axes stay.
         let [p0, p1, p2] = hit.corners;
-        let inside = triangle_contains(s, p0, p1, p2, p);
+        let (inside, b1, b2) = barycentrics(s, p0, p1, p2, p);
+        let on_tri = self.mask(lanes & hit.triangles) & steep & ahead & inside;
+        let p_tri = into_triangles(s, on_tri.bits(), p, from, w * dist, hit.corners, b1, b2);
         let exact = exact_axes(p0, p1, p2);
         let tri_p = Vec3s::new(
-            F32s::select(exact[0], si.p.x, p.x),
-            F32s::select(exact[1], si.p.y, p.y),
-            F32s::select(exact[2], si.p.z, p.z),
+            F32s::select(exact[0], si.p.x, p_tri.x),
+            F32s::select(exact[1], si.p.y, p_tri.y),
+            F32s::select(exact[2], si.p.z, p_tri.z),
         );
         let tri_err = Vec3s::new(
             F32s::select(exact[0], zero, p_error.x),
@@ -749,12 +754,12 @@ impl<'a, 'b, 't, S: Simd> Kernel<'a, 'b, 't, S> {
         &mut self,
         lanes: LaneBits,
         prims: &[u32; LANES],
-        si: Hits<S>,
+        hit: &HitData<S>,
         frame: &Frame<S>,
         wo: Vec3s<S>,
-        albedo: Vec3s<S>,
     ) {
         let s = self.s;
+        let (si, albedo) = (hit.si, hit.albedo);
         let zero = self.f(0.0);
         let n = self.it.light_samples;
         let nf = self.f(n as f32);
@@ -782,7 +787,7 @@ impl<'a, 'b, 't, S: Simd> Kernel<'a, 'b, 't, S> {
                 }
                 // The shadow segment, stopped short of the light.
                 let target = ls.p_light;
-                let origin = offset_ray_origin(s, si.p, si.p_error, si.ng, target - si.p);
+                let origin = spawn_origins(s, ok, hit, target - si.p);
                 shadow.o = origin.to_arrays();
                 shadow.d = (target - origin).to_arrays();
                 let blocked = self.it.accel.occluded_packet(&shadow, ok);
@@ -813,13 +818,13 @@ impl<'a, 'b, 't, S: Simd> Kernel<'a, 'b, 't, S> {
         &mut self,
         lanes: LaneBits,
         prims: &[u32; LANES],
-        si: Hits<S>,
+        hit: &HitData<S>,
         frame: &Frame<S>,
         wo: Vec3s<S>,
         wo_world: Vec3s<S>,
-        albedo: Vec3s<S>,
     ) -> LaneBits {
         let s = self.s;
+        let (si, albedo) = (hit.si, hit.albedo);
         let zero = self.f(0.0);
         // `material.sample(wo, next_f32(), next_2d())`: the lobe number is drawn too.
         let _u_lobe = self.next_f32(lanes);
@@ -861,7 +866,7 @@ impl<'a, 'b, 't, S: Simd> Kernel<'a, 'b, 't, S> {
             self.prev_p = Vec3s::select(m, si.p, self.prev_p);
             self.prev_pdf = F32s::select(m, pdf, self.prev_pdf);
             self.has_prev |= survive;
-            let origin = offset_ray_origin(s, si.p, si.p_error, si.ng, wi_world);
+            let origin = spawn_origins(s, survive, hit, wi_world);
             let rays = &mut self.rays;
             rays.o = Vec3s::select(m, origin, Vec3s::from_arrays(s, &rays.o)).to_arrays();
             rays.d = Vec3s::select(m, wi_world, Vec3s::from_arrays(s, &rays.d)).to_arrays();
@@ -1044,6 +1049,7 @@ fn intersect_area<S: Simd>(s: S, a: &AreaLight, p: Vec3s<S>, wi: Vec3s<S>) -> (M
 #[inline(always)]
 fn triangle_points<S: Simd>(
     s: S,
+    lanes: LaneBits,
     p0: Vec3s<S>,
     p1: Vec3s<S>,
     p2: Vec3s<S>,
@@ -1052,9 +1058,11 @@ fn triangle_points<S: Simd>(
 ) -> Hits<S> {
     let (e1, e2) = (p1 - p0, p2 - p0);
     let (t1, t2) = (e1 * b1, e2 * b2);
-    let p = p0 + (t1 + t2);
+    let local = t1 + t2;
+    let p = p0 + local;
     let p_error =
         p.abs() * F32s::splat(s, gamma(2)) + (t1.abs() + t2.abs()) * F32s::splat(s, gamma(4));
+    let p = into_triangles(s, lanes, p, p0, local, [p0, p1, p2], b1, b2);
     let exact = exact_axes(p0, p1, p2);
     let zero = F32s::splat(s, 0.0);
     let p_error = Vec3s::new(
@@ -1119,22 +1127,73 @@ fn sphere_points<S: Simd>(
     }
 }
 
-/// `Scene::triangle_contains`: whether `q`, in the plane of `(p0, p1, p2)`, lies in it.
+/// `Scene::barycentrics`: whether `q`, in the plane of `(p0, p1, p2)`, lies in it,
+/// and its `b1, b2`.
 #[inline(always)]
-fn triangle_contains<S: Simd>(
+fn barycentrics<S: Simd>(
     s: S,
     p0: Vec3s<S>,
     p1: Vec3s<S>,
     p2: Vec3s<S>,
     q: Vec3s<S>,
-) -> Mask<S> {
+) -> (Mask<S>, F32s<S>, F32s<S>) {
     let (e1, e2, d) = (p1 - p0, p2 - p0, q - p0);
     let m = e1.cross(e2);
     let m2 = m.length_squared();
     let b1 = d.cross(e2).dot(m) / m2;
     let b2 = e1.cross(d).dot(m) / m2;
     let zero = F32s::splat(s, 0.0);
-    b1.ge(zero) & b2.ge(zero) & (b1 + b2).le(F32s::splat(s, 1.0))
+    let inside = b1.ge(zero) & b2.ge(zero) & (b1 + b2).le(F32s::splat(s, 1.0));
+    (inside, b1, b2)
+}
+
+/// `scene::into_triangle` of `p = a ⊕ b` in the lanes in `lanes`, triangle corners
+/// `t`, barycentrics `b1, b2`. Its edge test is run here with four times its margin,
+/// so that whatever the lanes' rounding, every lane it would move is handed to it
+/// (they are rare: within half an ulp of an edge); it decides and rounds each.
+#[allow(clippy::too_many_arguments)]
+#[inline(always)]
+fn into_triangles<S: Simd>(
+    s: S,
+    lanes: LaneBits,
+    p: Vec3s<S>,
+    a: Vec3s<S>,
+    b: Vec3s<S>,
+    t: [Vec3s<S>; 3],
+    b1: F32s<S>,
+    b2: F32s<S>,
+) -> Vec3s<S> {
+    let [p0, p1, p2] = t;
+    let area2 = (p1 - p0).cross(p2 - p0).length_squared().sqrt();
+    let margin = (p.abs() * F32s::splat(s, 4.0 * gamma(1)))
+        .length_squared()
+        .sqrt();
+    let b0 = F32s::splat(s, 1.0) - b1 - b2;
+    let near = near_edge(b0, p2 - p1, area2, margin)
+        | near_edge(b1, p2 - p0, area2, margin)
+        | near_edge(b2, p1 - p0, area2, margin);
+    let mut moved = near.bits() & lanes;
+    if moved == 0 {
+        return p;
+    }
+    let mut out = p.to_arrays();
+    let (b1, b2) = (b1.to_array(), b2.to_array());
+    while moved != 0 {
+        let i = moved.trailing_zeros() as usize;
+        moved &= moved - 1;
+        let bary = [1.0 - b1[i] - b2[i], b1[i], b2[i]];
+        let corners = [p0.lane(i), p1.lane(i), p2.lane(i)];
+        let q = into_triangle(p.lane(i), a.lane(i), b.lane(i), corners, bary);
+        (out[0][i], out[1][i], out[2][i]) = q.into();
+    }
+    Vec3s::from_arrays(s, &out)
+}
+
+/// Whether the point at barycentric `bk` is within `margin` of the edge `edge`
+/// opposite corner k (`area2`: twice the triangle's area).
+#[inline(always)]
+fn near_edge<S: Simd>(bk: F32s<S>, edge: Vec3s<S>, area2: F32s<S>, margin: F32s<S>) -> Mask<S> {
+    (bk * area2).le(margin * edge.length_squared().sqrt())
 }
 
 /// `Scene::exact_axes`: per axis, the lanes whose three corners agree there.
@@ -1153,6 +1212,30 @@ fn normalize_or_zero<S: Simd>(s: S, v: Vec3s<S>) -> Vec3s<S> {
     let rcp = F32s::splat(s, 1.0) / v.length_squared().sqrt();
     let ok = rcp.is_finite() & rcp.gt(F32s::splat(s, 0.0));
     Vec3s::select(ok, v * rcp, Vec3s::splat(s, Vec3::ZERO))
+}
+
+/// `SurfaceInteraction::spawn_origin` for the lanes in `lanes` of `hit`, towards
+/// `w`: off the surface by the error bound, or (one sphere lane at a time) just on
+/// `w`'s side of the sphere.
+#[inline(always)]
+fn spawn_origins<S: Simd>(s: S, lanes: LaneBits, hit: &HitData<S>, w: Vec3s<S>) -> Vec3s<S> {
+    let si = &hit.si;
+    let offset = offset_ray_origin(s, si.p, si.p_error, si.ng, w);
+    let mut spheres = lanes & !hit.triangles;
+    if spheres == 0 {
+        return offset;
+    }
+    let mut out = offset.to_arrays();
+    while spheres != 0 {
+        let i = spheres.trailing_zeros() as usize;
+        spheres &= spheres - 1;
+        let (p, ng) = (si.p.lane(i), si.ng.lane(i));
+        let outward = w.lane(i).dot(ng) > 0.0;
+        if let Some(o) = sphere_spawn_origin(p, ng, outward, hit.centre.lane(i), hit.radius[i]) {
+            (out[0][i], out[1][i], out[2][i]) = o.into();
+        }
+    }
+    Vec3s::from_arrays(s, &out)
 }
 
 /// `geometry::offset_ray_origin` in lanes.

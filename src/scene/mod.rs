@@ -3,7 +3,7 @@
 
 pub mod collada;
 
-use crate::geometry::{offset_ray_origin, ray::gamma, Aabb, Ray};
+use crate::geometry::{offset_ray_origin, ray::gamma, sphere::sphere_spawn_origin, Aabb, Ray};
 use crate::lights::{AreaLight, Light};
 use crate::materials::Material;
 use crate::Color;
@@ -121,6 +121,9 @@ pub struct SurfaceInteraction {
     pub prim: PrimId,
     pub material: u32,
     pub light: u32,
+    /// The sphere `(centre, radius)` the point lies on, if it is a sphere's: rays leave
+    /// it from within an ulp of `p` (`sphere_spawn_origin`), not by the error bound.
+    pub sphere: Option<(Vec3, f32)>,
 }
 
 impl SurfaceInteraction {
@@ -131,20 +134,63 @@ impl SurfaceInteraction {
     pub fn spawn_ray(&self, w: Vec3) -> Ray {
         Ray {
             skip: self.prim,
-            ..Ray::new(offset_ray_origin(self.p, self.p_error, self.ng, w), w)
+            ..Ray::new(self.spawn_origin(w), w)
         }
+    }
+
+    /// Where a ray leaving this point toward `w` starts: off the surface by the error
+    /// bound, or for a sphere just on `w`'s side of it.
+    fn spawn_origin(&self, w: Vec3) -> Vec3 {
+        self.sphere
+            .and_then(|(c, r)| sphere_spawn_origin(self.p, self.ng, w.dot(self.ng) > 0.0, c, r))
+            .unwrap_or_else(|| offset_ray_origin(self.p, self.p_error, self.ng, w))
     }
 
     /// The segment from this point towards `target`, `o + t·(target − o)` for
     /// `t ∈ [0, t_end]` (`t_end` just below 1 leaves out a surface at `target`),
     /// spawned like [`spawn_ray`](Self::spawn_ray).
     pub fn spawn_segment(&self, target: Vec3, t_end: f32) -> Ray {
-        let o = offset_ray_origin(self.p, self.p_error, self.ng, target - self.p);
+        let o = self.spawn_origin(target - self.p);
         Ray {
             skip: self.prim,
             ..Ray::segment(o, target - o, t_end)
         }
     }
+}
+
+/// `p = a ⊕ b`, a point of the triangle with corners `t` and barycentrics `bary`, kept
+/// in it: within half an ulp of an edge, `p` is rounded on each axis to the
+/// float on the side of the exact sum toward the triangle's centroid (the
+/// round-to-nearest sum when that is already there, else one ulp further in).
+/// Rounded to nearest, a floor point within half an ulp of a wall lands on the wall's
+/// plane (and one near the diagonal of a quad in the other triangle): a ray leaving it
+/// may then meet that neighbour at `t ≈ 0`; at 1e5 (half an ulp is 4 mm) that darkened
+/// every edge of a room (stability case 5). Away from the edges `p` stays as rounded:
+/// rounding everything inward would move whole walls' shading points by an ulp.
+pub(crate) fn into_triangle(p: Vec3, a: Vec3, b: Vec3, t: [Vec3; 3], bary: [f32; 3]) -> Vec3 {
+    // Distance to the edge opposite corner k: b_k · 2·area / |edge|; rounding to
+    // nearest moves `p` by at most half an ulp per axis (≤ γ₁|p|).
+    let area2 = (t[1] - t[0]).cross(t[2] - t[0]).length();
+    let edges = [t[2] - t[1], t[2] - t[0], t[1] - t[0]];
+    let margin = (gamma(1) * p.abs()).length();
+    let near_edge = (0..3).any(|k| bary[k] * area2 <= margin * edges[k].length());
+    if !near_edge {
+        return p;
+    }
+    let centroid = (t[0] + t[1] + t[2]) / 3.0;
+    let mut p = p;
+    for i in 0..3 {
+        // TwoSum (Knuth): the exact rounding error of the sum, `a + b = p + e`.
+        let bb = p[i] - a[i];
+        let e = (a[i] - (p[i] - bb)) + (b[i] - bb);
+        let inward = centroid[i] - p[i];
+        if e > 0.0 && inward > 0.0 {
+            p[i] = crate::geometry::ray::next_float_up(p[i]);
+        } else if e < 0.0 && inward < 0.0 {
+            p[i] = crate::geometry::ray::next_float_down(p[i]);
+        }
+    }
+    p
 }
 
 impl Scene {
@@ -326,6 +372,7 @@ impl Scene {
         let local = h.b1 * e1 + h.b2 * e2;
         let p = p0 + local;
         let p_error = gamma(2) * p.abs() + gamma(4) * ((h.b1 * e1).abs() + (h.b2 * e2).abs());
+        let p = into_triangle(p, p0, local, [p0, p1, p2], [b0, h.b1, h.b2]);
         // On an axis where the three corners agree (a wall, floor or ceiling), both edge
         // terms are exact zeros and `p` is corner 0's own coordinate: no error there, so
         // rays leave such a plane from on it, as they do from a plane through 0. Else a
@@ -358,6 +405,7 @@ impl Scene {
             prim: h.prim,
             material: tri.material,
             light: tri.light,
+            sphere: None,
         }
     }
 
@@ -371,10 +419,9 @@ impl Scene {
         let n = if n == Vec3::ZERO { Vec3::Y } else { n };
         let p = s.centre + s.radius * n;
         // `p = centre ⊕ r·n`: one rounding of the sum (≤ γ₁|p|) plus the error of `r·n`
-        // (normalisation and product, ≤ γ₄·r); the centre itself is exact. A looser bound
-        // (γ₅·(|centre| + r) + γ₅·|p|, 10 ulps far from the origin) only pushes spawned rays
-        // further off the sphere: a mirror ball at 1e5 then reflects from 0.1 outside its
-        // surface (stability case 5).
+        // (normalisation and product, ≤ γ₄·r); the centre itself is exact. Rays leave
+        // from within an ulp of `p` (`sphere_spawn_origin`), not offset by this bound,
+        // which is 2–3 cm at 1e5: more than a resting ball's gap to the floor over ~10 cm.
         let p_error = gamma(2) * p.abs() + Vec3::splat(gamma(4) * s.radius);
         SurfaceInteraction {
             t: h.t,
@@ -386,17 +433,19 @@ impl Scene {
             prim: h.prim,
             material: s.material,
             light: NO_LIGHT,
+            sphere: Some((s.centre, s.radius)),
         }
     }
 
-    /// Whether `q`, a point in triangle `i`'s plane, lies in the triangle (dual basis).
-    fn triangle_contains(&self, i: usize, q: Vec3) -> bool {
+    /// Barycentrics `b1, b2` of `q`, a point in triangle `i`'s plane (dual basis), if it
+    /// lies in the triangle.
+    fn barycentrics(&self, i: usize, q: Vec3) -> Option<[f32; 2]> {
         let [p0, p1, p2] = self.triangle_positions(i);
         let (e1, e2, d) = (p1 - p0, p2 - p0, q - p0);
         let m = e1.cross(e2);
         let m2 = m.length_squared();
         let (b1, b2) = (d.cross(e2).dot(m) / m2, e1.cross(d).dot(m) / m2);
-        b1 >= 0.0 && b2 >= 0.0 && b1 + b2 <= 1.0
+        (b1 >= 0.0 && b2 >= 0.0 && b1 + b2 <= 1.0).then_some([b1, b2])
     }
 
     /// `si` (found by a ray spawned from surface point `from` in unit direction `w`) moved
@@ -428,9 +477,11 @@ impl Scene {
         let mut p_error = si.p_error + gamma(1) * p.abs() + gamma(5) * (s * w).abs();
         let mut p = p;
         if i < self.triangles.len() {
-            if !self.triangle_contains(i, p) {
+            let Some([b1, b2]) = self.barycentrics(i, p) else {
                 return *si;
-            }
+            };
+            let corners = self.triangle_positions(i);
+            p = into_triangle(p, from, s * w, corners, [1.0 - b1 - b2, b1, b2]);
             // On an axis where the corners agree the plane's coordinate is exact: keep it.
             let exact = self.exact_axes(i);
             p = Vec3::select(exact, si.p, p);
@@ -447,5 +498,52 @@ impl Scene {
         out.p_error = p_error;
         out.p = p;
         out
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A floor triangle at 1e5 (an ulp is 7.8e-3) whose edge `x = 1e5 + 1` a wall would
+    /// stand on.
+    fn floor_at_1e5() -> Scene {
+        let o = 1e5;
+        let mut s = Scene {
+            positions: vec![
+                Vec3::new(o - 1.0, o, o - 1.0),
+                Vec3::new(o + 1.0, o, o - 1.0),
+                Vec3::new(o + 1.0, o, o + 1.0),
+            ],
+            materials: vec![Material::Black],
+            ..Default::default()
+        };
+        s.triangles.push(Triangle {
+            v: [0, 1, 2],
+            n: None,
+            material: 0,
+            light: NO_LIGHT,
+        });
+        s
+    }
+
+    #[test]
+    fn points_within_half_an_ulp_of_an_edge_stay_in_their_triangle() {
+        let s = floor_at_1e5();
+        let hit = |b1: f32, b2: f32| PrimHit {
+            t: 1.0,
+            prim: 0,
+            b1,
+            b2,
+        };
+        // x = 1e5 + 1 − 1e-3 exactly: to nearest that is the edge itself, on the wall.
+        let near = s.triangle_interaction(0, &hit(0.4995, 0.5));
+        assert!(near.p.x < 1e5 + 1.0, "{}", near.p);
+        assert_eq!(near.p.y, 1e5);
+        assert!(1e5 + 1.0 - near.p.x <= 2.0 * 7.8125e-3, "{}", near.p);
+        // Away from the edges the point is rounded to nearest, as it was.
+        let [p0, p1, p2] = s.triangle_positions(0);
+        let mid = s.triangle_interaction(0, &hit(0.3, 0.3));
+        assert_eq!(mid.p, p0 + (0.3 * (p1 - p0) + 0.3 * (p2 - p0)));
     }
 }

@@ -23,8 +23,8 @@
 //! more than the bytes save once a level less has cut the misses. (At 8 wide
 //! they had won on the 1M mesh.)
 
-use crate::geometry::ray::gamma;
 use crate::accel::packet::PacketRays;
+use crate::geometry::ray::gamma;
 use crate::geometry::{Aabb, Ray};
 use crate::simd::{F32s, LaneBits, Simd};
 

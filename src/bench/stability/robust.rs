@@ -3,7 +3,8 @@
 //! rays along edges, through shared vertices or at grazing angles must not slip
 //! through a closed mesh; degenerate triangles must not produce NaN.
 
-use super::measure::{lum, Budget, Halves, NATIVE};
+use super::light_paths::student_t_two_sided;
+use super::measure::{lum, Budget, NATIVE};
 use super::scenes::{degenerate_room, embedded, grid_plane, transformed, GRID_CELLS, GRID_HALF};
 use super::Row;
 use crate::camera::Camera;
@@ -11,6 +12,7 @@ use crate::geometry::Ray;
 use crate::integrators::{DirectStrategy, Roulette};
 use crate::render::{RenderJob, RenderSettings, Shading};
 use crate::sampling::Sampler;
+use crate::scene::Scene;
 use crate::Vec3;
 use anyhow::Result;
 
@@ -33,10 +35,15 @@ pub struct ScaledRun {
     pub frac_changed: f64,
     /// Fraction of pixels differing by more than 4 per-pixel noise σ (σ from the halves).
     pub frac_beyond_noise: f64,
-    /// Largest difference of an 8×8 block of surface pixels, in units of that block's
-    /// noise σ·√2 for two independent renders (see `SurfaceBlocks`).
-    pub max_block_z: f64,
     pub nonfinite: u64,
+    /// Translations only: surfaces and every surface block against the rounded
+    /// original over `TEST_SEEDS` seeds.
+    pub seeds: Option<SeedsTest>,
+    /// Translations only: the surface mean of the original rounded as the translation
+    /// rounds it (`rounded_original`, what this run is compared with) against the
+    /// original itself, relative, with its paired standard error: the input's own
+    /// rounding, which no renderer can undo.
+    pub input_rounding: Option<(f64, f64)>,
 }
 
 pub struct ScaleCase {
@@ -75,14 +82,33 @@ pub fn scale(b: &Budget) -> Result<ScaleCase> {
     });
     let sigma = halves.noise_per_pixel();
     let surface = surface_pixels(&base);
-    let blocks = SurfaceBlocks::new(&halves, &surface, 8);
+    let blocks = SurfaceBlocks::new(b.width, b.height, &surface, 8);
     let mut runs = Vec::new();
     for (name, k, off) in SCALE_VARIANTS {
         let setup = b.job(transformed(&base_scene, k, Vec3::splat(off)))?;
         let o = setup.render(&s);
-        let mut run = compare(name, k, off, &reference.image, &o, sigma, &blocks);
+        if off == 0.0 {
+            // A scaled copy must render the original.
+            let mut run = compare(name, k, off, &reference.image, &o, sigma);
+            (run.surface_rel_diff, run.surface_rel_se) =
+                paired_relative_diff(&reference.image, &o.image, &surface);
+            runs.push(run);
+            continue;
+        }
+        // A translated one, the original with the translation's rounding (the scene
+        // itself moves on the f32 grid there).
+        let near = rounded_original(&base_scene, &setup, k, off)?;
+        let r = near.render(&s);
+        let mut run = compare(name, k, off, &r.image, &o, sigma);
         (run.surface_rel_diff, run.surface_rel_se) =
-            paired_relative_diff(&reference.image, &o.image, &surface);
+            paired_relative_diff(&r.image, &o.image, &surface);
+        run.input_rounding = Some(paired_relative_diff(&reference.image, &r.image, &surface));
+        let mut pairs = vec![(o.image, r.image)];
+        for seed in (1..TEST_SEEDS).map(|i| b.seed.wrapping_add(i)) {
+            let s = RenderSettings { seed, ..s.clone() };
+            pairs.push((setup.render(&s).image, near.render(&s).image));
+        }
+        run.seeds = Some(SeedsTest::new(&blocks, &surface, &pairs));
         runs.push(run);
     }
     let n = reference.image.pixels.len();
@@ -94,15 +120,28 @@ pub fn scale(b: &Budget) -> Result<ScaleCase> {
     })
 }
 
-/// Pixels none of whose corners or centre sees an emitter directly.
+/// The original scaled by `k` and rounded as its translation by `off` (`far`) rounds
+/// it, back at the origin: translated there and back, which is exact (Sterbenz), seen
+/// by `far`'s camera moved back with it, so that only the renderer's arithmetic far
+/// from the origin differs.
+fn rounded_original(original: &Scene, far: &RenderJob, k: f32, off: f32) -> Result<RenderJob> {
+    let back = Vec3::splat(-off);
+    let scene = transformed(&transformed(original, k, -back), 1.0, back);
+    let mut camera = far.camera;
+    camera.eye += back;
+    Ok(RenderJob::with_camera(scene, NATIVE, camera)?)
+}
+
+/// Pixels whose corners and centre all see a surface that is not an emitter (no
+/// background either: a silhouette's noise is its coverage's, badly estimated from a block).
 fn surface_pixels(setup: &RenderJob) -> Vec<usize> {
     let cam = &setup.camera;
-    let sees_emitter = |x: u32, y: u32| {
+    let not_surface = |x: u32, y: u32| {
         [(0.0, 0.0), (1.0, 0.0), (0.0, 1.0), (1.0, 1.0), (0.5, 0.5)]
             .iter()
             .any(|&(u, v)| {
                 let r = cam.generate_ray(x, y, glam::Vec2::new(u, v));
-                setup.accel.intersect(&r).is_some_and(|h| {
+                setup.accel.intersect(&r).is_none_or(|h| {
                     let si = setup.scene.interaction(&r, &h);
                     setup.scene.materials[si.material as usize].is_black()
                 })
@@ -110,7 +149,7 @@ fn surface_pixels(setup: &RenderJob) -> Vec<usize> {
     };
     (0..cam.height)
         .flat_map(|y| (0..cam.width).map(move |x| (x, y)))
-        .filter(|&(x, y)| !sees_emitter(x, y))
+        .filter(|&(x, y)| !not_surface(x, y))
         .map(|(x, y)| (y * cam.width + x) as usize)
         .collect()
 }
@@ -129,50 +168,135 @@ fn paired_relative_diff(
     (md / base, (var / n).sqrt() / base)
 }
 
-/// The `b × b` blocks made only of surface pixels, each with the noise of its mean in
-/// one render, from the per-pixel differences of two independent halves (`b²` degrees
-/// of freedom per block). Per block, because the noise is far from uniform: a block of
-/// caustic or of the mirror's view of the light is many times noisier than a wall, and a
-/// global σ made those look like failures. Blocks showing an emitter are left out, as
-/// for the surface mean: their edges move with the rounding of the geometry itself.
+/// The `b × b` blocks made only of surface pixels (indices in `Image::block_average(b)`).
+/// Blocks showing an emitter or the background are left out, as for the surface mean:
+/// their edges move with the rounding of the geometry itself.
 struct SurfaceBlocks {
     b: u32,
-    /// (block index in `block_average(b)`, noise σ of the block mean of one render).
-    noise: Vec<(usize, f64)>,
+    blocks: Vec<usize>,
 }
 
 impl SurfaceBlocks {
-    fn new(h: &Halves, surface: &[usize], b: u32) -> Self {
-        let img = &h.a.image;
-        let (w, bw, bh) = (img.width, img.width / b, img.height / b);
-        let mut is_surface = vec![false; img.pixels.len()];
+    fn new(w: u32, h: u32, surface: &[usize], b: u32) -> Self {
+        let mut is_surface = vec![false; (w * h) as usize];
         surface.iter().for_each(|&i| is_surface[i] = true);
-        let mut noise = Vec::new();
-        for by in 0..bh {
-            for bx in 0..bw {
-                let px: Vec<usize> = (0..b * b)
-                    .map(|k| ((by * b + k / b) * w + bx * b + k % b) as usize)
-                    .collect();
-                if px.iter().all(|&i| is_surface[i]) {
-                    // E[(a − c)²] = 2σ²_pixel for one half, whose spp is one render's.
-                    let var: f64 = px
-                        .iter()
-                        .map(|&i| 0.5 * (lum(img, i) - lum(&h.b.image, i)).powi(2))
-                        .sum();
-                    noise.push(((by * bw + bx) as usize, var.sqrt() / (b * b) as f64));
-                }
+        let (bw, bh) = (w / b, h / b);
+        let blocks = (0..bw * bh)
+            .filter(|&k| {
+                let (bx, by) = (k % bw, k / bw);
+                (0..b * b).all(|j| is_surface[((by * b + j / b) * w + bx * b + j % b) as usize])
+            })
+            .map(|k| k as usize)
+            .collect();
+        SurfaceBlocks { b, blocks }
+    }
+}
+
+/// Seeds (`Budget::seed` and the next ones) of a translated copy's `SeedsTest`.
+pub const TEST_SEEDS: u64 = 12;
+
+/// A translated copy against the rounded original over `TEST_SEEDS` seeds (the two
+/// renders of a pair share theirs), so that every noise below is measured, not
+/// estimated from one render: the spread across pairs is the difference's own noise.
+/// (One pair's block noise estimated from 64 pixels of two halves is not enough: two
+/// independent renders of the same scene put their worst block 3–16 σ apart that way.)
+///
+/// "Within noise" per 8×8 surface block: its systematic difference `μ` is below the
+/// noise `σ` of one render's block mean. Same-seed pairs differ deterministically
+/// wherever the arithmetic does (a 1e4 copy rounds to 1e-3), so `μ = 0` is not the
+/// question; `|μ| ≤ σ` is, tested one-sided by `t = (|d̄| − σ)/se(d̄)` at Šidák's level
+/// for 1 % family-wise.
+#[derive(Clone, Debug)]
+pub struct SeedsTest {
+    pub seeds: usize,
+    /// Surface mean difference relative to the rounded original's, over the pairs,
+    /// and its standard error (from their spread).
+    pub surface_rel_diff: f64,
+    pub surface_rel_se: f64,
+    pub blocks: usize,
+    /// The block with the largest `t`: `t`, its one-sided p-value, `d̄/σ` and its
+    /// top-left pixel.
+    pub worst_t: f64,
+    pub worst_p: f64,
+    pub worst_shift: f64,
+    pub worst_at: (u32, u32),
+    /// Šidák's per-block level for 1 % family-wise over `blocks`.
+    pub level: f64,
+}
+
+impl SeedsTest {
+    /// From `(translated, rounded original)` image pairs.
+    fn new(
+        blocks: &SurfaceBlocks,
+        surface: &[usize],
+        pairs: &[(crate::film::Image, crate::film::Image)],
+    ) -> Self {
+        let k = pairs.len();
+        let mean_se = |x: &[f64]| {
+            let m = x.iter().sum::<f64>() / k as f64;
+            let var = x.iter().map(|v| (v - m).powi(2)).sum::<f64>() / (k as f64 - 1.0);
+            (m, (var / k as f64).sqrt())
+        };
+        let surface_diffs: Vec<f64> = pairs
+            .iter()
+            .map(|(far, near)| paired_relative_diff(near, far, surface).0)
+            .collect();
+        let (surface_rel_diff, surface_rel_se) = mean_se(&surface_diffs);
+        // Per pair, per block: (difference, rounded original) of the block means.
+        let per_pair: Vec<Vec<(f64, f64)>> = pairs
+            .iter()
+            .map(|(far, near)| {
+                let (fa, na) = (far.block_average(blocks.b), near.block_average(blocks.b));
+                blocks
+                    .blocks
+                    .iter()
+                    .map(|&i| (lum(&fa, i) - lum(&na, i), lum(&na, i)))
+                    .collect()
+            })
+            .collect();
+        let bw = pairs[0].0.width / blocks.b;
+        let mut test = SeedsTest {
+            seeds: k,
+            surface_rel_diff,
+            surface_rel_se,
+            blocks: blocks.blocks.len(),
+            worst_t: f64::NEG_INFINITY,
+            worst_p: 1.0,
+            worst_shift: 0.0,
+            worst_at: (0, 0),
+            level: 1.0 - 0.99f64.powf(1.0 / blocks.blocks.len().max(1) as f64),
+        };
+        for (j, &i) in blocks.blocks.iter().enumerate() {
+            let d: Vec<f64> = per_pair.iter().map(|b| b[j].0).collect();
+            let near: Vec<f64> = per_pair.iter().map(|b| b[j].1).collect();
+            let (d_mean, d_se) = mean_se(&d);
+            // One render's block noise: the spread of the rounded original's block means.
+            let sigma = mean_se(&near).1 * (k as f64).sqrt();
+            let excess = d_mean.abs() - sigma;
+            let t = if d_se > 0.0 {
+                excess / d_se
+            } else if excess > 0.0 {
+                f64::INFINITY
+            } else {
+                f64::NEG_INFINITY
+            };
+            if t > test.worst_t {
+                test.worst_t = t;
+                test.worst_p = if t > 0.0 {
+                    0.5 * student_t_two_sided(t, k as f64 - 1.0)
+                } else {
+                    1.0
+                };
+                test.worst_shift = if sigma > 0.0 { d_mean / sigma } else { 0.0 };
+                test.worst_at = (i as u32 % bw * blocks.b, i as u32 / bw * blocks.b);
             }
         }
-        SurfaceBlocks { b, noise }
+        test
     }
 
-    /// Largest |difference of block means| of two renders in units of its noise, `σ·√2`.
-    fn worst_z(&self, r: &crate::film::Image, o: &crate::film::Image) -> f64 {
-        let (ra, oa) = (r.block_average(self.b), o.block_average(self.b));
-        self.noise
-            .iter()
-            .map(|&(i, s)| (lum(&oa, i) - lum(&ra, i)).abs() / (s * 2f64.sqrt()).max(1e-12))
-            .fold(0.0, f64::max)
+    /// No block beyond its noise, at 1 % family-wise.
+    pub fn blocks_within_noise(&self) -> bool {
+        self.worst_p >= self.level
     }
 }
 
@@ -183,7 +307,6 @@ fn compare(
     reference: &crate::film::Image,
     o: &crate::render::RenderOutput,
     sigma: f64,
-    blocks: &SurfaceBlocks,
 ) -> ScaledRun {
     let n = reference.pixels.len();
     let d: Vec<f64> = (0..n)
@@ -195,7 +318,6 @@ fn compare(
         .filter(|&i| d[i].abs() > 1e-3 * lum(reference, i).max(1e-3))
         .count();
     let beyond = d.iter().filter(|x| x.abs() > 4.0 * sigma).count();
-    let max_block_z = blocks.worst_z(reference, &o.image);
     ScaledRun {
         name: name.into(),
         scale,
@@ -206,8 +328,9 @@ fn compare(
         surface_rel_se: 0.0,
         frac_changed: changed as f64 / n as f64,
         frac_beyond_noise: beyond as f64 / n as f64,
-        max_block_z,
         nonfinite: o.nonfinite_samples,
+        seeds: None,
+        input_rounding: None,
     }
 }
 
@@ -232,12 +355,28 @@ impl ScaleCase {
             noise: self.pixel_noise,
             nonfinite: r.nonfinite,
             note: format!(
-                "{:.1}% of pixels changed, {:.2}% beyond 4σ; surfaces {:+.3}% ± {:.3}%; worst 8×8 surface block {:.1} σ",
+                "{}{:.1}% of pixels changed, {:.2}% beyond 4σ; surfaces {:+.3}% ± {:.3}%{}",
+                r.input_rounding.map_or(String::new(), |(d, se)| format!(
+                    "against the original rounded as here (that rounding itself: surfaces {:+.3}% ± {:.3}%): ",
+                    100.0 * d,
+                    100.0 * se
+                )),
                 100.0 * r.frac_changed,
                 100.0 * r.frac_beyond_noise,
                 100.0 * r.surface_rel_diff,
                 100.0 * r.surface_rel_se,
-                r.max_block_z
+                r.seeds.as_ref().map_or(String::new(), |t| format!(
+                    "; over {} seeds: surfaces {:+.3}% ± {:.3}%, largest 8×8 block shift {:+.2} σ of one render (t = {:.1} beyond 1 σ, p = {:.1e} against Šidák's {:.1e} for {} blocks) at {:?}",
+                    t.seeds,
+                    100.0 * t.surface_rel_diff,
+                    100.0 * t.surface_rel_se,
+                    t.worst_shift,
+                    t.worst_t,
+                    t.worst_p,
+                    t.level,
+                    t.blocks,
+                    t.worst_at
+                )),
             ),
         }));
         rows
