@@ -1,6 +1,6 @@
 //! Random numbers and the warps from `[0,1)²` to directions, each next to its pdf.
 
-use crate::simd::{F32s, Mask, Simd, U64s};
+use crate::simd::{F32s, Mask, Simd, U32s, U64s};
 use glam::{Vec2, Vec3};
 use rand_core::{RngCore, SeedableRng};
 use rand_pcg::Pcg32;
@@ -8,8 +8,98 @@ use std::f32::consts::{FRAC_1_PI, PI};
 
 /// A random stream. Seeded from (render seed, pixel, pass) or (render seed, pixel,
 /// sample index) only, so an image is the same whatever the thread count or tile order.
+/// A pixel's sample streams (`for_sample`) take their first [`STRATIFIED_DIMS`]
+/// numbers from a scrambled (0,2)-sequence over the pixel's samples instead.
 pub struct Sampler {
     rng: Pcg32,
+    strata: Option<Strata>,
+}
+
+/// How many of a pixel sample's first numbers are stratified across the pixel's
+/// samples: the camera's pixel position (2), and at the first vertex the light sample
+/// (2), the lobe choice (1) and the BSDF direction (2). Measured at 64 spp, `-m 5`,
+/// 160×120 (RMSE against the references): CBspheres_lambertian 0.030 independent,
+/// 0.0097 with 5, 0.0089 with 7, 0.0099 with 11; CBbunny 0.0085 with 5, 0.0083 with 7.
+pub const STRATIFIED_DIMS: u32 = 7;
+
+/// Where a pixel sample is in its pixel's (0,2)-sequence: sample `index` of the pixel
+/// whose scrambles derive from `seed`; `dim` numbers drawn so far.
+#[derive(Clone, Copy)]
+struct Strata {
+    seed: u32,
+    index: u32,
+    dim: u32,
+}
+
+impl Strata {
+    /// Number `dim` alone: the first component of the sequence, scrambled for `dim`.
+    fn single(&self) -> f32 {
+        to_unit(owen_scrambled(self.index, dim_seed(self.seed, self.dim)))
+    }
+
+    /// Numbers `dim, dim + 1` as a 2-D point of the sequence, scrambled for `dim`.
+    fn pair(&self) -> Vec2 {
+        let seed = dim_seed(self.seed, self.dim);
+        Vec2::new(
+            to_unit(owen_scrambled(self.index, seed)),
+            to_unit(owen_scrambled(
+                sobol_pascal(self.index),
+                hash32(seed ^ SECOND_AXIS),
+            )),
+        )
+    }
+}
+
+/// Mixed into the scramble seed of a pair's second component.
+const SECOND_AXIS: u32 = 0x68E3_1DA4;
+
+/// The scramble seed of dimension `dim` in a pixel whose seed is `seed`.
+#[inline]
+fn dim_seed(seed: u32, dim: u32) -> u32 {
+    hash32(seed.wrapping_add(dim.wrapping_mul(0x9E37_79B9)))
+}
+
+/// Chris Wellons' `lowbias32` integer hash.
+#[inline]
+fn hash32(mut x: u32) -> u32 {
+    x ^= x >> 16;
+    x = x.wrapping_mul(0x7feb_352d);
+    x ^= x >> 15;
+    x = x.wrapping_mul(0x846c_a68b);
+    x ^ (x >> 16)
+}
+
+/// The second Sobol dimension of sample `i`, before its bits are reversed: the
+/// generator is Pascal's triangle mod 2, so output digit `j` is the XOR of the index
+/// bits `k ⊇ j` (Lucas), a superset sum done one bit of `j` at a time.
+#[inline]
+fn sobol_pascal(i: u32) -> u32 {
+    let mut y = i;
+    y ^= (y >> 1) & 0x5555_5555;
+    y ^= (y >> 2) & 0x3333_3333;
+    y ^= (y >> 4) & 0x0f0f_0f0f;
+    y ^= (y >> 8) & 0x00ff_00ff;
+    y ^ ((y >> 16) & 0x0000_ffff)
+}
+
+/// Owen scrambling (pbrt-v4's `FastOwenScrambler`, Laine–Karras hash) of the radical
+/// inverse of `x`, with the two bit reversals cancelled: the first Sobol dimension of
+/// sample `i` is `reverse(i)`, the second `reverse(sobol_pascal(i))`.
+#[inline]
+fn owen_scrambled(x: u32, seed: u32) -> u32 {
+    let mut v = x;
+    v ^= v.wrapping_mul(0x3d20_adea);
+    v = v.wrapping_add(seed);
+    v = v.wrapping_mul((seed >> 16) | 1);
+    v ^= v.wrapping_mul(0x0552_6c56);
+    v ^= v.wrapping_mul(0x53a2_2864);
+    v.reverse_bits()
+}
+
+/// The top 24 bits as a float in `[0, 1)`, as `next_f32` converts PCG's output.
+#[inline]
+fn to_unit(bits: u32) -> f32 {
+    (bits >> 8) as f32 * (1.0 / (1u32 << 24) as f32)
 }
 
 impl Sampler {
@@ -27,25 +117,47 @@ impl Sampler {
         let stream = splitmix64(pass ^ 0xD1B5_4A32_D192_ED03).wrapping_add(pixel);
         Sampler {
             rng: Pcg32::new(state, stream),
+            strata: None,
         }
     }
 
     pub fn from_seed(seed: u64) -> Self {
         Sampler {
             rng: Pcg32::seed_from_u64(seed),
+            strata: None,
         }
     }
 
-    /// Uniform in `[0, 1)`.
+    /// Uniform in `[0, 1)`. The random stream advances on every draw, stratified or
+    /// not, so the numbers after the stratified ones are the stream's own.
     #[inline]
     pub fn next_f32(&mut self) -> f32 {
-        (self.rng.next_u32() >> 8) as f32 * (1.0 / (1u32 << 24) as f32)
+        let u = to_unit(self.rng.next_u32());
+        match &mut self.strata {
+            Some(st) if st.dim < STRATIFIED_DIMS => {
+                let v = st.single();
+                st.dim += 1;
+                v
+            }
+            Some(st) => {
+                st.dim += 1;
+                u
+            }
+            None => u,
+        }
     }
 
+    /// Uniform in `[0, 1)²`: a 2-D point of the sequence when both numbers are
+    /// stratified, else two draws.
     #[inline]
     pub fn next_2d(&mut self) -> Vec2 {
+        let pair = self
+            .strata
+            .filter(|st| st.dim + 1 < STRATIFIED_DIMS)
+            .map(|st| st.pair());
         let x = self.next_f32();
-        Vec2::new(x, self.next_f32())
+        let y = self.next_f32();
+        pair.unwrap_or(Vec2::new(x, y))
     }
 }
 
@@ -70,6 +182,11 @@ impl PixelStreams {
         let stream = splitmix64(key ^ 0xD1B5_4A32_D192_ED03);
         Sampler {
             rng: Pcg32::new(key, stream),
+            strata: Some(Strata {
+                seed: (self.key >> 32) as u32,
+                index: sample as u32,
+                dim: 0,
+            }),
         }
     }
 }
@@ -81,6 +198,10 @@ impl PixelStreams {
 pub struct StreamLanes<S: Simd> {
     state: U64s<S>,
     increment: U64s<S>,
+    /// Each lane's `Strata`: scramble seed, sample index, numbers drawn.
+    seed: U32s<S>,
+    index: U32s<S>,
+    dim: U32s<S>,
 }
 
 /// PCG32's multiplier (`rand_pcg`'s `Lcg64Xsh32`).
@@ -100,7 +221,13 @@ impl<S: Simd> StreamLanes<S> {
         let state = state
             .wrapping_mul(U64s::splat(s, PCG_MULTIPLIER))
             .wrapping_add(increment);
-        StreamLanes { state, increment }
+        StreamLanes {
+            state,
+            increment,
+            seed: pixel_key.shr::<32>().low32(),
+            index: sample.low32(),
+            dim: U32s::splat(s, 0),
+        }
     }
 
     /// Lane `i` of `other` where `m` is set, else of `self`.
@@ -109,6 +236,9 @@ impl<S: Simd> StreamLanes<S> {
         StreamLanes {
             state: U64s::select(m, other.state, self.state),
             increment: U64s::select(m, other.increment, self.increment),
+            seed: U32s::select(m, other.seed, self.seed),
+            index: U32s::select(m, other.index, self.index),
+            dim: U32s::select(m, other.dim, self.dim),
         }
     }
 
@@ -116,6 +246,61 @@ impl<S: Simd> StreamLanes<S> {
     /// neither draw nor advance (their value is meaningless).
     #[inline(always)]
     pub fn next_f32(&mut self, s: S, m: Mask<S>) -> F32s<S> {
+        let u = self.next_random(s, m);
+        let single = m & self.dims_below(s, STRATIFIED_DIMS);
+        let v = if single.any() {
+            let seed = dim_seed_lanes(s, self.seed, self.dim);
+            F32s::select(
+                single,
+                to_unit_lanes(s, owen_scrambled_lanes(s, self.index, seed)),
+                u,
+            )
+        } else {
+            u
+        };
+        self.dim = U32s::select(m, self.dim.wrapping_add(U32s::splat(s, 1)), self.dim);
+        v
+    }
+
+    /// Two numbers per lane of `m` (`Sampler::next_2d`). The first of a stratified
+    /// pair is the single number of its dimension, so one scramble serves both.
+    #[inline(always)]
+    pub fn next_2d(&mut self, s: S, m: Mask<S>) -> (F32s<S>, F32s<S>) {
+        let mut x = self.next_random(s, m);
+        let mut y = self.next_random(s, m);
+        let first = m & self.dims_below(s, STRATIFIED_DIMS);
+        if first.any() {
+            let seed = dim_seed_lanes(s, self.seed, self.dim);
+            let sx = to_unit_lanes(s, owen_scrambled_lanes(s, self.index, seed));
+            x = F32s::select(first, sx, x);
+            let pair = m & self.dims_below(s, STRATIFIED_DIMS - 1);
+            if pair.any() {
+                let second = hash32_lanes(s, seed.xor(U32s::splat(s, SECOND_AXIS)));
+                let sy = owen_scrambled_lanes(s, sobol_pascal_lanes(s, self.index), second);
+                y = F32s::select(pair, to_unit_lanes(s, sy), y);
+            }
+        }
+        self.dim = U32s::select(m, self.dim.wrapping_add(U32s::splat(s, 2)), self.dim);
+        (x, y)
+    }
+
+    /// Draws one number per lane of `m` and discards it (`Sampler::next_f32` whose
+    /// value goes unused), without the cost of scrambling it.
+    #[inline(always)]
+    pub fn skip(&mut self, s: S, m: Mask<S>) {
+        self.next_random(s, m);
+        self.dim = U32s::select(m, self.dim.wrapping_add(U32s::splat(s, 1)), self.dim);
+    }
+
+    /// Lanes that have drawn fewer than `n` numbers.
+    #[inline(always)]
+    fn dims_below(&self, s: S, n: u32) -> Mask<S> {
+        self.dim.to_f32().lt(F32s::splat(s, n as f32))
+    }
+
+    /// The PCG32 draw of the lanes of `m`, as a float in `[0, 1)`.
+    #[inline(always)]
+    fn next_random(&mut self, s: S, m: Mask<S>) -> F32s<S> {
         let old = self.state;
         let next = old
             .wrapping_mul(U64s::splat(s, PCG_MULTIPLIER))
@@ -126,6 +311,54 @@ impl<S: Simd> StreamLanes<S> {
         let bits = xsh.rotate_right(rot).shr::<8>();
         bits.to_f32() * F32s::splat(s, 1.0 / (1u32 << 24) as f32)
     }
+}
+
+/// [`hash32`] per lane.
+#[inline(always)]
+fn hash32_lanes<S: Simd>(s: S, x: U32s<S>) -> U32s<S> {
+    let x = x
+        .xor(x.shr::<16>())
+        .wrapping_mul(U32s::splat(s, 0x7feb_352d));
+    let x = x
+        .xor(x.shr::<15>())
+        .wrapping_mul(U32s::splat(s, 0x846c_a68b));
+    x.xor(x.shr::<16>())
+}
+
+/// [`dim_seed`] per lane.
+#[inline(always)]
+fn dim_seed_lanes<S: Simd>(s: S, seed: U32s<S>, dim: U32s<S>) -> U32s<S> {
+    hash32_lanes(
+        s,
+        seed.wrapping_add(dim.wrapping_mul(U32s::splat(s, 0x9E37_79B9))),
+    )
+}
+
+/// [`sobol_pascal`] per lane.
+#[inline(always)]
+fn sobol_pascal_lanes<S: Simd>(s: S, i: U32s<S>) -> U32s<S> {
+    let y = i.xor(i.shr::<1>().and(U32s::splat(s, 0x5555_5555)));
+    let y = y.xor(y.shr::<2>().and(U32s::splat(s, 0x3333_3333)));
+    let y = y.xor(y.shr::<4>().and(U32s::splat(s, 0x0f0f_0f0f)));
+    let y = y.xor(y.shr::<8>().and(U32s::splat(s, 0x00ff_00ff)));
+    y.xor(y.shr::<16>().and(U32s::splat(s, 0x0000_ffff)))
+}
+
+/// [`owen_scrambled`] per lane.
+#[inline(always)]
+fn owen_scrambled_lanes<S: Simd>(s: S, x: U32s<S>, seed: U32s<S>) -> U32s<S> {
+    let v = x.xor(x.wrapping_mul(U32s::splat(s, 0x3d20_adea)));
+    let v = v.wrapping_add(seed);
+    let v = v.wrapping_mul(seed.shr::<16>().or(U32s::splat(s, 1)));
+    let v = v.xor(v.wrapping_mul(U32s::splat(s, 0x0552_6c56)));
+    let v = v.xor(v.wrapping_mul(U32s::splat(s, 0x53a2_2864)));
+    v.reverse_bits()
+}
+
+/// [`to_unit`] per lane.
+#[inline(always)]
+fn to_unit_lanes<S: Simd>(s: S, bits: U32s<S>) -> F32s<S> {
+    bits.shr::<8>().to_f32() * F32s::splat(s, 1.0 / (1u32 << 24) as f32)
 }
 
 /// [`splitmix64`] per lane.
@@ -296,12 +529,38 @@ mod tests {
             let mut scalar: Vec<Sampler> = (0..LANES)
                 .map(|i| PixelStreams::new(seed, pixels[i]).sample(samples[i]))
                 .collect();
-            // Draws in a changing subset of lanes: the others must not advance.
-            for round in 0..40u32 {
+            // Single, paired and skipped draws in a changing subset of lanes (the
+            // others must not advance), so lanes cross the stratified dimensions at
+            // different draws and as firsts, seconds or singles.
+            for round in 0..60u32 {
                 let m: LaneBits = round.wrapping_mul(0x9E37_79B9) >> 16;
-                let u = lanes.next_f32(s, Mask::from_bits(s, m)).to_array();
-                for i in (0..LANES).filter(|&i| m >> i & 1 != 0) {
-                    assert_eq!(u[i].to_bits(), scalar[i].next_f32().to_bits(), "lane {i}");
+                let mask = Mask::from_bits(s, m);
+                let drawn = (0..LANES).filter(|&i| m >> i & 1 != 0);
+                match round % 3 {
+                    0 => {
+                        let u = lanes.next_f32(s, mask).to_array();
+                        for i in drawn {
+                            assert_eq!(u[i].to_bits(), scalar[i].next_f32().to_bits(), "lane {i}");
+                        }
+                    }
+                    1 => {
+                        let (x, y) = lanes.next_2d(s, mask);
+                        let (x, y) = (x.to_array(), y.to_array());
+                        for i in drawn {
+                            let v = scalar[i].next_2d();
+                            assert_eq!(
+                                (x[i].to_bits(), y[i].to_bits()),
+                                (v.x.to_bits(), v.y.to_bits()),
+                                "lane {i}"
+                            );
+                        }
+                    }
+                    _ => {
+                        lanes.skip(s, mask);
+                        for i in drawn {
+                            scalar[i].next_f32();
+                        }
+                    }
                 }
             }
         }
@@ -311,6 +570,65 @@ mod tests {
     fn stream_lanes_draw_what_the_scalar_streams_draw() {
         crate::simd::dispatch(LanesMatch);
         LanesMatch.run(crate::simd::Portable);
+    }
+
+    #[test]
+    fn sobol_pascal_is_the_second_sobol_dimension() {
+        // Direction numbers of x + 1: v₀ = 2³¹, vₖ = vₖ₋₁ ⊕ (vₖ₋₁ >> 1).
+        let columns: Vec<u32> = std::iter::successors(Some(1u32 << 31), |v| Some(v ^ (v >> 1)))
+            .take(32)
+            .collect();
+        for i in (0..4096u32).chain([0xffff_ffff, 0x8000_0001, 0x1234_5678]) {
+            let direct = (0..32)
+                .filter(|k| i >> k & 1 != 0)
+                .fold(0, |v, k| v ^ columns[k]);
+            assert_eq!(sobol_pascal(i).reverse_bits(), direct, "index {i}");
+        }
+    }
+
+    /// A pixel's first 2ᵐ samples put one 2-D point in every elementary interval of
+    /// area 2⁻ᵐ (a (0, m, 2)-net, kept by Owen scrambling), for every pair of
+    /// stratified dimensions and whatever the seed; the numbers after the
+    /// stratified ones are the random stream's.
+    #[test]
+    fn stratified_pairs_are_nets_and_the_rest_is_the_stream() {
+        let m = 6;
+        let n = 1usize << m;
+        for (seed, pixel) in [(0u64, 0u64), (7, 12345), (99, 1 << 40)] {
+            let streams = PixelStreams::new(seed, pixel);
+            let draws: Vec<Vec<Vec2>> = (0..n as u64)
+                .map(|k| {
+                    let mut s = streams.sample(k);
+                    (0..STRATIFIED_DIMS / 2).map(|_| s.next_2d()).collect()
+                })
+                .collect();
+            for d in 0..(STRATIFIED_DIMS / 2) as usize {
+                for bx in 0..=m {
+                    let (cols, rows) = (1usize << bx, 1usize << (m - bx));
+                    let mut seen = vec![0u32; n];
+                    for p in draws.iter().map(|v| v[d]) {
+                        let cell =
+                            (p.y * rows as f32) as usize * cols + (p.x * cols as f32) as usize;
+                        seen[cell] += 1;
+                    }
+                    assert!(
+                        seen.iter().all(|&c| c == 1),
+                        "pair {d}, {cols}x{rows}: {seen:?}"
+                    );
+                }
+            }
+            // Beyond the stratified numbers: the stream's own.
+            let mut a = streams.sample(3);
+            let mut b = streams.sample(3);
+            b.strata = None;
+            for _ in 0..STRATIFIED_DIMS {
+                a.next_f32();
+                b.next_f32();
+            }
+            for _ in 0..8 {
+                assert_eq!(a.next_f32().to_bits(), b.next_f32().to_bits());
+            }
+        }
     }
 
     #[test]

@@ -39,25 +39,25 @@ const CASES: &[Case] = &[
         scene: "scenes/cs184/sky/CBspheres_lambertian.dae",
         max_depth: 1,
         strategy: DirectStrategy::Light,
-        expected: 0x9a99_602d_c069_8556,
+        expected: 0xe161_02a4_0f76_a35e,
     },
     Case {
         scene: "scenes/cs184/sky/CBspheres_lambertian.dae",
         max_depth: 5,
         strategy: DirectStrategy::Mis,
-        expected: 0x40a7_4860_52d4_e4f3,
+        expected: 0x6036_e0e7_8785_a4f6,
     },
     Case {
         scene: "scenes/cs184/sky/CBspheres.dae",
         max_depth: 5,
         strategy: DirectStrategy::Light,
-        expected: 0x1878_f7bb_2072_d5f1,
+        expected: 0x7bc6_c95a_c289_c8e2,
     },
     Case {
         scene: "scenes/cs184/sky/CBbunny_microfacet_cu.dae",
         max_depth: 5,
         strategy: DirectStrategy::Mis,
-        expected: 0xc2dd_d633_4a0a_d684,
+        expected: 0xf70a_1198_1b13_75d9,
     },
 ];
 

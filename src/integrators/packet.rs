@@ -283,6 +283,13 @@ impl<'a, 'b, 't, S: Simd> Kernel<'a, 'b, 't, S> {
         self.rng.next_f32(self.s, m)
     }
 
+    /// Two uniform numbers per lane of `lanes` (`Sampler::next_2d`).
+    #[inline(always)]
+    fn next_2d(&mut self, lanes: LaneBits) -> (F32s<S>, F32s<S>) {
+        let m = self.mask(lanes);
+        self.rng.next_2d(self.s, m)
+    }
+
     /// Lanes of `lanes` where light found after `bounces` scattering events counts
     /// (`PathIntegrator::counts`).
     #[inline(always)]
@@ -328,8 +335,7 @@ impl<'a, 'b, 't, S: Simd> Kernel<'a, 'b, 't, S> {
             U64s::from_array(s, index),
         );
         self.rng = self.rng.replace(m, streams);
-        let xi_x = self.next_f32(fresh);
-        let xi_y = self.next_f32(fresh);
+        let (xi_x, xi_y) = self.next_2d(fresh);
         let cam = self.it.camera;
         let (one, two) = (self.f(1.0), self.f(2.0));
         let u = (U32s::from_array(s, xy[0]).to_f32() + xi_x) / self.f(cam.width as f32);
@@ -775,8 +781,7 @@ impl<'a, 'b, 't, S: Simd> Kernel<'a, 'b, 't, S> {
         for k in 0..self.it.lights.len() {
             let light = self.it.lights[k];
             for _ in 0..n {
-                let u1 = self.next_f32(lanes);
-                let u2 = self.next_f32(lanes);
+                let (u1, u2) = self.next_2d(lanes);
                 let ls = sample_area(s, &light, si.p, u1, u2);
                 let wi = frame.to_local(ls.wi);
                 let reflect = (wi.z * wo.z).gt(zero);
@@ -827,9 +832,8 @@ impl<'a, 'b, 't, S: Simd> Kernel<'a, 'b, 't, S> {
         let (si, albedo) = (hit.si, hit.albedo);
         let zero = self.f(0.0);
         // `material.sample(wo, next_f32(), next_2d())`: the lobe number is drawn too.
-        let _u_lobe = self.next_f32(lanes);
-        let u1 = self.next_f32(lanes);
-        let u2 = self.next_f32(lanes);
+        self.rng.skip(s, self.mask(lanes));
+        let (u1, u2) = self.next_2d(lanes);
         // Cosine-weighted direction on the side of `wo` (`lambertian::sample`).
         let finite = wo.x.is_finite() & wo.y.is_finite() & wo.z.is_finite();
         let (dx, dy) = concentric_disk_lanes(s, u1, u2);

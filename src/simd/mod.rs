@@ -86,8 +86,12 @@ pub unsafe trait Simd: Copy + Send + Sync + 'static {
     unsafe fn u_eq(a: Self::U, b: Self::U) -> Self::M;
     unsafe fn u_select(m: Self::M, a: Self::U, b: Self::U) -> Self::U;
 
+    /// Wrapping product (the low 32 bits).
+    unsafe fn u_mul(a: Self::U, b: Self::U) -> Self::U;
     /// `a >> N` (logical) per lane.
     unsafe fn u_shr<const N: u32>(a: Self::U) -> Self::U;
+    /// `a << N` per lane.
+    unsafe fn u_shl<const N: u32>(a: Self::U) -> Self::U;
     /// `a.rotate_right(r)` per lane (`r < 32`).
     unsafe fn u_rotr(a: Self::U, r: Self::U) -> Self::U;
 
@@ -264,6 +268,40 @@ impl<S: Simd> U32s<S> {
     #[inline(always)]
     pub fn shr<const N: u32>(self) -> Self {
         U32s(unsafe { S::u_shr::<N>(self.0) })
+    }
+    #[inline(always)]
+    pub fn shl<const N: u32>(self) -> Self {
+        U32s(unsafe { S::u_shl::<N>(self.0) })
+    }
+    #[inline(always)]
+    pub fn wrapping_add(self, o: Self) -> Self {
+        U32s(unsafe { S::u_add(self.0, o.0) })
+    }
+    #[inline(always)]
+    pub fn wrapping_mul(self, o: Self) -> Self {
+        U32s(unsafe { S::u_mul(self.0, o.0) })
+    }
+    #[inline(always)]
+    pub fn and(self, o: Self) -> Self {
+        U32s(unsafe { S::u_and(self.0, o.0) })
+    }
+    #[inline(always)]
+    pub fn or(self, o: Self) -> Self {
+        U32s(unsafe { S::u_or(self.0, o.0) })
+    }
+    /// `u32::reverse_bits` per lane.
+    #[inline(always)]
+    pub fn reverse_bits(self) -> Self {
+        let x = self;
+        let m1 = U32s(unsafe { S::u_splat(0x5555_5555) });
+        let m2 = U32s(unsafe { S::u_splat(0x3333_3333) });
+        let m4 = U32s(unsafe { S::u_splat(0x0f0f_0f0f) });
+        let m8 = U32s(unsafe { S::u_splat(0x00ff_00ff) });
+        let x = x.shr::<1>().and(m1).or(x.and(m1).shl::<1>());
+        let x = x.shr::<2>().and(m2).or(x.and(m2).shl::<2>());
+        let x = x.shr::<4>().and(m4).or(x.and(m4).shl::<4>());
+        let x = x.shr::<8>().and(m8).or(x.and(m8).shl::<8>());
+        x.shr::<16>().or(x.shl::<16>())
     }
     #[inline(always)]
     pub fn rotate_right(self, r: Self) -> Self {

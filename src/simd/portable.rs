@@ -142,6 +142,14 @@ unsafe impl Simd for Portable {
         a.map(|x| x >> N)
     }
     #[inline(always)]
+    unsafe fn u_shl<const N: u32>(a: Ua) -> Ua {
+        a.map(|x| x << N)
+    }
+    #[inline(always)]
+    unsafe fn u_mul(a: Ua, b: Ua) -> Ua {
+        map2(a, b, u32::wrapping_mul)
+    }
+    #[inline(always)]
     unsafe fn u_rotr(a: Ua, r: Ua) -> Ua {
         map2(a, r, u32::rotate_right)
     }

@@ -166,6 +166,14 @@ unsafe impl Simd for Avx512 {
         _mm512_srl_epi32(a, _mm_cvtsi32_si128(N as i32))
     }
     #[inline(always)]
+    unsafe fn u_shl<const N: u32>(a: __m512i) -> __m512i {
+        _mm512_sll_epi32(a, _mm_cvtsi32_si128(N as i32))
+    }
+    #[inline(always)]
+    unsafe fn u_mul(a: __m512i, b: __m512i) -> __m512i {
+        _mm512_mullo_epi32(a, b)
+    }
+    #[inline(always)]
     unsafe fn u_rotr(a: __m512i, r: __m512i) -> __m512i {
         _mm512_rorv_epi32(a, r)
     }
@@ -443,6 +451,15 @@ unsafe impl Simd for Avx2 {
     unsafe fn u_shr<const N: u32>(a: U2) -> U2 {
         let n = _mm_cvtsi32_si128(N as i32);
         [_mm256_srl_epi32(a[0], n), _mm256_srl_epi32(a[1], n)]
+    }
+    #[inline(always)]
+    unsafe fn u_shl<const N: u32>(a: U2) -> U2 {
+        let n = _mm_cvtsi32_si128(N as i32);
+        [_mm256_sll_epi32(a[0], n), _mm256_sll_epi32(a[1], n)]
+    }
+    #[inline(always)]
+    unsafe fn u_mul(a: U2, b: U2) -> U2 {
+        pair!(_mm256_mullo_epi32, a, b)
     }
     #[inline(always)]
     unsafe fn u_rotr(a: U2, r: U2) -> U2 {
