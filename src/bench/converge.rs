@@ -459,6 +459,55 @@ pub fn time_to_reach(points: &[Point], target: f64) -> Vec<(String, Option<f64>)
         .collect()
 }
 
+/// `method`'s RMSE at `seconds`, interpolated log-log between its two points that
+/// bracket it (`None` outside its points' range).
+pub fn rmse_at(points: &[Point], method: &str, seconds: f64) -> Option<f64> {
+    let mut pts: Vec<(f64, f64)> = points
+        .iter()
+        .filter(|p| p.method == method && p.seconds > 0.0 && p.rmse > 0.0)
+        .map(|p| (p.seconds, p.rmse))
+        .collect();
+    pts.sort_by(|a, b| a.0.total_cmp(&b.0));
+    let (a, b) = pts
+        .windows(2)
+        .map(|w| (w[0], w[1]))
+        .find(|(a, b)| a.0 <= seconds && seconds <= b.0)?;
+    if a.0 == b.0 {
+        return Some(a.1);
+    }
+    let f = (seconds / a.0).ln() / (b.0 / a.0).ln();
+    Some((a.1.ln() + f * (b.1 / a.1).ln()).exp())
+}
+
+/// Three render times, log-spaced over the range the first method (ember's default)
+/// and every Mitsuba method have all measured, from their 8-spp points on.
+fn common_times(points: &[Point]) -> Vec<f64> {
+    let Some(first) = points.first().map(|p| p.method.clone()) else {
+        return Vec::new();
+    };
+    let (mut lo, mut hi) = (0.0f64, f64::INFINITY);
+    let mut names = vec![first];
+    for p in points.iter().filter(|p| p.method.starts_with("Mitsuba")) {
+        if !names.contains(&p.method) {
+            names.push(p.method.clone());
+        }
+    }
+    for name in &names {
+        let secs = points
+            .iter()
+            .filter(|p| &p.method == name && p.spp >= 8)
+            .map(|p| p.seconds);
+        let (a, b) = secs.fold((f64::INFINITY, 0.0f64), |(a, b), t| (a.min(t), b.max(t)));
+        (lo, hi) = (lo.max(a), hi.min(b));
+    }
+    if !(lo > 0.0 && hi > lo) {
+        return Vec::new();
+    }
+    (0..3)
+        .map(|k| lo * (hi / lo).powf(k as f64 / 2.0))
+        .collect()
+}
+
 /// `path`'s file name without its extension ("" when it has none).
 fn scene_stem(path: &Path) -> String {
     path.file_stem()
@@ -505,6 +554,47 @@ impl ConvergeReport {
                 Some(t) => vec![name.clone(), format!("{t:.3}"), format!("{:.2}", t / best)],
                 None => vec![name.clone(), "not reached".into(), "–".into()],
             });
+        }
+        table.to_markdown()
+    }
+
+    /// Each method's RMSE at three common render times (interpolated on its curve),
+    /// and the first method's RMSE as a fraction of each Mitsuba method's: the
+    /// comparison at equal time that holds whatever the shape of the curves.
+    pub fn equal_time_table(&self) -> String {
+        let times = common_times(&self.points);
+        if times.is_empty() {
+            return String::new();
+        }
+        let mut header = vec!["method".to_string()];
+        header.extend(times.iter().map(|t| format!("RMSE at {t:.3} s")));
+        let mut table = Table::new(header);
+        let mut names: Vec<&str> = Vec::new();
+        for p in &self.points {
+            if !names.contains(&p.method.as_str()) {
+                names.push(&p.method);
+            }
+        }
+        let cell =
+            |v: Option<f64>, digits: usize| v.map_or("–".into(), |v| format!("{v:.digits$}"));
+        for name in &names {
+            let mut row = vec![name.to_string()];
+            row.extend(
+                times
+                    .iter()
+                    .map(|&t| cell(rmse_at(&self.points, name, t), 5)),
+            );
+            table.push(row);
+        }
+        for peer in names.iter().filter(|n| n.starts_with("Mitsuba")) {
+            let mut row = vec![format!("{} ÷ {peer}", names[0])];
+            row.extend(times.iter().map(|&t| {
+                let ratio = rmse_at(&self.points, names[0], t)
+                    .zip(rmse_at(&self.points, peer, t))
+                    .map(|(a, b)| a / b);
+                cell(ratio, 2)
+            }));
+            table.push(row);
         }
         table.to_markdown()
     }
@@ -560,9 +650,15 @@ impl Report for ConvergeReport {
         Ok(files)
     }
 
-    /// Where the reference came from, and the time each method needs to reach the target RMSE.
+    /// Where the reference came from, the time each method needs to reach the target
+    /// RMSE, and the RMSEs at equal render time.
     fn summary(&self) -> String {
-        format!("{}\n{}", self.reference_note, self.efficiency_table())
+        format!(
+            "{}\n{}\n{}",
+            self.reference_note,
+            self.efficiency_table(),
+            self.equal_time_table()
+        )
     }
 }
 
@@ -590,5 +686,10 @@ mod tests {
         let t = time_to_reach(&pts, 0.05);
         assert!((t[0].1.unwrap() - 4.0).abs() < 1e-9);
         assert_eq!(time_to_reach(&[pt("b", 1, 1.0, 1.0)], 0.1)[0].1, None);
+        // On the log-log line RMSE = 0.1/√t: 2 s lies between the 1 s and 4 s points.
+        let r = rmse_at(&pts, "a", 2.0).unwrap();
+        assert!((r - 0.1 / 2f64.sqrt()).abs() < 1e-12, "{r}");
+        assert_eq!(rmse_at(&pts, "a", 20.0), None);
+        assert_eq!(rmse_at(&pts, "b", 1.0), None);
     }
 }
