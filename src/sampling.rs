@@ -1,6 +1,6 @@
 //! Random numbers and the warps from `[0,1)²` to directions, each next to its pdf.
 
-use crate::simd::{F32s, Mask, Simd, U32s, U64s};
+use crate::simd::{F32s, LaneBits, Mask, Simd, U32s, U64s, ALL_LANES};
 use glam::{Vec2, Vec3};
 use rand_core::{RngCore, SeedableRng};
 use rand_pcg::Pcg32;
@@ -9,7 +9,7 @@ use std::f32::consts::{FRAC_1_PI, PI};
 /// A random stream. Seeded from (render seed, pixel, pass) or (render seed, pixel,
 /// sample index) only, so an image is the same whatever the thread count or tile order.
 /// A pixel's sample streams (`for_sample`) take their first [`STRATIFIED_DIMS`]
-/// numbers from a scrambled (0,2)-sequence over the pixel's samples instead.
+/// numbers from a scrambled Sobol sequence over the pixel's samples instead.
 pub struct Sampler {
     rng: Pcg32,
     strata: Option<Strata>,
@@ -18,11 +18,11 @@ pub struct Sampler {
 /// How many of a pixel sample's first numbers are stratified across the pixel's
 /// samples: the camera's pixel position (2), and at the first vertex the light sample
 /// (2), the lobe choice (1) and the BSDF direction (2). Measured at 64 spp, `-m 5`,
-/// 160×120 (RMSE against the references): CBspheres_lambertian 0.030 independent,
-/// 0.0097 with 5, 0.0089 with 7, 0.0099 with 11; CBbunny 0.0085 with 5, 0.0083 with 7.
+/// 160×120 (RMSE against the references, 3 seeds): CBspheres_lambertian 0.030
+/// independent, 0.0089 stratified; CBbunny 0.0083.
 pub const STRATIFIED_DIMS: u32 = 7;
 
-/// Where a pixel sample is in its pixel's (0,2)-sequence: sample `index` of the pixel
+/// Where a pixel sample is in its pixel's Sobol sequence: sample `index` of the pixel
 /// whose scrambles derive from `seed`; `dim` numbers drawn so far.
 #[derive(Clone, Copy)]
 struct Strata {
@@ -32,26 +32,81 @@ struct Strata {
 }
 
 impl Strata {
-    /// Number `dim` alone: the first component of the sequence, scrambled for `dim`.
-    fn single(&self) -> f32 {
-        to_unit(owen_scrambled(self.index, dim_seed(self.seed, self.dim)))
-    }
-
-    /// Numbers `dim, dim + 1` as a 2-D point of the sequence, scrambled for `dim`.
-    fn pair(&self) -> Vec2 {
-        let seed = dim_seed(self.seed, self.dim);
-        Vec2::new(
-            to_unit(owen_scrambled(self.index, seed)),
-            to_unit(owen_scrambled(
-                sobol_pascal(self.index),
-                hash32(seed ^ SECOND_AXIS),
-            )),
-        )
+    /// Number `dim`: dimension `dim` of the Sobol sequence at `index`, Owen-scrambled
+    /// for (pixel, dimension). Each dimension is its own (the dimensions of one sample
+    /// are jointly uniform over the pixel's samples): scrambled copies of one dimension
+    /// would tie them together by a fixed map per pixel, whose error never averages out.
+    fn value(&self) -> f32 {
+        let y = match self.dim {
+            0 => self.index,
+            1 => sobol_pascal(self.index),
+            d => sobol_reversed(d as usize, self.index),
+        };
+        to_unit(owen_scrambled(y, dim_seed(self.seed, self.dim)))
     }
 }
 
-/// Mixed into the scramble seed of a pair's second component.
-const SECOND_AXIS: u32 = 0x68E3_1DA4;
+/// Sobol generator matrices of dimensions `0..STRATIFIED_DIMS`, column `k` bit-reversed:
+/// the XOR of the columns of an index's set bits is the sequence's value with its bits
+/// reversed, the form Owen scrambling takes. Dimension 0 is the van der Corput
+/// sequence, the others come from primitive polynomials (degree, coefficients `a`,
+/// initial `m`) as in Joe and Kuo's table.
+const SOBOL: [[u32; 32]; STRATIFIED_DIMS as usize] = sobol_columns();
+
+const fn sobol_columns() -> [[u32; 32]; STRATIFIED_DIMS as usize] {
+    const POLYNOMIALS: [(usize, u32, [u32; 4]); 6] = [
+        (1, 0, [1, 0, 0, 0]),
+        (2, 1, [1, 3, 0, 0]),
+        (3, 1, [1, 3, 1, 0]),
+        (3, 2, [1, 1, 1, 0]),
+        (4, 1, [1, 1, 3, 3]),
+        (4, 4, [1, 3, 5, 13]),
+    ];
+    let mut out = [[0u32; 32]; STRATIFIED_DIMS as usize];
+    let mut k = 0;
+    while k < 32 {
+        out[0][k] = 1 << k;
+        k += 1;
+    }
+    let mut d = 1;
+    while d < STRATIFIED_DIMS as usize {
+        let (deg, a, m) = POLYNOMIALS[d - 1];
+        // Direction numbers v₁…v₃₂ (1-based): mᵢ·2³²⁻ⁱ, then the recurrence.
+        let mut v = [0u32; 33];
+        let mut i = 1;
+        while i <= 32 {
+            if i <= deg {
+                v[i] = m[i - 1] << (32 - i);
+            } else {
+                let mut x = v[i - deg] ^ (v[i - deg] >> deg);
+                let mut j = 1;
+                while j < deg {
+                    if (a >> (deg - 1 - j)) & 1 == 1 {
+                        x ^= v[i - j];
+                    }
+                    j += 1;
+                }
+                v[i] = x;
+            }
+            out[d][i - 1] = v[i].reverse_bits();
+            i += 1;
+        }
+        d += 1;
+    }
+    out
+}
+
+/// The bit-reversed value of Sobol dimension `dim` at `index`.
+#[inline]
+fn sobol_reversed(dim: usize, index: u32) -> u32 {
+    let mut y = 0;
+    let mut rest = index;
+    while rest != 0 {
+        y ^= SOBOL[dim][rest.trailing_zeros() as usize];
+        rest &= rest - 1;
+    }
+    y
+}
 
 /// The scramble seed of dimension `dim` in a pixel whose seed is `seed`.
 #[inline]
@@ -69,9 +124,9 @@ fn hash32(mut x: u32) -> u32 {
     x ^ (x >> 16)
 }
 
-/// The second Sobol dimension of sample `i`, before its bits are reversed: the
-/// generator is Pascal's triangle mod 2, so output digit `j` is the XOR of the index
-/// bits `k ⊇ j` (Lucas), a superset sum done one bit of `j` at a time.
+/// `sobol_reversed(1, i)` without the table: the generator of dimension 1 is Pascal's
+/// triangle mod 2, so output digit `j` is the XOR of the index bits `k ⊇ j` (Lucas), a
+/// superset sum done one bit of `j` at a time.
 #[inline]
 fn sobol_pascal(i: u32) -> u32 {
     let mut y = i;
@@ -82,9 +137,8 @@ fn sobol_pascal(i: u32) -> u32 {
     y ^ ((y >> 16) & 0x0000_ffff)
 }
 
-/// Owen scrambling (pbrt-v4's `FastOwenScrambler`, Laine–Karras hash) of the radical
-/// inverse of `x`, with the two bit reversals cancelled: the first Sobol dimension of
-/// sample `i` is `reverse(i)`, the second `reverse(sobol_pascal(i))`.
+/// Owen scrambling (pbrt-v4's `FastOwenScrambler`, Laine–Karras hash) of the value
+/// whose bits reversed are `x`, with the two bit reversals cancelled.
 #[inline]
 fn owen_scrambled(x: u32, seed: u32) -> u32 {
     let mut v = x;
@@ -135,7 +189,7 @@ impl Sampler {
         let u = to_unit(self.rng.next_u32());
         match &mut self.strata {
             Some(st) if st.dim < STRATIFIED_DIMS => {
-                let v = st.single();
+                let v = st.value();
                 st.dim += 1;
                 v
             }
@@ -147,17 +201,10 @@ impl Sampler {
         }
     }
 
-    /// Uniform in `[0, 1)²`: a 2-D point of the sequence when both numbers are
-    /// stratified, else two draws.
     #[inline]
     pub fn next_2d(&mut self) -> Vec2 {
-        let pair = self
-            .strata
-            .filter(|st| st.dim + 1 < STRATIFIED_DIMS)
-            .map(|st| st.pair());
         let x = self.next_f32();
-        let y = self.next_f32();
-        pair.unwrap_or(Vec2::new(x, y))
+        Vec2::new(x, self.next_f32())
     }
 }
 
@@ -246,42 +293,43 @@ impl<S: Simd> StreamLanes<S> {
     /// neither draw nor advance (their value is meaningless).
     #[inline(always)]
     pub fn next_f32(&mut self, s: S, m: Mask<S>) -> F32s<S> {
-        let u = self.next_random(s, m);
-        let single = m & self.dims_below(s, STRATIFIED_DIMS);
-        let v = if single.any() {
-            let seed = dim_seed_lanes(s, self.seed, self.dim);
-            F32s::select(
-                single,
-                to_unit_lanes(s, owen_scrambled_lanes(s, self.index, seed)),
-                u,
-            )
-        } else {
-            u
-        };
+        let mut v = self.next_random(s, m);
+        let strata = (m & self.dims_below(s, STRATIFIED_DIMS)).bits();
+        if strata != 0 {
+            v = self.stratified(s, strata, v);
+        }
         self.dim = U32s::select(m, self.dim.wrapping_add(U32s::splat(s, 1)), self.dim);
         v
     }
 
-    /// Two numbers per lane of `m` (`Sampler::next_2d`). The first of a stratified
-    /// pair is the single number of its dimension, so one scramble serves both.
+    /// Two numbers per lane of `m` (`Sampler::next_2d`).
     #[inline(always)]
     pub fn next_2d(&mut self, s: S, m: Mask<S>) -> (F32s<S>, F32s<S>) {
-        let mut x = self.next_random(s, m);
-        let mut y = self.next_random(s, m);
-        let first = m & self.dims_below(s, STRATIFIED_DIMS);
-        if first.any() {
-            let seed = dim_seed_lanes(s, self.seed, self.dim);
-            let sx = to_unit_lanes(s, owen_scrambled_lanes(s, self.index, seed));
-            x = F32s::select(first, sx, x);
-            let pair = m & self.dims_below(s, STRATIFIED_DIMS - 1);
-            if pair.any() {
-                let second = hash32_lanes(s, seed.xor(U32s::splat(s, SECOND_AXIS)));
-                let sy = owen_scrambled_lanes(s, sobol_pascal_lanes(s, self.index), second);
-                y = F32s::select(pair, to_unit_lanes(s, sy), y);
-            }
+        let x = self.next_f32(s, m);
+        (x, self.next_f32(s, m))
+    }
+
+    /// `v` with the lanes of `lanes` replaced by their `Strata::value`: one pass per
+    /// dimension among them (lanes at the same draw of their path share it).
+    #[inline(always)]
+    fn stratified(&self, s: S, lanes: LaneBits, mut v: F32s<S>) -> F32s<S> {
+        let dims = self.dim.to_array();
+        let mut rest = lanes;
+        while rest != 0 {
+            let d = dims[rest.trailing_zeros() as usize];
+            let at_d = self.dim.eq(U32s::splat(s, d));
+            let these = Mask::from_bits(s, rest) & at_d;
+            rest &= !these.bits();
+            let y = match d {
+                0 => self.index,
+                1 => sobol_pascal_lanes(s, self.index),
+                _ => sobol_reversed_lanes(s, d as usize, self.index, these),
+            };
+            let seed = dim_seed_lanes(s, self.seed, U32s::splat(s, d));
+            let value = to_unit_lanes(s, owen_scrambled_lanes(s, y, seed));
+            v = F32s::select(these, value, v);
         }
-        self.dim = U32s::select(m, self.dim.wrapping_add(U32s::splat(s, 2)), self.dim);
-        (x, y)
+        v
     }
 
     /// Draws one number per lane of `m` and discards it (`Sampler::next_f32` whose
@@ -332,6 +380,24 @@ fn dim_seed_lanes<S: Simd>(s: S, seed: U32s<S>, dim: U32s<S>) -> U32s<S> {
         s,
         seed.wrapping_add(dim.wrapping_mul(U32s::splat(s, 0x9E37_79B9))),
     )
+}
+
+/// [`sobol_reversed`] of dimension `dim` per lane of `m` (the others give garbage):
+/// one step per index bit, as long as any lane has bits left.
+#[inline(always)]
+fn sobol_reversed_lanes<S: Simd>(s: S, dim: usize, index: U32s<S>, m: Mask<S>) -> U32s<S> {
+    let (zero, one) = (U32s::splat(s, 0), U32s::splat(s, 1));
+    let mut rest = U32s::select(m, index, zero);
+    let mut y = zero;
+    for column in SOBOL[dim] {
+        if rest.eq(zero).bits() == ALL_LANES {
+            break;
+        }
+        let bit = rest.and(one).eq(one);
+        y = U32s::select(bit, y.xor(U32s::splat(s, column)), y);
+        rest = rest.shr::<1>();
+    }
+    y
 }
 
 /// [`sobol_pascal`] per lane.
@@ -583,37 +649,59 @@ mod tests {
                 .filter(|k| i >> k & 1 != 0)
                 .fold(0, |v, k| v ^ columns[k]);
             assert_eq!(sobol_pascal(i).reverse_bits(), direct, "index {i}");
+            assert_eq!(sobol_reversed(1, i), sobol_pascal(i), "index {i}");
         }
     }
 
-    /// A pixel's first 2ᵐ samples put one 2-D point in every elementary interval of
-    /// area 2⁻ᵐ (a (0, m, 2)-net, kept by Owen scrambling), for every pair of
-    /// stratified dimensions and whatever the seed; the numbers after the
+    /// The stratified numbers of a pixel's samples: each dimension puts one of the
+    /// first 2ᵐ samples in every interval of length 2⁻ᵐ; the pixel position pair is a
+    /// (0, m, 2)-net; every pair of dimensions is a (t, m, 2)-net with t ≤ 3 and
+    /// integrates x·y to 1/4 (scrambled copies of one dimension, tied by a fixed map,
+    /// gave a per-pixel error that never averaged out); the numbers after the
     /// stratified ones are the random stream's.
     #[test]
-    fn stratified_pairs_are_nets_and_the_rest_is_the_stream() {
-        let m = 6;
+    fn stratified_numbers_are_sobol_nets_and_the_rest_is_the_stream() {
+        let m = 10;
         let n = 1usize << m;
+        let dims = STRATIFIED_DIMS as usize;
         for (seed, pixel) in [(0u64, 0u64), (7, 12345), (99, 1 << 40)] {
             let streams = PixelStreams::new(seed, pixel);
-            let draws: Vec<Vec<Vec2>> = (0..n as u64)
+            let pts: Vec<Vec<f32>> = (0..n as u64)
                 .map(|k| {
                     let mut s = streams.sample(k);
-                    (0..STRATIFIED_DIMS / 2).map(|_| s.next_2d()).collect()
+                    (0..dims).map(|_| s.next_f32()).collect()
                 })
                 .collect();
-            for d in 0..(STRATIFIED_DIMS / 2) as usize {
-                for bx in 0..=m {
-                    let (cols, rows) = (1usize << bx, 1usize << (m - bx));
-                    let mut seen = vec![0u32; n];
-                    for p in draws.iter().map(|v| v[d]) {
-                        let cell =
-                            (p.y * rows as f32) as usize * cols + (p.x * cols as f32) as usize;
-                        seen[cell] += 1;
+            for d in 0..dims {
+                let mut seen = vec![0u32; n];
+                pts.iter()
+                    .for_each(|p| seen[(p[d] * n as f32) as usize] += 1);
+                assert!(seen.iter().all(|&c| c == 1), "dimension {d}");
+            }
+            for d1 in 0..dims {
+                for d2 in d1 + 1..dims {
+                    let t = if (d1, d2) == (0, 1) { 0 } else { 3 };
+                    for bx in 0..=m {
+                        let (cols, rows) = (1usize << bx, 1usize << (m - bx));
+                        let mut seen = vec![0u32; n];
+                        for p in &pts {
+                            let (x, y) = (
+                                (p[d1] * cols as f32) as usize,
+                                (p[d2] * rows as f32) as usize,
+                            );
+                            seen[y * cols + x] += 1;
+                        }
+                        let most = *seen.iter().max().unwrap();
+                        assert!(
+                            most <= 1 << t,
+                            "dimensions {d1},{d2}, {cols}x{rows}: {most} in a cell"
+                        );
                     }
+                    let mean: f64 =
+                        pts.iter().map(|p| (p[d1] * p[d2]) as f64).sum::<f64>() / n as f64;
                     assert!(
-                        seen.iter().all(|&c| c == 1),
-                        "pair {d}, {cols}x{rows}: {seen:?}"
+                        (mean - 0.25).abs() < 2e-3,
+                        "dimensions {d1},{d2}: E[xy] = {mean}"
                     );
                 }
             }
