@@ -9,7 +9,6 @@ mod common;
 use bvh_common::{builders, random_ray, scene_from};
 use common::load;
 use ember::accel::{Accel, AccelKind, Bvh, BvhBuilder, HitPacket, RayPacket};
-use ember::bench::stability::scenes::transformed;
 use ember::geometry::Ray;
 use ember::integrators::{DirectStrategy, Roulette};
 use ember::render::{Engine, RenderJob, RenderSettings};
@@ -254,8 +253,10 @@ fn packet_renders_are_the_scalar_renders_bit_for_bit() {
 /// Far from the origin points near edges are rounded into their triangle and rays
 /// leave spheres from within an ulp (`into_triangle`, `sphere_spawn_origin`): the
 /// lanes must take the same branches (at 1e5 an ulp is 8 mm, a room is 2 m).
+#[cfg(feature = "bench")]
 #[test]
 fn packet_renders_are_the_scalar_renders_far_from_the_origin() {
+    use ember::bench::stability::scenes::transformed;
     let path = "scenes/cs184/sky/CBspheres_lambertian.dae";
     for (offset, strategy) in [(1e4, DirectStrategy::Light), (1e5, DirectStrategy::Mis)] {
         let scene = transformed(&load(path), 1.0, Vec3::splat(offset));
