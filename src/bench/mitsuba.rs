@@ -77,11 +77,7 @@ impl MitsubaRunner {
         seed: u64,
     ) -> Result<MitsubaRender> {
         let stem = format!("scene_m{max_depth}_{spp}spp");
-        let settings = MitsubaSettings::for_ember(spp, max_depth, &Roulette::default());
-        let xml = self.dir.join(format!("{stem}.xml"));
-        if !xml.exists() {
-            write_mitsuba(scene, camera, &settings, &self.dir, &stem)?;
-        }
+        let xml = export(scene, camera, max_depth, spp, &self.dir, &stem)?;
         let exr = self.dir.join(format!("{stem}_{}_{seed}.exr", self.variant));
         let out = Command::new(&self.python)
             .arg(&self.script)
@@ -110,6 +106,22 @@ impl MitsubaRunner {
     }
 }
 
+/// Writes `scene` as ember renders it (`-m max_depth`, default roulette, `spp`) to
+/// `dir/stem.xml` and its meshes, always anew: a file left there by another scene
+/// (the names do not say which scene) must not be rendered in its place.
+fn export(
+    scene: &Scene,
+    camera: &Camera,
+    max_depth: u32,
+    spp: u32,
+    dir: &Path,
+    stem: &str,
+) -> Result<PathBuf> {
+    let settings = MitsubaSettings::for_ember(spp, max_depth, &Roulette::default());
+    write_mitsuba(scene, camera, &settings, dir, stem)?;
+    Ok(dir.join(format!("{stem}.xml")))
+}
+
 /// The `"seconds"` field of one JSON line printed by the render script.
 fn seconds_of(line: &str) -> Option<f64> {
     let rest = &line[line.find("\"seconds\":")? + "\"seconds\":".len()..];
@@ -130,6 +142,35 @@ fn last_line(bytes: &[u8]) -> String {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// The converge runs of CBbunny once rendered CBspheres_lambertian in Mitsuba: the
+    /// export was skipped when a file of the same name was there.
+    #[test]
+    fn each_export_replaces_what_another_scene_left() {
+        let shared = |f: &str| {
+            format!(
+                "{}/../shared/scenes/cs184/sky/{f}",
+                env!("CARGO_MANIFEST_DIR")
+            )
+        };
+        let load = |f: &str| crate::scene::collada::load(std::path::Path::new(&shared(f))).unwrap();
+        let dir = std::env::temp_dir().join(format!("ember-mitsuba-export-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let mut texts = Vec::new();
+        for f in ["CBspheres_lambertian.dae", "CBbunny.dae"] {
+            let scene = load(f);
+            let camera = Camera::new(&scene.camera, &scene.bounds, 16, 12);
+            let xml = export(&scene, &camera, 5, 4, &dir, "scene_m5_4spp").unwrap();
+            texts.push(std::fs::read_to_string(xml).unwrap());
+        }
+        std::fs::remove_dir_all(&dir).unwrap();
+        let spheres = |t: &str| t.matches("type=\"sphere\"").count();
+        assert!(
+            spheres(&texts[0]) > 0 && spheres(&texts[1]) == 0,
+            "{}",
+            texts[1]
+        );
+    }
 
     #[test]
     fn reads_the_seconds_of_a_render_line() {
