@@ -61,6 +61,20 @@ typedef struct skip_context {
   const uint32_t *skips;
 } skip_context;
 
+/* A fresh Embree context carrying what the skip filter needs: the primitive a single
+ * ray skips, or per ray id the primitives a packet's rays skip. */
+static void init_skip_context(skip_context *sc, const ember_scene *s, uint32_t skip,
+                              const uint32_t *skips) {
+#if RTC_VERSION_MAJOR >= 4
+  rtcInitRayQueryContext(&sc->ctx);
+#else
+  rtcInitIntersectContext(&sc->ctx);
+#endif
+  sc->scene = s;
+  sc->skip = skip;
+  sc->skips = skips;
+}
+
 static void lock_device(ember_device *d) {
   while (atomic_flag_test_and_set_explicit(&d->lock, memory_order_acquire)) {
   }
@@ -373,19 +387,15 @@ int ember_intersect1(const ember_scene *s, const ember_ray *ray, ember_hit *hit)
   rhp->hit.primID = RTC_INVALID_GEOMETRY_ID;
   rhp->hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
   skip_context sc;
-  sc.scene = s;
-  sc.skip = ray->skip;
-  sc.skips = NULL;
+  init_skip_context(&sc, s, ray->skip, NULL);
   int filtered = ray->skip != EMBER_NO_PRIM;
 #if RTC_VERSION_MAJOR >= 4
-  rtcInitRayQueryContext(&sc.ctx);
   struct RTCIntersectArguments args;
   rtcInitIntersectArguments(&args);
   args.context = &sc.ctx;
   args.filter = filtered ? skip_filter : NULL;
   rtcIntersect1(s->scene, rhp, &args);
 #else
-  rtcInitIntersectContext(&sc.ctx);
   sc.ctx.filter = filtered ? skip_filter : NULL;
   rtcIntersect1(s->scene, &sc.ctx, rhp);
 #endif
@@ -469,19 +479,15 @@ int ember_occluded1(const ember_scene *s, const ember_ray *ray) {
   struct RTCRay r;
   fill_ray(&r, ray);
   skip_context sc;
-  sc.scene = s;
-  sc.skip = ray->skip;
-  sc.skips = NULL;
+  init_skip_context(&sc, s, ray->skip, NULL);
   int filtered = ray->skip != EMBER_NO_PRIM;
 #if RTC_VERSION_MAJOR >= 4
-  rtcInitRayQueryContext(&sc.ctx);
   struct RTCOccludedArguments args;
   rtcInitOccludedArguments(&args);
   args.context = &sc.ctx;
   args.filter = filtered ? skip_filter : NULL;
   rtcOccluded1(s->scene, &r, &args);
 #else
-  rtcInitIntersectContext(&sc.ctx);
   sc.ctx.filter = filtered ? skip_filter : NULL;
   rtcOccluded1(s->scene, &sc.ctx, &r);
 #endif
@@ -530,18 +536,14 @@ void ember_intersect16(const ember_scene *s, const ember_ray *rays, uint32_t act
     rhp->hit.instID[0][i] = RTC_INVALID_GEOMETRY_ID;
   }
   skip_context sc;
-  sc.scene = s;
-  sc.skip = EMBER_NO_PRIM;
-  sc.skips = skips;
+  init_skip_context(&sc, s, EMBER_NO_PRIM, skips);
 #if RTC_VERSION_MAJOR >= 4
-  rtcInitRayQueryContext(&sc.ctx);
   struct RTCIntersectArguments args;
   rtcInitIntersectArguments(&args);
   args.context = &sc.ctx;
   args.filter = skip_filter;
   rtcIntersect16(valid, s->scene, rhp, &args);
 #else
-  rtcInitIntersectContext(&sc.ctx);
   sc.ctx.filter = skip_filter;
   rtcIntersect16(valid, s->scene, &sc.ctx, rhp);
 #endif
@@ -557,18 +559,14 @@ uint32_t ember_occluded16(const ember_scene *s, const ember_ray *rays, uint32_t 
   uint32_t skips[16];
   fill_packet16(rays, active, &r, valid, skips);
   skip_context sc;
-  sc.scene = s;
-  sc.skip = EMBER_NO_PRIM;
-  sc.skips = skips;
+  init_skip_context(&sc, s, EMBER_NO_PRIM, skips);
 #if RTC_VERSION_MAJOR >= 4
-  rtcInitRayQueryContext(&sc.ctx);
   struct RTCOccludedArguments args;
   rtcInitOccludedArguments(&args);
   args.context = &sc.ctx;
   args.filter = skip_filter;
   rtcOccluded16(valid, s->scene, &r, &args);
 #else
-  rtcInitIntersectContext(&sc.ctx);
   sc.ctx.filter = skip_filter;
   rtcOccluded16(valid, s->scene, &sc.ctx, &r);
 #endif

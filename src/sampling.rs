@@ -356,8 +356,7 @@ impl<S: Simd> StreamLanes<S> {
         self.state = U64s::select(m, next, old);
         let rot = old.shr::<59>().low32();
         let xsh = old.shr::<18>().xor(old).shr::<27>().low32();
-        let bits = xsh.rotate_right(rot).shr::<8>();
-        bits.to_f32() * F32s::splat(s, 1.0 / (1u32 << 24) as f32)
+        to_unit_lanes(s, xsh.rotate_right(rot))
     }
 }
 

@@ -5,7 +5,7 @@
 
 mod common;
 
-use common::load;
+use common::{load, random_triangle_point};
 use ember::accel::embree::EmbreeAccel;
 use ember::accel::{Accel, EmbreeQuality, HitPacket, RayPacket};
 use ember::geometry::Ray;
@@ -17,28 +17,16 @@ use glam::Vec3;
 /// from outside aimed at corners.
 fn rays(scene: &ember::scene::Scene, n: usize) -> Vec<Ray> {
     let mut rng = Sampler::from_seed(17);
-    let ntri = scene.triangles.len();
-    let point = |rng: &mut Sampler| {
-        let i = ((rng.next_f32() * ntri as f32) as usize).min(ntri - 1);
-        let [a, b, c] = scene.triangle_positions(i);
-        let (u, v) = (rng.next_f32(), rng.next_f32());
-        let (u, v) = if u + v > 1.0 {
-            (1.0 - u, 1.0 - v)
-        } else {
-            (u, v)
-        };
-        (a + u * (b - a) + v * (c - a), i as u32)
-    };
     (0..n)
         .map(|k| {
-            let (p, prim) = point(&mut rng);
+            let (p, prim) = random_triangle_point(scene, &mut rng);
             match k % 3 {
                 0 => Ray {
                     skip: prim,
                     ..Ray::new(p, uniform_sphere(rng.next_2d()))
                 },
                 1 => {
-                    let (q, _) = point(&mut rng);
+                    let (q, _) = random_triangle_point(scene, &mut rng);
                     Ray {
                         skip: prim,
                         ..Ray::segment(p, q - p, 1.0 - 1e-4)

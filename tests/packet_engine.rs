@@ -7,7 +7,7 @@ mod bvh_common;
 mod common;
 
 use bvh_common::{builders, random_ray, scene_from};
-use common::load;
+use common::{load, random_triangle_point};
 use ember::accel::{Accel, AccelKind, Bvh, BvhBuilder, HitPacket, RayPacket};
 use ember::geometry::Ray;
 use ember::integrators::{DirectStrategy, Roulette};
@@ -47,20 +47,8 @@ fn rays_for(scene: &Scene, seed: u64, n: usize) -> Vec<Ray> {
     let targets: Vec<Vec3> = (0..scene.triangles.len())
         .flat_map(|i| scene.triangle_positions(i))
         .collect();
-    let surface_point = |rng: &mut Sampler| -> Option<(Vec3, u32)> {
-        if scene.triangles.is_empty() {
-            return None;
-        }
-        let i = ((rng.next_f32() * scene.triangles.len() as f32) as usize)
-            .min(scene.triangles.len() - 1);
-        let [a, b, c] = scene.triangle_positions(i);
-        let (u, v) = (rng.next_f32(), rng.next_f32());
-        let (u, v) = if u + v > 1.0 {
-            (1.0 - u, 1.0 - v)
-        } else {
-            (u, v)
-        };
-        Some((a + u * (b - a) + v * (c - a), i as u32))
+    let surface_point = |rng: &mut Sampler| {
+        (!scene.triangles.is_empty()).then(|| random_triangle_point(scene, rng))
     };
     (0..n)
         .map(|k| match (k % 3, surface_point(&mut rng)) {

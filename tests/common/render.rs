@@ -70,3 +70,21 @@ impl HalfRenders {
         self.noise_per_pixel() / (self.avg.pixels.len() as f64).sqrt()
     }
 }
+
+/// A uniformly random point of a uniformly chosen triangle of `scene` (which must
+/// have one), and that triangle's index: three numbers drawn from `rng`.
+pub fn random_triangle_point(
+    scene: &Scene,
+    rng: &mut ember::sampling::Sampler,
+) -> (glam::Vec3, u32) {
+    let ntri = scene.triangles.len();
+    let i = ((rng.next_f32() * ntri as f32) as usize).min(ntri - 1);
+    let [a, b, c] = scene.triangle_positions(i);
+    let (u, v) = (rng.next_f32(), rng.next_f32());
+    let (u, v) = if u + v > 1.0 {
+        (1.0 - u, 1.0 - v)
+    } else {
+        (u, v)
+    };
+    (a + u * (b - a) + v * (c - a), i as u32)
+}
