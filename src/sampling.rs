@@ -96,6 +96,32 @@ const fn sobol_columns() -> [[u32; 32]; STRATIFIED_DIMS as usize] {
     out
 }
 
+/// `SOBOL_NIBBLES[d][k][v]`: the XOR of the columns of dimension `d` that the bits
+/// of `v` select in index nibble `k` (the lanes look up a nibble at a time).
+const SOBOL_NIBBLES: [[[u32; 16]; 8]; STRATIFIED_DIMS as usize] = {
+    let mut out = [[[0u32; 16]; 8]; STRATIFIED_DIMS as usize];
+    let mut d = 0;
+    while d < STRATIFIED_DIMS as usize {
+        let mut k = 0;
+        while k < 8 {
+            let mut v = 0;
+            while v < 16 {
+                let mut bit = 0;
+                while bit < 4 {
+                    if v >> bit & 1 == 1 {
+                        out[d][k][v] ^= SOBOL[d][4 * k + bit];
+                    }
+                    bit += 1;
+                }
+                v += 1;
+            }
+            k += 1;
+        }
+        d += 1;
+    }
+    out
+};
+
 /// The bit-reversed value of Sobol dimension `dim` at `index`.
 #[inline]
 fn sobol_reversed(dim: usize, index: u32) -> u32 {
@@ -382,19 +408,19 @@ fn dim_seed_lanes<S: Simd>(s: S, seed: U32s<S>, dim: U32s<S>) -> U32s<S> {
 }
 
 /// [`sobol_reversed`] of dimension `dim` per lane of `m` (the others give garbage):
-/// one step per index bit, as long as any lane has bits left.
+/// the XOR of one table entry per index nibble, as long as any lane has bits left.
 #[inline(always)]
 fn sobol_reversed_lanes<S: Simd>(s: S, dim: usize, index: U32s<S>, m: Mask<S>) -> U32s<S> {
-    let (zero, one) = (U32s::splat(s, 0), U32s::splat(s, 1));
+    let zero = U32s::splat(s, 0);
+    let low_nibble = U32s::splat(s, 0xf);
     let mut rest = U32s::select(m, index, zero);
     let mut y = zero;
-    for column in SOBOL[dim] {
+    for table in &SOBOL_NIBBLES[dim] {
+        y = y.xor(rest.and(low_nibble).lookup16(table));
+        rest = rest.shr::<4>();
         if rest.eq(zero).bits() == ALL_LANES {
             break;
         }
-        let bit = rest.and(one).eq(one);
-        y = U32s::select(bit, y.xor(U32s::splat(s, column)), y);
-        rest = rest.shr::<1>();
     }
     y
 }

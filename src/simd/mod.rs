@@ -94,6 +94,10 @@ pub unsafe trait Simd: Copy + Send + Sync + 'static {
     unsafe fn u_shl<const N: u32>(a: Self::U) -> Self::U;
     /// `a.rotate_right(r)` per lane (`r < 32`).
     unsafe fn u_rotr(a: Self::U, r: Self::U) -> Self::U;
+    /// `u32::reverse_bits` per lane.
+    unsafe fn u_reverse_bits(a: Self::U) -> Self::U;
+    /// `table[a]` per lane (every lane of `a` below 16).
+    unsafe fn u_lookup16(table: &[u32; 16], a: Self::U) -> Self::U;
 
     unsafe fn w_splat(x: u64) -> Self::W;
     unsafe fn w_load(a: &[u64; LANES]) -> Self::W;
@@ -292,16 +296,12 @@ impl<S: Simd> U32s<S> {
     /// `u32::reverse_bits` per lane.
     #[inline(always)]
     pub fn reverse_bits(self) -> Self {
-        let x = self;
-        let m1 = U32s(unsafe { S::u_splat(0x5555_5555) });
-        let m2 = U32s(unsafe { S::u_splat(0x3333_3333) });
-        let m4 = U32s(unsafe { S::u_splat(0x0f0f_0f0f) });
-        let m8 = U32s(unsafe { S::u_splat(0x00ff_00ff) });
-        let x = x.shr::<1>().and(m1).or(x.and(m1).shl::<1>());
-        let x = x.shr::<2>().and(m2).or(x.and(m2).shl::<2>());
-        let x = x.shr::<4>().and(m4).or(x.and(m4).shl::<4>());
-        let x = x.shr::<8>().and(m8).or(x.and(m8).shl::<8>());
-        x.shr::<16>().or(x.shl::<16>())
+        U32s(unsafe { S::u_reverse_bits(self.0) })
+    }
+    /// `table[self]` per lane (every lane below 16): a table held in registers.
+    #[inline(always)]
+    pub fn lookup16(self, table: &[u32; 16]) -> Self {
+        U32s(unsafe { S::u_lookup16(table, self.0) })
     }
     #[inline(always)]
     pub fn rotate_right(self, r: Self) -> Self {
@@ -751,6 +751,20 @@ mod tests {
                 (u & v).to_f32().to_array()[i],
                 (ua[i] & va[i] & 0xff_ffff) as f32
             );
+        }
+        let table: [u32; 16] = std::array::from_fn(|i| 0x9E37_79B9u32.wrapping_mul(i as u32 + 1));
+        for seed in [1u32, 0x8000_0001, 0xdead_beef] {
+            let x: [u32; LANES] =
+                std::array::from_fn(|i| seed.wrapping_mul(0x2545_F491 ^ i as u32));
+            let xa = U32s::from_array(s, x);
+            let index = xa.and(U32s::splat(s, 15));
+            for i in 0..LANES {
+                assert_eq!(xa.reverse_bits().to_array()[i], x[i].reverse_bits());
+                assert_eq!(
+                    index.lookup16(&table).to_array()[i],
+                    table[(x[i] & 15) as usize]
+                );
+            }
         }
     }
 

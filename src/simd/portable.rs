@@ -154,6 +154,14 @@ unsafe impl Simd for Portable {
         map2(a, r, u32::rotate_right)
     }
     #[inline(always)]
+    unsafe fn u_reverse_bits(a: Ua) -> Ua {
+        a.map(u32::reverse_bits)
+    }
+    #[inline(always)]
+    unsafe fn u_lookup16(table: &[u32; 16], a: Ua) -> Ua {
+        a.map(|i| table[i as usize])
+    }
+    #[inline(always)]
     unsafe fn w_splat(x: u64) -> [u64; LANES] {
         [x; LANES]
     }

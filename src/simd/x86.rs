@@ -178,6 +178,25 @@ unsafe impl Simd for Avx512 {
         _mm512_rorv_epi32(a, r)
     }
     #[inline(always)]
+    unsafe fn u_reverse_bits(a: __m512i) -> __m512i {
+        let [rev_low, rev_high, bytes] = &REVERSE_TABLES;
+        let rev_low = _mm512_broadcast_i32x4(_mm_loadu_si128(rev_low.as_ptr().cast()));
+        let rev_high = _mm512_broadcast_i32x4(_mm_loadu_si128(rev_high.as_ptr().cast()));
+        let bytes = _mm512_broadcast_i32x4(_mm_loadu_si128(bytes.as_ptr().cast()));
+        let nibble = _mm512_set1_epi8(0x0f);
+        let low = _mm512_and_si512(a, nibble);
+        let high = _mm512_and_si512(_mm512_srli_epi16::<4>(a), nibble);
+        let x = _mm512_or_si512(
+            _mm512_shuffle_epi8(rev_low, low),
+            _mm512_shuffle_epi8(rev_high, high),
+        );
+        _mm512_shuffle_epi8(x, bytes)
+    }
+    #[inline(always)]
+    unsafe fn u_lookup16(table: &[u32; 16], a: __m512i) -> __m512i {
+        _mm512_permutexvar_epi32(a, _mm512_loadu_si512(table.as_ptr().cast()))
+    }
+    #[inline(always)]
     unsafe fn w_splat(x: u64) -> [__m512i; 2] {
         [_mm512_set1_epi64(x as i64); 2]
     }
@@ -284,6 +303,39 @@ unsafe fn finite_in(x: __m256, m: __m256) -> __m256 {
 unsafe fn rotr32(x: __m256i, r: __m256i) -> __m256i {
     let left = _mm256_sub_epi32(_mm256_set1_epi32(32), r);
     _mm256_or_si256(_mm256_srlv_epi32(x, r), _mm256_sllv_epi32(x, left))
+}
+
+/// Byte shuffles that reverse bits: a nibble's reversal placed in the low and in
+/// the high half of a byte, and the bytes of each `u32` in reverse order.
+const REVERSE_TABLES: [[u8; 16]; 3] = {
+    let mut t = [[0u8; 16]; 3];
+    let mut i = 0;
+    while i < 16 {
+        let r = (i as u8).reverse_bits() >> 4;
+        t[0][i] = r << 4;
+        t[1][i] = r;
+        t[2][i] = (i - i % 4 + 3 - i % 4) as u8;
+        i += 1;
+    }
+    t
+};
+
+/// `u32::reverse_bits` per lane: each nibble reversed by table into the other half
+/// of its byte, then the bytes reversed.
+#[inline(always)]
+unsafe fn reverse_bits256(a: __m256i) -> __m256i {
+    let [rev_low, rev_high, bytes] = &REVERSE_TABLES;
+    let rev_low = _mm256_broadcastsi128_si256(_mm_loadu_si128(rev_low.as_ptr().cast()));
+    let rev_high = _mm256_broadcastsi128_si256(_mm_loadu_si128(rev_high.as_ptr().cast()));
+    let bytes = _mm256_broadcastsi128_si256(_mm_loadu_si128(bytes.as_ptr().cast()));
+    let nibble = _mm256_set1_epi8(0x0f);
+    let low = _mm256_and_si256(a, nibble);
+    let high = _mm256_and_si256(_mm256_srli_epi16::<4>(a), nibble);
+    let x = _mm256_or_si256(
+        _mm256_shuffle_epi8(rev_low, low),
+        _mm256_shuffle_epi8(rev_high, high),
+    );
+    _mm256_shuffle_epi8(x, bytes)
 }
 
 /// The low 32 bits of the four 64-bit lanes of `x`, then of `y`.
@@ -464,6 +516,23 @@ unsafe impl Simd for Avx2 {
     #[inline(always)]
     unsafe fn u_rotr(a: U2, r: U2) -> U2 {
         pair!(rotr32, a, r)
+    }
+    #[inline(always)]
+    unsafe fn u_reverse_bits(a: U2) -> U2 {
+        [reverse_bits256(a[0]), reverse_bits256(a[1])]
+    }
+    #[inline(always)]
+    unsafe fn u_lookup16(table: &[u32; 16], a: U2) -> U2 {
+        let low = _mm256_loadu_si256(table.as_ptr().cast());
+        let high = _mm256_loadu_si256(table[8..].as_ptr().cast());
+        let seven = _mm256_set1_epi32(7);
+        let mut out = a;
+        for (o, &i) in out.iter_mut().zip(&a) {
+            let from_low = _mm256_permutevar8x32_epi32(low, i);
+            let from_high = _mm256_permutevar8x32_epi32(high, i);
+            *o = _mm256_blendv_epi8(from_low, from_high, _mm256_cmpgt_epi32(i, seven));
+        }
+        out
     }
     #[inline(always)]
     unsafe fn w_splat(x: u64) -> W4 {
