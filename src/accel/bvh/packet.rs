@@ -145,21 +145,27 @@ impl Bvh {
                 continue;
             }
             let node = &self.nodes[child.index() as usize];
-            // Entered children, nearest last (pushed last, popped first).
+            // Every child's test first, without a branch, so the tests overlap; then
+            // the entered children, nearest last (pushed last, popped first).
             let mut entry_of = [zero; WIDTH];
+            let mut entered_by = [0 as LaneBits; WIDTH];
+            let mut children: u32 = 0;
+            for c in 0..node.len_lanes(s) {
+                let (entered, t0) = node.hits_packet(s, &rays, c, hits.t_max);
+                entry_of[c] = t0;
+                entered_by[c] = entered & lanes;
+                children |= u32::from(entered & lanes != 0) << c;
+            }
             let mut order = [(0.0f32, 0u8, 0 as LaneBits); WIDTH];
             let mut n = 0;
-            for (c, entry_c) in entry_of.iter_mut().enumerate().take(node.len()) {
-                let (entered, t0) = node.hits_packet(s, &rays, c, hits.t_max);
-                let entered = entered & lanes;
-                if entered == 0 {
-                    continue;
-                }
-                *entry_c = t0;
+            while children != 0 {
+                let c = children.trailing_zeros() as usize;
+                children &= children - 1;
+                let entered = entered_by[c];
                 let key = if ANY {
                     0.0
                 } else {
-                    t0.reduce_min(Mask::from_bits(s, entered))
+                    entry_of[c].reduce_min(Mask::from_bits(s, entered))
                 };
                 // Insertion by decreasing key.
                 let mut j = n;

@@ -138,6 +138,18 @@ impl WideNode {
             .count()
     }
 
+    /// [`len`](Self::len) by one lane comparison (the packet traversal's hot loop).
+    #[inline(always)]
+    pub fn len_lanes<S: Simd>(&self, s: S) -> usize {
+        const _: () = assert!(WIDTH <= crate::simd::LANES);
+        let mut lo = [f32::INFINITY; crate::simd::LANES];
+        let mut hi = [f32::NEG_INFINITY; crate::simd::LANES];
+        lo[..WIDTH].copy_from_slice(&self.lo[0]);
+        hi[..WIDTH].copy_from_slice(&self.hi[0]);
+        let used = F32s::from_array(s, lo).le(F32s::from_array(s, hi));
+        used.bits().count_ones() as usize
+    }
+
     /// The slab test of child `c` against every lane of a packet, as `hits_avx2`
     /// does it for one ray: the lanes that enter it before their `t_max`, and their
     /// entry distances.
