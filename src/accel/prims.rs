@@ -6,7 +6,9 @@ use super::packet::{PacketHits, PacketRays};
 use crate::geometry::sphere::{
     intersect_sphere, intersect_sphere_lanes, intersect_sphere_leaving, sphere_is_hittable,
 };
-use crate::geometry::triangle::{triangle_is_hittable, PackedTriangle, Triangle4, TriangleRay};
+use crate::geometry::triangle::{
+    triangle_is_hittable, Edges, PackedTriangle, Triangle4, TriangleRay,
+};
 use crate::geometry::{Aabb, Ray};
 use crate::scene::{PrimHit, PrimId, Scene};
 use crate::simd::{F32s, LaneBits, Simd, U32s};
@@ -292,23 +294,31 @@ impl TriBlock {
         lanes: LaneBits,
         hits: &mut PacketHits<S>,
     ) -> LaneBits {
+        // Every triangle's edge functions first, without a branch on any outcome,
+        // so the tests overlap; then the rest of each test in order.
+        let mut edges = [Edges::none(s); 4];
+        let mut tris = self.tri_lanes;
+        while tris != 0 {
+            let lane = tris.trailing_zeros() as usize;
+            tris &= tris - 1;
+            // A ray never meets the triangle it left.
+            let own = rays.skip.eq(U32s::splat(s, self.ids[lane])).bits();
+            edges[lane] = rays.tri.edges(s, &self.tris.corners(lane), lanes & !own);
+        }
         let mut found = 0;
         let mut rest = self.tri_lanes | self.sphere_lanes;
         while rest != 0 {
             let lane = rest.trailing_zeros() as usize;
             rest &= rest - 1;
             let id = self.ids[lane];
-            let own = rays.skip.eq(U32s::splat(s, id));
             let todo = if ANY { lanes & !found } else { lanes };
             let (hit, t, b1, b2) = if self.tri_lanes >> lane & 1 != 0 {
-                // A ray never meets the triangle it left.
-                let todo = todo & !own.bits();
-                if todo == 0 {
-                    continue;
-                }
+                let mut edges = edges[lane];
+                edges.restrict(todo);
                 rays.tri
-                    .intersect(s, &self.tris.corners(lane), hits.t_max, todo)
+                    .finish(s, &self.tris.corners(lane), &edges, hits.t_max)
             } else {
+                let own = rays.skip.eq(U32s::splat(s, id));
                 let (centre, radius) = spheres.spheres[(id - spheres.num_triangles) as usize];
                 let (hit, t) = intersect_sphere_lanes(
                     s, rays.o, rays.d, centre, radius, hits.t_max, own, todo,

@@ -353,6 +353,15 @@ impl<S: Simd> TriangleRays<S> {
         t_max: F32s<S>,
         active: LaneBits,
     ) -> (LaneBits, F32s<S>, F32s<S>, F32s<S>) {
+        let edges = self.edges(s, corners, active);
+        self.finish(s, corners, &edges, t_max)
+    }
+
+    /// The first half of [`intersect`](Self::intersect): the edge functions and
+    /// which lanes may hit. A leaf computes these for all its triangles before
+    /// branching on any, so the tests overlap.
+    #[inline(always)]
+    pub fn edges(&self, s: S, corners: &[Vec3; 3], active: LaneBits) -> Edges<S> {
         let (x0, y0, z0) = self.shear(s, corners[0]);
         let (x1, y1, z1) = self.shear(s, corners[1]);
         let (x2, y2, z2) = self.shear(s, corners[2]);
@@ -364,12 +373,31 @@ impl<S: Simd> TriangleRays<S> {
         let pos = (e0.gt(zero) | e1.gt(zero) | e2.gt(zero)).bits();
         let rounded = (e0.eq(zero) | e1.eq(zero) | e2.eq(zero)).bits();
         let mixed = neg & pos;
-        let candidates = active & !mixed & !rounded;
-        let exact = active & rounded & !mixed;
+        Edges {
+            e: [e0, e1, e2],
+            z: [z0, z1, z2],
+            candidates: active & !mixed & !rounded,
+            exact: active & rounded & !mixed,
+        }
+    }
+
+    /// The second half of [`intersect`](Self::intersect), for the lanes of `edges`.
+    #[inline(always)]
+    pub fn finish(
+        &self,
+        s: S,
+        corners: &[Vec3; 3],
+        edges: &Edges<S>,
+        t_max: F32s<S>,
+    ) -> (LaneBits, F32s<S>, F32s<S>, F32s<S>) {
+        let zero = F32s::splat(s, 0.0);
+        let (candidates, exact) = (edges.candidates, edges.exact);
         if candidates | exact == 0 {
             // Every lane passes outside an edge: the usual answer, known before the division.
             return (0, zero, zero, zero);
         }
+        let [e0, e1, e2] = edges.e;
+        let [z0, z1, z2] = edges.z;
         let det = e0 + e1 + e2;
         let t_scaled = e0 * z0 + e1 * z1 + e2 * z2;
         let inv_det = F32s::splat(s, 1.0) / det;
@@ -448,6 +476,37 @@ impl<S: Simd> TriangleRays<S> {
             F32s::from_array(s, b1),
             F32s::from_array(s, b2),
         )
+    }
+}
+
+/// One triangle's edge functions against sixteen rays ([`TriangleRays::edges`]).
+#[derive(Clone, Copy)]
+pub struct Edges<S: Simd> {
+    e: [F32s<S>; 3],
+    z: [F32s<S>; 3],
+    /// Lanes inside all three edges, and lanes with an edge function of zero.
+    candidates: LaneBits,
+    exact: LaneBits,
+}
+
+impl<S: Simd> Edges<S> {
+    /// No lane may hit.
+    #[inline(always)]
+    pub fn none(s: S) -> Self {
+        let zero = F32s::splat(s, 0.0);
+        Edges {
+            e: [zero; 3],
+            z: [zero; 3],
+            candidates: 0,
+            exact: 0,
+        }
+    }
+
+    /// Only the lanes of `lanes` may hit.
+    #[inline(always)]
+    pub fn restrict(&mut self, lanes: LaneBits) {
+        self.candidates &= lanes;
+        self.exact &= lanes;
     }
 }
 
