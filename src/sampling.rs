@@ -248,6 +248,11 @@ impl PixelStreams {
         }
     }
 
+    /// The hash of (seed, pixel) every sample stream of the pixel starts from.
+    pub fn key(&self) -> u64 {
+        self.key
+    }
+
     /// The stream of sample `sample`: the same as `Sampler::for_sample(seed, pixel, sample)`.
     #[inline]
     pub fn sample(&self, sample: u64) -> Sampler {
@@ -286,6 +291,13 @@ impl<S: Simd> StreamLanes<S> {
     #[inline(always)]
     pub fn new(s: S, seed: u64, pixel: U64s<S>, sample: U64s<S>) -> Self {
         let pixel_key = splitmix64_lanes(s, U64s::splat(s, splitmix64(seed)).xor(pixel));
+        Self::of_pixels(s, pixel_key, sample)
+    }
+
+    /// The streams of samples `sample` of the pixels whose [`PixelStreams::key`]s
+    /// are `pixel_key` (a renderer hashes each pixel once, not once per sample).
+    #[inline(always)]
+    pub fn of_pixels(s: S, pixel_key: U64s<S>, sample: U64s<S>) -> Self {
         let key = splitmix64_lanes(s, pixel_key.xor(sample));
         let stream = splitmix64_lanes(s, key.xor(U64s::splat(s, 0xD1B5_4A32_D192_ED03)));
         // `Pcg32::new(key, stream)`: odd increment, then one step away from the seed.
@@ -319,8 +331,14 @@ impl<S: Simd> StreamLanes<S> {
     /// neither draw nor advance (their value is meaningless).
     #[inline(always)]
     pub fn next_f32(&mut self, s: S, m: Mask<S>) -> F32s<S> {
-        let mut v = self.next_random(s, m);
         let strata = (m & self.dims_below(s, STRATIFIED_DIMS)).bits();
+        // The stream's own number only where some lane uses it.
+        let mut v = if strata == m.bits() {
+            self.advance(s, m);
+            F32s::splat(s, 0.0)
+        } else {
+            self.next_random(s, m)
+        };
         if strata != 0 {
             v = self.stratified(s, strata, v);
         }
@@ -362,7 +380,7 @@ impl<S: Simd> StreamLanes<S> {
     /// value goes unused), without the cost of scrambling it.
     #[inline(always)]
     pub fn skip(&mut self, s: S, m: Mask<S>) {
-        self.next_random(s, m);
+        self.advance(s, m);
         self.dim = U32s::select(m, self.dim.wrapping_add(U32s::splat(s, 1)), self.dim);
     }
 
@@ -372,14 +390,21 @@ impl<S: Simd> StreamLanes<S> {
         self.dim.to_f32().lt(F32s::splat(s, n as f32))
     }
 
+    /// One PCG32 step in the lanes of `m`.
+    #[inline(always)]
+    fn advance(&mut self, s: S, m: Mask<S>) {
+        let next = self
+            .state
+            .wrapping_mul(U64s::splat(s, PCG_MULTIPLIER))
+            .wrapping_add(self.increment);
+        self.state = U64s::select(m, next, self.state);
+    }
+
     /// The PCG32 draw of the lanes of `m`, as a float in `[0, 1)`.
     #[inline(always)]
     fn next_random(&mut self, s: S, m: Mask<S>) -> F32s<S> {
         let old = self.state;
-        let next = old
-            .wrapping_mul(U64s::splat(s, PCG_MULTIPLIER))
-            .wrapping_add(self.increment);
-        self.state = U64s::select(m, next, old);
+        self.advance(s, m);
         let rot = old.shr::<59>().low32();
         let xsh = old.shr::<18>().xor(old).shr::<27>().low32();
         to_unit_lanes(s, xsh.rotate_right(rot))

@@ -21,7 +21,7 @@ use crate::geometry::sphere::sphere_spawn_origin;
 use crate::geometry::NO_PRIM;
 use crate::lights::{AreaLight, Light};
 use crate::materials::Material;
-use crate::sampling::{StreamLanes, COS_POLY, SIN_POLY};
+use crate::sampling::{PixelStreams, StreamLanes, COS_POLY, SIN_POLY};
 use crate::scene::{into_triangle, Scene, NO_LIGHT};
 use crate::simd::{
     dispatch, prefetch, F32s, LaneBits, Mask, Simd, SimdTask, U32s, U64s, Vec3s, ALL_LANES, LANES,
@@ -152,6 +152,8 @@ struct PixelSlots {
     spp: usize,
     /// Tile pixel of each slot (`u32::MAX`: free), its values and how many are done.
     pixel: [u32; SLOTS],
+    /// Each slot's pixel's `PixelStreams::key`, hashed once per pixel.
+    key: [u64; SLOTS],
     values: Vec<Color>,
     done: [u32; SLOTS],
 }
@@ -240,6 +242,7 @@ impl<'a, 'b, 't, S: Simd> Kernel<'a, 'b, 't, S> {
             slots: PixelSlots {
                 spp,
                 pixel: [u32::MAX; SLOTS],
+                key: [0; SLOTS],
                 values: vec![Color::ZERO; SLOTS * spp],
                 done: [0; SLOTS],
             },
@@ -323,15 +326,14 @@ impl<'a, 'b, 't, S: Simd> Kernel<'a, 'b, 't, S> {
     #[inline(always)]
     fn refill(&mut self) {
         let s = self.s;
-        let (fresh, image_pixel, index, xy) = self.assign_samples();
+        let (fresh, pixel_key, index, xy) = self.assign_samples();
         if fresh == 0 {
             return;
         }
         let m = self.mask(fresh);
-        let streams = StreamLanes::new(
+        let streams = StreamLanes::of_pixels(
             s,
-            self.work.seed,
-            U64s::from_array(s, image_pixel),
+            U64s::from_array(s, pixel_key),
             U64s::from_array(s, index),
         );
         self.rng = self.rng.replace(m, streams);
@@ -361,7 +363,7 @@ impl<'a, 'b, 't, S: Simd> Kernel<'a, 'b, 't, S> {
     }
 
     /// Gives the free lanes the next samples of the tile, in order: the lanes
-    /// started, and per lane its pixel's index in the image, the sample's index
+    /// started, and per lane its pixel's `PixelStreams::key`, the sample's index
     /// and the pixel's `(x, y)`.
     #[allow(clippy::type_complexity)]
     #[inline(always)]
@@ -370,7 +372,7 @@ impl<'a, 'b, 't, S: Simd> Kernel<'a, 'b, 't, S> {
         let npix = self.work.pixels.len() as u32;
         let width = self.it.camera.width as u64;
         let mut fresh: LaneBits = 0;
-        let mut image_pixel = [0u64; LANES];
+        let mut pixel_key = [0u64; LANES];
         let mut index = [0u64; LANES];
         let mut xy = [[0u32; LANES]; 2];
         while (self.live | fresh) != ALL_LANES && !self.stopped {
@@ -388,12 +390,15 @@ impl<'a, 'b, 't, S: Simd> Kernel<'a, 'b, 't, S> {
                     self.stopped = true;
                     break;
                 }
+                let (x, y) = self.work.pixels[px as usize];
+                let image_pixel = y as u64 * width + x as u64;
                 self.slots.pixel[slot] = px;
+                self.slots.key[slot] = PixelStreams::new(self.work.seed, image_pixel).key();
                 self.slots.done[slot] = 0;
             }
             let i = (!(self.live | fresh)).trailing_zeros() as usize;
             let (x, y) = self.work.pixels[px as usize];
-            image_pixel[i] = y as u64 * width + x as u64;
+            pixel_key[i] = self.slots.key[slot];
             index[i] = self.work.spp_offset as u64 + sample as u64;
             (xy[0][i], xy[1][i]) = (x, y);
             self.pixel[i] = px;
@@ -405,7 +410,7 @@ impl<'a, 'b, 't, S: Simd> Kernel<'a, 'b, 't, S> {
                 (px + 1, 0)
             };
         }
-        (fresh, image_pixel, index, xy)
+        (fresh, pixel_key, index, xy)
     }
 
     /// Records the radiance of the lanes in `ended` and frees them; pixels whose
