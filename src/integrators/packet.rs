@@ -743,8 +743,17 @@ impl<'a, 'b, 't, S: Simd> Kernel<'a, 'b, 't, S> {
     fn emitted(&mut self, lanes: LaneBits, light: &[u32; LANES], si: Hits<S>, w: Vec3s<S>) {
         let mut le = [[0.0; LANES]; 3];
         let mut any = 0;
+        let on_light = !U32s::from_array(self.s, *light)
+            .eq(U32s::splat(self.s, NO_LIGHT))
+            .bits();
+        let mut rest = lanes & on_light;
+        if rest == 0 {
+            return;
+        }
         let cos_out = (-w).dot(si.ng).to_array();
-        for i in (0..LANES).filter(|&i| lanes >> i & 1 != 0 && light[i] != NO_LIGHT) {
+        while rest != 0 {
+            let i = rest.trailing_zeros() as usize;
+            rest &= rest - 1;
             let Some(Light::Area(a)) = self.it.scene.lights.get(light[i] as usize) else {
                 continue;
             };

@@ -147,12 +147,13 @@ impl Bvh {
             let node = &self.nodes[child.index() as usize];
             // Every child's test first, without a branch, so the tests overlap; then
             // the entered children, nearest last (pushed last, popped first).
-            let mut entry_of = [zero; WIDTH];
+            // (Left uninitialised: only the entries of tested children are read.)
+            let mut entry_of = [MaybeUninit::<F32s<S>>::uninit(); WIDTH];
             let mut entered_by = [0 as LaneBits; WIDTH];
             let mut children: u32 = 0;
             for c in 0..node.len_lanes(s) {
                 let (entered, t0) = node.hits_packet(s, &rays, c, hits.t_max);
-                entry_of[c] = t0;
+                entry_of[c] = MaybeUninit::new(t0);
                 entered_by[c] = entered & lanes;
                 children |= u32::from(entered & lanes != 0) << c;
             }
@@ -165,7 +166,8 @@ impl Bvh {
                 let key = if ANY {
                     0.0
                 } else {
-                    entry_of[c].reduce_min(Mask::from_bits(s, entered))
+                    // SAFETY: child `c` was tested above.
+                    unsafe { entry_of[c].assume_init() }.reduce_min(Mask::from_bits(s, entered))
                 };
                 // Insertion by decreasing key.
                 let mut j = n;
@@ -180,7 +182,8 @@ impl Bvh {
                 stack[sp] = MaybeUninit::new(Pending {
                     child: node.child(c as usize),
                     lanes: entered,
-                    entry: entry_of[c as usize],
+                    // SAFETY: child `c` was tested above.
+                    entry: unsafe { entry_of[c as usize].assume_init() },
                 });
                 sp += 1;
             }
