@@ -381,6 +381,7 @@ impl<'a, 'b, 't, S: Simd> Kernel<'a, 'b, 't, S> {
                 break;
             }
             let slot = PixelSlots::slot_of(px);
+            let (x, y) = self.work.pixels[px as usize];
             if sample == 0 {
                 // A new pixel needs a free slot, and leave to start.
                 if self.slots.pixel[slot] != u32::MAX {
@@ -390,14 +391,12 @@ impl<'a, 'b, 't, S: Simd> Kernel<'a, 'b, 't, S> {
                     self.stopped = true;
                     break;
                 }
-                let (x, y) = self.work.pixels[px as usize];
                 let image_pixel = y as u64 * width + x as u64;
                 self.slots.pixel[slot] = px;
                 self.slots.key[slot] = PixelStreams::new(self.work.seed, image_pixel).key();
                 self.slots.done[slot] = 0;
             }
             let i = (!(self.live | fresh)).trailing_zeros() as usize;
-            let (x, y) = self.work.pixels[px as usize];
             pixel_key[i] = self.slots.key[slot];
             index[i] = self.work.spp_offset as u64 + sample as u64;
             (xy[0][i], xy[1][i]) = (x, y);

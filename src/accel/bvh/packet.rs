@@ -19,7 +19,8 @@ use std::mem::MaybeUninit;
 /// Rays left in a packet at or below which the rest is traced ray by ray. Measured
 /// on CBbunny and CBspheres_lambertian (480×360, 64 spp, `-m 5`, AMD EPYC, 2 threads):
 /// 2 renders 2–4 % faster than 4, 6 and 8 slower (8: −5 %), 16 (always alone) −20 %
-/// (bunny) and −44 % (spheres).
+/// (bunny) and −44 % (spheres). Again after the node test lost its branches
+/// (CBbunny, 128 spp): 1 and 3 took 1.6 % and 2.5 % longer than 2.
 const SINGLE_RAY_BELOW: u32 = 2;
 
 /// Entries of the packet stack (each a lane value: 64 bytes of entry distances).
