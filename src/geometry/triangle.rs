@@ -342,24 +342,11 @@ impl<S: Simd> TriangleRays<S> {
     }
 
     /// The watertight test of one triangle against the lanes in `active` for
-    /// `t ∈ [t_lo, t_max]`: the lanes hit, with `t`, `b1`, `b2`. Lanes whose
-    /// edge functions round to zero go through the scalar test and its `f64`
-    /// fallback, as in [`Triangle4::intersect`].
-    #[inline(always)]
-    pub fn intersect(
-        &self,
-        s: S,
-        corners: &[Vec3; 3],
-        t_max: F32s<S>,
-        active: LaneBits,
-    ) -> (LaneBits, F32s<S>, F32s<S>, F32s<S>) {
-        let edges = self.edges(s, corners, active);
-        self.finish(s, corners, &edges, t_max)
-    }
-
-    /// The first half of [`intersect`](Self::intersect): the edge functions and
-    /// which lanes may hit. A leaf computes these for all its triangles before
-    /// branching on any, so the tests overlap.
+    /// `t ∈ [t_lo, t_max]`, in two halves: these edge functions and the lanes that
+    /// may hit, then [`finish`](Self::finish): the lanes hit, with `t`, `b1`, `b2`.
+    /// A leaf computes the first half for all its triangles before branching on any,
+    /// so the tests overlap. Lanes whose edge functions round to zero go through the
+    /// scalar test and its `f64` fallback, as in [`Triangle4::intersect`].
     #[inline(always)]
     pub fn edges(&self, s: S, corners: &[Vec3; 3], active: LaneBits) -> Edges<S> {
         let (x0, y0, z0) = self.shear(s, corners[0]);
@@ -381,7 +368,7 @@ impl<S: Simd> TriangleRays<S> {
         }
     }
 
-    /// The second half of [`intersect`](Self::intersect), for the lanes of `edges`.
+    /// The second half of the test begun by [`edges`](Self::edges), for its lanes.
     #[inline(always)]
     pub fn finish(
         &self,

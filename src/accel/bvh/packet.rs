@@ -152,11 +152,12 @@ impl Bvh {
             let mut entry_of = [MaybeUninit::<F32s<S>>::uninit(); WIDTH];
             let mut entered_by = [0 as LaneBits; WIDTH];
             let mut children: u32 = 0;
-            for c in 0..node.len_lanes(s) {
+            for c in 0..node.len() {
                 let (entered, t0) = node.hits_packet(s, &rays, c, hits.t_max);
+                let entered = entered & lanes;
                 entry_of[c] = MaybeUninit::new(t0);
-                entered_by[c] = entered & lanes;
-                children |= u32::from(entered & lanes != 0) << c;
+                entered_by[c] = entered;
+                children |= u32::from(entered != 0) << c;
             }
             let mut order = [(0.0f32, 0u8, 0 as LaneBits); WIDTH];
             let mut n = 0;

@@ -131,23 +131,13 @@ impl WideNode {
         )
     }
 
-    /// Slots in use (children fill the slots from slot 0).
-    pub fn len(&self) -> usize {
-        (0..WIDTH)
-            .take_while(|&c| self.lo[0][c] <= self.hi[0][c])
-            .count()
-    }
-
-    /// [`len`](Self::len) by one lane comparison (the packet traversal's hot loop).
+    /// Slots in use (children fill the slots from slot 0, so this counts them):
+    /// every slot compared, without an early exit, so the packet traversal's hot
+    /// loop gets it as one vector comparison.
     #[inline(always)]
-    pub fn len_lanes<S: Simd>(&self, s: S) -> usize {
-        const _: () = assert!(WIDTH <= crate::simd::LANES);
-        let mut lo = [f32::INFINITY; crate::simd::LANES];
-        let mut hi = [f32::NEG_INFINITY; crate::simd::LANES];
-        lo[..WIDTH].copy_from_slice(&self.lo[0]);
-        hi[..WIDTH].copy_from_slice(&self.hi[0]);
-        let used = F32s::from_array(s, lo).le(F32s::from_array(s, hi));
-        used.bits().count_ones() as usize
+    pub fn len(&self) -> usize {
+        let (lo, hi) = (&self.lo[0], &self.hi[0]);
+        (0..WIDTH).filter(|&c| lo[c] <= hi[c]).count()
     }
 
     /// The slab test of child `c` against every lane of a packet, as `hits_avx2`
