@@ -128,7 +128,7 @@ fn benches(c: &mut Criterion) {
     bench_scene(c, "generated-32k", &generated_mesh(90));
     let bunny = Path::new(concat!(
         env!("CARGO_MANIFEST_DIR"),
-        "/../shared/scenes/cs184/sky/CBbunny.dae"
+        "/scenes/cs184/sky/CBbunny.dae"
     ));
     if let Ok(scene) = collada::load(bunny) {
         bench_scene(c, "CBbunny", &scene);

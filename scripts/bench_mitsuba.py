@@ -10,8 +10,8 @@ import sys
 import tempfile
 
 HERE = os.path.dirname(os.path.abspath(__file__))
-DEFAULT_SCENES = ["../shared/scenes/cs184/sky/CBspheres_lambertian.dae",
-                  "../shared/scenes/cs184/sky/CBbunny.dae"]
+DEFAULT_SCENES = ["scenes/cs184/sky/CBspheres_lambertian.dae",
+                  "scenes/cs184/sky/CBbunny.dae"]
 
 
 def cpu_model():

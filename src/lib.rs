@@ -1,7 +1,7 @@
 //! ember: a physically based CPU path tracer for the CS184 COLLADA scenes.
 //!
 //! The library holds everything; the `ember` binary only parses arguments.
-//! Scene semantics follow `shared/docs/scene-semantics.md`.
+//! Scene semantics follow `docs/scene-semantics.md`.
 
 pub mod accel;
 pub mod adaptive;
@@ -9,6 +9,7 @@ pub mod adaptive;
 pub mod bench;
 pub mod camera;
 pub mod color;
+pub mod data;
 pub mod distribution;
 pub mod export;
 pub mod film;

@@ -56,10 +56,7 @@ fn geometry_key(scene: &Scene) -> u64 {
 
 #[test]
 fn bvh_agrees_with_oracle_on_course_scenes() {
-    let dir = Path::new(concat!(
-        env!("CARGO_MANIFEST_DIR"),
-        "/../shared/scenes/cs184"
-    ));
+    let dir = Path::new(concat!(env!("CARGO_MANIFEST_DIR"), "/scenes/cs184"));
     let files = scene_files(dir);
     assert!(
         files.len() >= 10,

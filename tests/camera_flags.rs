@@ -3,7 +3,7 @@
 
 mod common;
 
-use common::{ember, shared};
+use common::{ember, repo};
 use ember::film::Image;
 use std::path::Path;
 use std::process::Output;
@@ -16,7 +16,7 @@ fn run(args: &[&str], out: &Path, scene: &str) -> Output {
         .args(args)
         .arg("-f")
         .arg(out)
-        .arg(shared(scene))
+        .arg(repo(scene))
         .output()
         .unwrap()
 }
@@ -55,7 +55,7 @@ fn saved_camera_renders_the_same_image() {
         let st = ember()
             .args(["camera", "-r", "40", "30", "--save"])
             .arg(&cam)
-            .arg(shared(scene))
+            .arg(repo(scene))
             .output()
             .unwrap();
         assert!(
@@ -83,7 +83,7 @@ fn saved_lens_is_used_and_flags_replace_it() {
     let st = ember()
         .args(["camera", "-r", "40", "30", "-b", "0.1", "-d", "3", "--save"])
         .arg(&cam)
-        .arg(shared(BUNNY))
+        .arg(repo(BUNNY))
         .output()
         .unwrap();
     assert!(st.status.success());
@@ -108,7 +108,7 @@ fn saved_lens_is_used_and_flags_replace_it() {
 fn camera_without_save_prints_the_file() {
     let o = ember()
         .args(["camera", "-b", "0.05", "-d", "3.5"])
-        .arg(shared(SPHERES))
+        .arg(repo(SPHERES))
         .output()
         .unwrap();
     assert!(o.status.success());
@@ -123,7 +123,7 @@ fn camera_file_moves_the_view() {
     let dir = tempfile::tempdir().unwrap();
     let o = ember()
         .args(["camera", "-r", "40", "30"])
-        .arg(shared(SPHERES))
+        .arg(repo(SPHERES))
         .output()
         .unwrap();
     let text = String::from_utf8_lossy(&o.stdout).into_owned();

@@ -2,7 +2,7 @@
 
 mod common;
 
-use common::{ember, shared};
+use common::{ember, repo};
 
 #[test]
 fn cs184_command_line_is_accepted_verbatim() {
@@ -13,7 +13,7 @@ fn cs184_command_line_is_accepted_verbatim() {
             "-t", "2", "-s", "2", "-l", "2", "-m", "2", "-r", "32", "24", "-f",
         ])
         .arg(&out)
-        .arg(shared("scenes/cs184/sky/CBspheres_lambertian.dae"))
+        .arg(repo("scenes/cs184/sky/CBspheres_lambertian.dae"))
         .output()
         .unwrap();
     assert!(
@@ -34,7 +34,7 @@ fn exr_output_and_adaptive_rate_map() {
             "-s", "64", "-a", "8", "0.1", "-m", "1", "-r", "64", "48", "-f",
         ])
         .arg(&out)
-        .arg(shared("scenes/cs184/sky/CBspheres_lambertian.dae"))
+        .arg(repo("scenes/cs184/sky/CBspheres_lambertian.dae"))
         .output()
         .unwrap();
     assert!(
@@ -62,7 +62,7 @@ fn fails_with(args: &[&str], needle: &str) {
 
 #[test]
 fn bad_flags_and_paths_fail_cleanly() {
-    let scene = shared("scenes/cs184/sky/CBempty.dae");
+    let scene = repo("scenes/cs184/sky/CBempty.dae");
     let scene = scene.to_str().unwrap();
     fails_with(&["--frobnicate", scene], "--frobnicate");
     fails_with(&["-s", "zero", scene], "-s");
@@ -81,7 +81,7 @@ fn unwritable_output_leaves_no_file() {
     let st = ember()
         .args(["-s", "1", "-r", "8", "6", "-f"])
         .arg(&target)
-        .arg(shared("scenes/cs184/sky/CBempty.dae"))
+        .arg(repo("scenes/cs184/sky/CBempty.dae"))
         .output()
         .unwrap();
     assert!(!st.status.success());
@@ -93,7 +93,7 @@ fn unwritable_output_leaves_no_file() {
     let st = ember()
         .args(["-s", "1", "-r", "8", "6", "-f"])
         .arg(&as_dir)
-        .arg(shared("scenes/cs184/sky/CBempty.dae"))
+        .arg(repo("scenes/cs184/sky/CBempty.dae"))
         .output()
         .unwrap();
     assert!(!st.status.success());
@@ -131,7 +131,7 @@ fn embree_request_without_feature_says_how_to_get_it() {
     }
     let st = ember()
         .args(["--accel", "embree", "-r", "8", "6"])
-        .arg(shared("scenes/cs184/sky/CBempty.dae"))
+        .arg(repo("scenes/cs184/sky/CBempty.dae"))
         .output()
         .unwrap();
     assert!(!st.status.success());
@@ -142,7 +142,7 @@ fn embree_request_without_feature_says_how_to_get_it() {
 fn info_says_what_accel_auto_picks_and_why() {
     let st = ember()
         .arg("info")
-        .arg(shared("scenes/cs184/sky/CBspheres_lambertian.dae"))
+        .arg(repo("scenes/cs184/sky/CBspheres_lambertian.dae"))
         .output()
         .unwrap();
     assert!(st.status.success());
@@ -237,7 +237,7 @@ fn light_tracing_from_the_command_line_and_its_warning_on_glass() {
                 "-f",
             ])
             .arg(&out)
-            .arg(shared(scene))
+            .arg(repo(scene))
             .output()
             .unwrap()
     };

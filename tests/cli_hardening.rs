@@ -3,13 +3,13 @@
 
 mod common;
 
-use common::{ember, shared, stderr};
+use common::{ember, repo, stderr};
 use std::path::PathBuf;
 use std::process::{Command, Output, Stdio};
 use std::time::{Duration, Instant};
 
 fn scene() -> PathBuf {
-    shared("scenes/cs184/sky/CBempty.dae")
+    repo("scenes/cs184/sky/CBempty.dae")
 }
 
 fn dev_full() -> Stdio {
@@ -97,7 +97,7 @@ fn bad_output_path_fails_before_rendering() {
         let o = ember()
             .args(["-s", "4096", "-m", "5", "-r", "480", "360", "-f"])
             .arg(&target)
-            .arg(shared("scenes/cs184/sky/CBspheres_lambertian.dae"))
+            .arg(repo("scenes/cs184/sky/CBspheres_lambertian.dae"))
             .output()
             .unwrap();
         // A render of this size takes minutes; a preflight failure takes milliseconds
@@ -304,7 +304,7 @@ fn long_render_of(scene: &str, out: &std::path::Path, extra: &[&str]) -> std::pr
         .args(extra)
         .arg("-f")
         .arg(out)
-        .arg(shared("scenes/cs184/sky").join(scene))
+        .arg(repo("scenes/cs184/sky").join(scene))
         .stdout(Stdio::null())
         .stderr(Stdio::piped())
         .spawn()
@@ -366,7 +366,7 @@ fn second_sigint_exits_at_once_and_leaves_no_temporary() {
         .args(["-t", "1", "-s", "100000", "-m", "5", "-r", "1600", "1200"])
         .arg("-f")
         .arg(&out)
-        .arg(shared("scenes/cs184/sky/CBspheres_lambertian.dae"))
+        .arg(repo("scenes/cs184/sky/CBspheres_lambertian.dae"))
         .stdout(Stdio::null())
         .stderr(Stdio::piped())
         .spawn()
@@ -413,7 +413,7 @@ fn time_budget_stops_and_writes() {
     let o = ember()
         .args(["-t", "1", "-m", "5", "-r", "64", "48", "--time", "1", "-f"])
         .arg(&out)
-        .arg(shared("scenes/cs184/sky/CBspheres_lambertian.dae"))
+        .arg(repo("scenes/cs184/sky/CBspheres_lambertian.dae"))
         .output()
         .unwrap();
     assert_no_panic(&o);
@@ -483,7 +483,7 @@ fn render_ok(args: &[&str], out: &std::path::Path, scene: &std::path::Path) -> O
 #[test]
 fn bvh_cost_exr_holds_raw_counts_and_a_fixed_scale_colours_the_png() {
     let dir = tempfile::tempdir().unwrap();
-    let bunny = shared("scenes/cs184/sky/CBbunny.dae");
+    let bunny = repo("scenes/cs184/sky/CBbunny.dae");
     let exr = dir.path().join("c.exr");
     render_ok(&["--shading", "bvh-cost", "-r", "32", "24"], &exr, &bunny);
     let img = ember::image_io::read_image(&exr).unwrap();
@@ -583,7 +583,7 @@ fn options_that_do_nothing_are_refused() {
 fn info_lists_meshes_with_names_and_the_bvh() {
     let o = ember()
         .arg("info")
-        .arg(shared("scenes/cs184/sky/CBbunny.dae"))
+        .arg(repo("scenes/cs184/sky/CBbunny.dae"))
         .output()
         .unwrap();
     assert!(o.status.success());
@@ -785,7 +785,7 @@ fn course_flags_ember_lacks_are_named_and_negative_numbers_get_a_value_message()
 #[test]
 fn renders_in_passes_are_deterministic_whatever_the_threads() {
     let dir = tempfile::tempdir().unwrap();
-    let spheres = shared("scenes/cs184/sky/CBspheres_lambertian.dae");
+    let spheres = repo("scenes/cs184/sky/CBspheres_lambertian.dae");
     let render = |name: &str, args: &[&str]| {
         let out = dir.path().join(name);
         render_ok(

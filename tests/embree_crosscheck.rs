@@ -614,7 +614,7 @@ fn crosscheck_native(label: &str, scene: &Scene) -> Tally {
 }
 
 fn course_scenes() -> Vec<std::path::PathBuf> {
-    let root = concat!(env!("CARGO_MANIFEST_DIR"), "/../shared/scenes/cs184");
+    let root = concat!(env!("CARGO_MANIFEST_DIR"), "/scenes/cs184");
     let mut files: Vec<_> = ["sky", "meshedit", "keenan"]
         .iter()
         .flat_map(|dir| std::fs::read_dir(format!("{root}/{dir}")).expect("cs184 scenes present"))

@@ -352,7 +352,7 @@ fn set_environment_replaces_the_ambient_light() {
 #[test]
 fn cli_renders_with_e_and_refuses_bad_maps() {
     let dir = tempfile::tempdir().unwrap();
-    let scene = common::shared("scenes/cs184/sky/CBspheres_lambertian.dae");
+    let scene = common::repo("scenes/cs184/sky/CBspheres_lambertian.dae");
     let out = dir.path().join("env.exr");
     let st = ember()
         .args(["-s", "2", "-m", "2", "-r", "24", "18", "-q", "-e"])
@@ -466,7 +466,7 @@ fn export_writes_the_map_in_mitsubas_orientation() {
     let dir = tempfile::tempdir().unwrap();
     let st = ember()
         .arg("export")
-        .arg(common::shared("scenes/cs184/sky/CBspheres_lambertian.dae"))
+        .arg(common::repo("scenes/cs184/sky/CBspheres_lambertian.dae"))
         .arg("-e")
         .arg(sun_map_path())
         .arg("--out")

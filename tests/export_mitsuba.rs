@@ -10,10 +10,8 @@ use ember::image_io::read_image;
 use std::path::{Path, PathBuf};
 use std::process::Command;
 
-fn shared(rel: &str) -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join("../shared")
-        .join(rel)
+fn repo(rel: &str) -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join(rel)
 }
 
 fn ember(args: &[&str]) -> std::process::Output {
@@ -30,7 +28,7 @@ fn ember(args: &[&str]) -> std::process::Output {
 }
 
 fn export(scene: &str, dir: &Path, spp: u32, m: u32) -> PathBuf {
-    let path = shared(scene);
+    let path = repo(scene);
     ember(&[
         "export",
         "--format",
@@ -69,7 +67,7 @@ fn export_is_complete_and_well_formed() {
     let xml_path = export("scenes/cs184/sky/CBspheres.dae", dir.path(), 16, 5);
     let text = std::fs::read_to_string(&xml_path).unwrap();
     let doc = roxmltree::Document::parse(&text).expect("exported XML parses");
-    let scene = ember::scene::collada::load(&shared("scenes/cs184/sky/CBspheres.dae")).unwrap();
+    let scene = ember::scene::collada::load(&repo("scenes/cs184/sky/CBspheres.dae")).unwrap();
 
     let shapes: Vec<_> = doc
         .descendants()
@@ -175,7 +173,7 @@ fn ember_means(scene: &str, dir: &Path, spp: u32, m: u32, n: usize) -> Means {
                 &(1000 + seed).to_string(),
                 "-f",
                 out.to_str().unwrap(),
-                shared(scene).to_str().unwrap(),
+                repo(scene).to_str().unwrap(),
             ]);
             let mean = read_image(&out).unwrap().mean();
             [mean.x as f64, mean.y as f64, mean.z as f64]

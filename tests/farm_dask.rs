@@ -16,7 +16,7 @@ use std::process::{Child, Command, Stdio};
 use std::time::{Duration, Instant};
 
 const ROOT: &str = env!("CARGO_MANIFEST_DIR");
-const SCENE: &str = "../shared/scenes/cs184/sky/CBspheres_lambertian.dae";
+const SCENE: &str = "scenes/cs184/sky/CBspheres_lambertian.dae";
 /// One shard takes ~0.5-2 s at -t 1 on a shared machine: long enough to be caught
 /// rendering, short enough for a test of about a minute.
 const RENDER: [&str; 10] = ["-t", "1", "-s", "2048", "-m", "3", "-r", "64", "64", "-q"];

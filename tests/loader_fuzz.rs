@@ -10,7 +10,7 @@ use proptest::test_runner::{Config, RngSeed};
 use std::ops::Range;
 use std::sync::LazyLock;
 
-const SCENES: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/../shared/scenes");
+const SCENES: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/scenes");
 
 /// Values that stress counts, indices, offsets and transforms.
 const NASTY_NUMBERS: [&str; 16] = [

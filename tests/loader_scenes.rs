@@ -10,7 +10,7 @@ use ember::scene::{Scene, NO_LIGHT};
 use ember::Vec3;
 use std::path::{Path, PathBuf};
 
-const SCENES: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/../shared/scenes");
+const SCENES: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/scenes");
 
 fn scene_path(rel: &str) -> PathBuf {
     Path::new(SCENES).join(rel)
@@ -298,7 +298,7 @@ fn hemisphere_and_directional_lights_of_banana() {
     assert!(direction.y < 0.0, "the sun shines downward: {direction}");
 }
 
-/// Camera of the reference manifest (shared/references/manifest.json) at 160×120.
+/// Camera of the reference manifest (tests/data/references/manifest.json) at 160×120.
 fn assert_camera(rel: &str, eye: [f32; 3], forward: [f32; 3], hfov: f64, vfov: f64) {
     let s = load_rel(rel);
     let cam = Camera::new(&s.camera, &s.bounds, 160, 120);

@@ -1,10 +1,10 @@
-//! Comparison with the Mitsuba 3 reference renders in ../shared/references, as
+//! Comparison with the Mitsuba 3 reference renders in tests/data/references, as
 //! their README prescribes: image mean, and RMSE of 8×8 block averages against
 //! the combined noise floor of the reference and of this render.
 
 mod common;
 
-use common::{load, render_halves, shared};
+use common::{load, render_halves, repo};
 use ember::accel::{AccelKind, BvhBuilder};
 use ember::film::Image;
 use ember::image_io::read_image;
@@ -19,7 +19,8 @@ struct Reference {
 }
 
 fn reference(file: &str) -> Reference {
-    let text = std::fs::read_to_string(shared("references/manifest.json")).expect("manifest");
+    let text =
+        std::fs::read_to_string(repo("tests/data/references/manifest.json")).expect("manifest");
     let v: serde_json::Value = serde_json::from_str(&text).expect("manifest json");
     let e = v["images"]
         .as_array()
@@ -39,7 +40,7 @@ fn reference(file: &str) -> Reference {
         mean: arr("mean_rgb"),
         mean_clamped: arr("mean_rgb_clamped"),
         noise_box8: e["noise_rmse_box8"].as_f64().unwrap(),
-        image: read_image(&shared(&format!("references/{file}"))).expect("reference exr"),
+        image: read_image(&repo(&format!("tests/data/references/{file}"))).expect("reference exr"),
     }
 }
 
@@ -340,7 +341,8 @@ fn cbempty_m5_per_pixel_with_the_default_estimator() {
     let scene = load("scenes/cs184/sky/CBempty.dae");
     let estimator = Estimator::auto_for(&scene);
     assert_eq!(estimator, Estimator::LightTracing);
-    let (reference, noise) = noisy_reference(&shared(""), "CBempty_m5.exr").unwrap();
+    let (reference, noise) =
+        noisy_reference(&repo("tests/data/references"), "CBempty_m5.exr").unwrap();
     let renders: Vec<Image> = (0..16)
         .map(|k| {
             let s = RenderSettings {

@@ -4,7 +4,7 @@
 
 mod common;
 
-use common::{ember, job, load, shared};
+use common::{ember, job, load, repo};
 use ember::accel::{AccelKind, BvhBuilder};
 use ember::film::Image;
 use ember::image_metadata::ImageMetadata;
@@ -30,7 +30,7 @@ fn part(job: &RenderJob, s: &RenderSettings, rect: PixelRect, name: &str) -> Par
     let out = job.render_rect(s, rect, &|_| {});
     Part {
         name: name.into(),
-        meta: ImageMetadata::for_render(&shared(SCENE), job, s, 0.0),
+        meta: ImageMetadata::for_render(&repo(SCENE), job, s, 0.0),
         frame: SIZE,
         rect,
         image: out.image,
@@ -240,7 +240,7 @@ fn run(args: &[&str], dir: &Path) -> (bool, String) {
 fn cli_shards_merge_into_the_whole_render_and_bad_merges_fail() {
     let dir = tempfile::tempdir().unwrap();
     let d = dir.path();
-    let scene = shared(SCENE).display().to_string();
+    let scene = repo(SCENE).display().to_string();
     let render = |extra: &[&str], out: &str| {
         let mut a = vec!["-q", "-s", "4", "-m", "2", "-r", "40", "30", "-f", out];
         a.extend_from_slice(extra);
@@ -325,7 +325,7 @@ fn cli_shards_merge_into_the_whole_render_and_bad_merges_fail() {
     let (ok, err) = run(&["-q", "--shard", "0/2", "-f", "p.png", &scene], d);
     assert!(!ok && err.contains("p.png: a part"), "{err}");
     // Light tracing (auto's choice for CBempty) splats anywhere: no parts.
-    let empty = shared("scenes/cs184/sky/CBempty.dae").display().to_string();
+    let empty = repo("scenes/cs184/sky/CBempty.dae").display().to_string();
     for flag in ["--shard", "--spp-offset"] {
         let value = if flag == "--shard" { "0/2" } else { "4" };
         let (ok, err) = run(

@@ -356,8 +356,8 @@ fn case8_russian_roulette_with_low_probability_stays_unbiased() {
 
 #[test]
 fn case9_cbempty_point_light_needs_light_tracing() {
-    let shared = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../shared");
-    let c = light_paths::cbempty(&budget(160, 120, 32), &shared).unwrap();
+    let data = std::path::Path::new(env!("CARGO_MANIFEST_DIR"));
+    let c = light_paths::cbempty(&budget(160, 120, 32), data).unwrap();
     for r in &c.runs {
         eprintln!(
             "{}: {:.3}% pass ({} high, {} low), mean {} ± {} vs {}, {:.1} s",

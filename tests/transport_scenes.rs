@@ -3,7 +3,7 @@
 
 mod common;
 
-use common::{load, render_halves, render_scene, shared};
+use common::{load, render_halves, render_scene, repo};
 use ember::accel::{AccelKind, BvhBuilder};
 use ember::integrators::{DirectStrategy, Estimator};
 use ember::render::{Adaptive, RenderSettings, Shading};
@@ -61,7 +61,7 @@ fn all_scenes(dir: &Path, out: &mut Vec<std::path::PathBuf>) {
 #[test]
 fn no_nan_or_inf_in_any_cs184_scene_at_m5() {
     let mut scenes = Vec::new();
-    all_scenes(&shared("scenes/cs184"), &mut scenes);
+    all_scenes(&repo("scenes/cs184"), &mut scenes);
     scenes.sort();
     assert!(scenes.len() >= 20);
     for p in scenes {

@@ -89,23 +89,21 @@ pub struct AccelBenchOptions {
 
 impl AccelBenchOptions {
     /// CBbunny, CBspheres_lambertian and a ~1M-triangle displaced sphere.
-    pub fn default_scenes() -> Vec<BenchScene> {
-        let sky = PathBuf::from(concat!(
-            env!("CARGO_MANIFEST_DIR"),
-            "/../shared/scenes/cs184/sky"
-        ));
-        vec![
+    pub fn default_scenes() -> anyhow::Result<Vec<BenchScene>> {
+        let sky = crate::data::scene("cs184/sky")?;
+        Ok(vec![
             BenchScene::File(sky.join("CBbunny.dae")),
             BenchScene::File(sky.join("CBspheres_lambertian.dae")),
             BenchScene::DisplacedSphere(1_000_000),
-        ]
+        ])
     }
 }
 
 impl Default for AccelBenchOptions {
     fn default() -> Self {
         AccelBenchOptions {
-            scenes: AccelBenchOptions::default_scenes(),
+            // Filled by the caller (`default_scenes` needs the data folder).
+            scenes: Vec::new(),
             rays: 500_000,
             width: 480,
             height: 360,

@@ -147,13 +147,8 @@ mod tests {
     /// export was skipped when a file of the same name was there.
     #[test]
     fn each_export_replaces_what_another_scene_left() {
-        let shared = |f: &str| {
-            format!(
-                "{}/../shared/scenes/cs184/sky/{f}",
-                env!("CARGO_MANIFEST_DIR")
-            )
-        };
-        let load = |f: &str| crate::scene::collada::load(std::path::Path::new(&shared(f))).unwrap();
+        let scene = |f: &str| format!("{}/scenes/cs184/sky/{f}", env!("CARGO_MANIFEST_DIR"));
+        let load = |f: &str| crate::scene::collada::load(std::path::Path::new(&scene(f))).unwrap();
         let dir = std::env::temp_dir().join(format!("ember-mitsuba-export-{}", std::process::id()));
         std::fs::create_dir_all(&dir).unwrap();
         let mut texts = Vec::new();

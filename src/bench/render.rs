@@ -25,20 +25,21 @@ pub struct RenderBenchOptions {
 }
 
 impl RenderBenchOptions {
-    /// The default scenes: CBspheres_lambertian and CBbunny from ../shared.
-    pub fn default_scenes() -> Vec<PathBuf> {
-        let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("../shared/scenes/cs184/sky");
-        vec![
+    /// The default scenes: CBspheres_lambertian and CBbunny of the course's scenes.
+    pub fn default_scenes() -> Result<Vec<PathBuf>> {
+        let root = crate::data::scene("cs184/sky")?;
+        Ok(vec![
             root.join("CBspheres_lambertian.dae"),
             root.join("CBbunny.dae"),
-        ]
+        ])
     }
 }
 
 impl Default for RenderBenchOptions {
     fn default() -> Self {
         RenderBenchOptions {
-            scenes: Self::default_scenes(),
+            // Filled by the caller (`default_scenes` needs the data folder).
+            scenes: Vec::new(),
             spp: 64,
             max_depth: 5,
             repeat: 3,

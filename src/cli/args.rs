@@ -27,7 +27,7 @@ Where ember differs from the CS184 binary on purpose:
     beside a small light), it takes more batches first;
   - -t defaults to all cores, and the image does not depend on it;
   - <out>_rate.png is written only with -a.
-  The full list is in shared/docs/scene-semantics.md, section 9.";
+  The full list is in docs/scene-semantics.md, section 9.";
 
 /// ember — a physically based CPU path tracer for the CS184 COLLADA scenes.
 ///
@@ -39,6 +39,11 @@ Where ember differs from the CS184 binary on purpose:
 pub struct Cli {
     #[command(subcommand)]
     pub command: Option<Command>,
+    /// ember's data folder (a clone of the repository: its scenes/ and tests/data/), where
+    /// the benchmarks find their default scenes and references. Default: $EMBER_DATA, else
+    /// the clone around the current directory or the executable.
+    #[arg(long, global = true, value_name = "DIR")]
+    pub data: Option<PathBuf>,
     #[command(flatten)]
     pub render: RenderArgs,
 }
@@ -247,7 +252,8 @@ pub enum BenchCommand {
     /// Samples per second for CBspheres_lambertian and CBbunny at 480x360, 64 spp, -m 5.
     #[command(allow_negative_numbers = true)]
     Render {
-        /// Scenes to render (default: the two CS184 scenes from ../shared).
+        /// Scenes to render (default: the course's CBspheres_lambertian and CBbunny from the
+        /// repository's scenes/, or $EMBER_DATA's).
         scenes: Vec<PathBuf>,
         /// Samples per pixel.
         #[arg(short = 's', default_value_t = 64)]

@@ -50,7 +50,7 @@ fn run_on_pool(which: BenchCommand) -> Result<()> {
             let defaults = bench::accel::AccelBenchOptions::default();
             let opts = bench::accel::AccelBenchOptions {
                 scenes: if scenes.is_empty() {
-                    defaults.scenes.clone()
+                    bench::accel::AccelBenchOptions::default_scenes()?
                 } else {
                     scenes
                 },
@@ -116,7 +116,7 @@ fn run_on_pool(which: BenchCommand) -> Result<()> {
         } => bench_render(
             bench::render::RenderBenchOptions {
                 scenes: if scenes.is_empty() {
-                    bench::render::RenderBenchOptions::default_scenes()
+                    bench::render::RenderBenchOptions::default_scenes()?
                 } else {
                     scenes
                 },

@@ -58,6 +58,9 @@ pub fn parse() -> Result<Cli, std::process::ExitCode> {
 }
 
 pub fn run(cli: Cli) -> anyhow::Result<()> {
+    if let Some(dir) = cli.data {
+        ember::data::set_root(dir);
+    }
     match cli.command {
         Some(Command::Info { scene, resolution }) => {
             commands::info(&scene, resolution[0], resolution[1])

@@ -6,15 +6,13 @@ use ember::render::{RenderJob, RenderOutput, RenderSettings};
 use ember::scene::{collada, Scene};
 use std::path::PathBuf;
 
-/// A path under the shared folder beside the repository.
-pub fn shared(rel: &str) -> PathBuf {
-    PathBuf::from(env!("CARGO_MANIFEST_DIR"))
-        .join("../shared")
-        .join(rel)
+/// A path in the repository (`scenes/…`, `tests/data/references/…`).
+pub fn repo(rel: &str) -> PathBuf {
+    PathBuf::from(env!("CARGO_MANIFEST_DIR")).join(rel)
 }
 
 pub fn load(rel: &str) -> Scene {
-    let p = shared(rel);
+    let p = repo(rel);
     collada::load(&p).unwrap_or_else(|e| panic!("{}: {e}", p.display()))
 }
 

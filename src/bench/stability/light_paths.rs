@@ -4,8 +4,8 @@
 //! with independent seeds, a per-pixel, per-channel Welch t-test of their mean against
 //! the light-traced Mitsuba reference and its noise, Šidák-corrected to 1 % family-wise.
 //!
-//! Needs the shared folder (`EMBER_SHARED`, default `../shared`); without it the case
-//! reports that it was skipped.
+//! Needs ember's data folder (`crate::data`: the repository, or `$EMBER_DATA`);
+//! without it the case reports that it was skipped.
 
 use super::measure::{Budget, NATIVE};
 use super::Row;
@@ -15,17 +15,12 @@ use crate::integrators::{DirectStrategy, Estimator, Roulette};
 use crate::render::{RenderJob, RenderSettings};
 use crate::scene::collada;
 use anyhow::{bail, Context, Result};
-use std::path::{Path, PathBuf};
+use std::path::Path;
 use std::time::Instant;
 
 /// Independent renders per estimator.
 pub const RENDERS: usize = 16;
 pub const MAX_DEPTH: u32 = 5;
-
-/// The folder with `scenes/` and `references/`.
-pub fn shared_dir() -> PathBuf {
-    std::env::var_os("EMBER_SHARED").map_or_else(|| PathBuf::from("../shared"), PathBuf::from)
-}
 
 /// One estimator's 16 renders against the reference.
 #[derive(Clone, Debug)]
@@ -87,10 +82,11 @@ pub const ESTIMATORS: [(&str, Estimator, DirectStrategy); 2] = [
 ];
 
 /// Case 9 at `b.spp` per render (the figure is 32), at the reference's 160×120.
-pub fn cbempty(b: &Budget, shared: &Path) -> Result<CbemptyCase> {
-    let scene_path = shared.join("scenes/cs184/sky/CBempty.dae");
+/// `data` is ember's data folder (`crate::data::root`).
+pub fn cbempty(b: &Budget, data: &Path) -> Result<CbemptyCase> {
+    let scene_path = data.join("scenes/cs184/sky/CBempty.dae");
     let scene = collada::load(&scene_path)?;
-    let (reference, noise) = reference(shared, "CBempty_m5.exr")?;
+    let (reference, noise) = reference(&data.join("tests/data/references"), "CBempty_m5.exr")?;
     let (w, h) = (reference.width, reference.height);
     let job = RenderJob::new(scene, NATIVE, w, h)?;
     let mut runs = Vec::new();
@@ -132,27 +128,29 @@ pub fn cbempty(b: &Budget, shared: &Path) -> Result<CbemptyCase> {
     Ok(CbemptyCase { runs })
 }
 
-/// Case 9's rows, or one row saying why it was skipped (no shared folder).
-pub fn rows_if_shared(b: &Budget) -> Result<Vec<Row>> {
-    let shared = shared_dir();
-    if !shared.join("references/CBempty_m5.exr").exists() {
-        return Ok(vec![Row {
-            case: "9 CBempty point light (m 5)".into(),
-            method: "skipped".into(),
-            mean: 0.0,
-            stderr: 0.0,
-            expected: None,
-            noise: 0.0,
-            nonfinite: 0,
-            note: format!("{}: no references (set EMBER_SHARED)", shared.display()),
-        }]);
-    }
-    Ok(cbempty(b, &shared)?.rows())
+/// Case 9's rows, or one row saying why it was skipped (no data folder).
+pub fn rows_if_data(b: &Budget) -> Result<Vec<Row>> {
+    let data = match crate::data::root() {
+        Ok(d) => d,
+        Err(e) => {
+            return Ok(vec![Row {
+                case: "9 CBempty point light (m 5)".into(),
+                method: "skipped".into(),
+                mean: 0.0,
+                stderr: 0.0,
+                expected: None,
+                noise: 0.0,
+                nonfinite: 0,
+                note: format!("{e:#}"),
+            }])
+        }
+    };
+    Ok(cbempty(b, &data)?.rows())
 }
 
-/// A reference EXR and its per-channel per-pixel noise from the manifest.
-pub fn reference(shared: &Path, file: &str) -> Result<(Image, [f64; 3])> {
-    let refs = shared.join("references");
+/// A reference EXR of the folder `refs` and its per-channel per-pixel noise from
+/// the folder's manifest.
+pub fn reference(refs: &Path, file: &str) -> Result<(Image, [f64; 3])> {
     let image = read_image(&refs.join(file))?;
     let manifest = refs.join("manifest.json");
     let text = std::fs::read_to_string(&manifest)

@@ -91,7 +91,7 @@ pub fn run_stability(opts: &StabilityOptions) -> Result<StabilityReport> {
     rows.extend(robust::grid(&budget(320, 240, 4))?.rows());
     rows.extend(sampling::adaptive(&budget(80, 60, 512))?.rows());
     rows.extend(sampling::roulette(&budget(80, 60, 256))?.rows());
-    rows.extend(light_paths::rows_if_shared(&budget(160, 120, 32))?);
+    rows.extend(light_paths::rows_if_data(&budget(160, 120, 32))?);
     rows.extend(environment::sun_sky(&budget(80, 60, 64))?.rows());
     Ok(StabilityReport { rows })
 }
