@@ -13,7 +13,7 @@ use crate::film::Image;
 use crate::image_io::{write_image, ImageIoError};
 use crate::integrators::Roulette;
 use crate::lights::Light;
-use crate::materials::Material;
+use crate::materials::{Bsdf, Material};
 use crate::scene::{Scene, NO_LIGHT};
 use crate::Color;
 use glam::Vec3;
@@ -192,9 +192,7 @@ fn triangle_groups(scene: &Scene) -> Vec<TriangleGroup> {
 fn group_material(scene: &Scene, g: &TriangleGroup) -> Material {
     if g.light != NO_LIGHT {
         // An area light reflects nothing (spec §5).
-        return Material::Lambertian {
-            albedo: Color::ZERO,
-        };
+        return Material::lambertian(Color::ZERO);
     }
     scene.materials[g.material as usize]
 }
@@ -207,10 +205,7 @@ fn group_emitter(scene: &Scene, g: &TriangleGroup) -> Option<Color> {
 }
 
 fn emission_of(m: &Material) -> Option<Color> {
-    match *m {
-        Material::Emission { radiance } => Some(radiance),
-        _ => None,
-    }
+    m.emits().then_some(m.emission)
 }
 
 fn area_emitter_xml(radiance: Color) -> String {
@@ -229,17 +224,17 @@ fn bsdf_xml(m: &Material, warnings: &mut Vec<String>) -> String {
             inner.replace("\n  ", "\n    ")
         )
     };
-    match *m {
-        Material::Lambertian { albedo } => two_sided(format!(
+    match m.bsdf {
+        Bsdf::Lambertian(b) => two_sided(format!(
             "  <bsdf type=\"diffuse\"><rgb name=\"reflectance\" value=\"{}\"/></bsdf>\n",
-            rgb(albedo)
+            rgb(b.albedo.vec3())
         )),
-        Material::Mirror { reflectance } => two_sided(format!(
+        Bsdf::Mirror(b) => two_sided(format!(
             "  <bsdf type=\"conductor\"><string name=\"material\" value=\"none\"/>\
              <rgb name=\"specular_reflectance\" value=\"{}\"/></bsdf>\n",
-            rgb(reflectance)
+            rgb(b.reflectance.vec3())
         )),
-        Material::Microfacet(c) => two_sided(format!(
+        Bsdf::Microfacet(c) => two_sided(format!(
             "  <bsdf type=\"roughconductor\"><string name=\"distribution\" value=\"beckmann\"/>\
              <float name=\"alpha\" value=\"{}\"/><rgb name=\"eta\" value=\"{}\"/>\
              <rgb name=\"k\" value=\"{}\"/></bsdf>\n",
@@ -247,20 +242,16 @@ fn bsdf_xml(m: &Material, warnings: &mut Vec<String>) -> String {
             rgb(c.eta()),
             rgb(c.k())
         )),
-        Material::Glass {
-            ior,
-            reflectance,
-            transmittance,
-        } => dielectric_xml(ior, reflectance, transmittance),
-        Material::Refraction { ior, transmittance } => {
+        Bsdf::Glass(b) => dielectric_xml(b.ior, b.reflectance.vec3(), b.transmittance.vec3()),
+        Bsdf::Refraction(b) => {
             warnings.push(
                 "refraction-only material: Mitsuba's nearest is a dielectric without reflection, \
                  which weights transmission by (1 - Fresnel) where the spec does not"
                     .into(),
             );
-            dielectric_xml(ior, Color::ZERO, transmittance)
+            dielectric_xml(b.ior, Color::ZERO, b.transmittance.vec3())
         }
-        Material::Emission { .. } | Material::Black => {
+        Bsdf::NonScattering(_) => {
             "    <bsdf type=\"diffuse\"><rgb name=\"reflectance\" value=\"0 0 0\"/></bsdf>\n".into()
         }
     }

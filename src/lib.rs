@@ -4,7 +4,7 @@
 //! Scene semantics follow `docs/scene-semantics.md`.
 
 pub mod accel;
-pub mod adaptive;
+
 #[cfg(feature = "bench")]
 pub mod bench;
 pub mod camera;
@@ -18,6 +18,7 @@ pub mod image_io;
 pub mod image_metadata;
 pub mod info;
 pub mod integrators;
+pub mod lanes;
 pub mod lights;
 pub mod materials;
 pub mod names;
@@ -26,7 +27,6 @@ pub mod render;
 pub mod sampling;
 pub mod scene;
 pub mod shard;
-pub mod simd;
 
 pub use color::Color;
 pub use glam::{Vec2, Vec3};

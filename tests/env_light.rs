@@ -14,7 +14,7 @@ use ember::lights::environment::{EnvMapError, EnvSampling};
 use ember::lights::{EnvironmentMap, Light};
 use ember::materials::Material;
 use ember::render::{RenderJob, RenderSettings};
-use ember::sampling::Sampler;
+use ember::sampling::Rng;
 use ember::scene::{CameraDesc, Scene, Triangle, NO_LIGHT};
 use ember::{Color, Vec3};
 use std::path::{Path, PathBuf};
@@ -75,9 +75,7 @@ fn floor_job(a: f32, light: Light) -> RenderJob {
                 light: NO_LIGHT,
             })
             .to_vec(),
-        materials: vec![Material::Lambertian {
-            albedo: Color::splat(a),
-        }],
+        materials: vec![Material::lambertian(Color::splat(a))],
         bounds: Aabb::new(Vec3::new(-l, 0.0, -l), Vec3::new(l, 0.0, l)),
         ..Default::default()
     };
@@ -182,7 +180,7 @@ fn chi2_env(env: &EnvironmentMap, seed: u64) -> Result<f64, String> {
     chi2_p_value(
         1_000_000,
         seed,
-        |s: &mut Sampler| env.sample_li(s.next_2d()).map(|ls| ls.wi),
+        |s: &mut Rng| env.sample_li(s.next_2d()).map(|ls| ls.wi),
         &|wi| env.pdf_li(wi) as f64,
     )
 }
@@ -214,7 +212,7 @@ fn chi2_rejects_a_pdf_without_sin_theta() {
     let p = chi2_p_value(
         1_000_000,
         3,
-        |s: &mut Sampler| env.sample_li(s.next_2d()).map(|ls| ls.wi),
+        |s: &mut Rng| env.sample_li(s.next_2d()).map(|ls| ls.wi),
         &|wi| {
             let sin = (1.0 - wi.y as f64 * wi.y as f64).max(0.0).sqrt();
             env.pdf_li(wi) as f64 * sin / std::f64::consts::FRAC_PI_4
@@ -227,7 +225,7 @@ fn chi2_rejects_a_pdf_without_sin_theta() {
 #[test]
 fn samples_carry_the_texel_and_pdf_li() {
     let env = sun_map();
-    let mut s = Sampler::from_seed(5);
+    let mut s = Rng::from_seed(5);
     let mut sun = 0;
     for _ in 0..20_000 {
         let ls = env.sample_li(s.next_2d()).expect("sample");

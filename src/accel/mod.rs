@@ -5,13 +5,13 @@ pub mod brute;
 pub mod bvh;
 #[cfg(any(feature = "embree", feature = "embree4"))]
 pub mod embree;
-pub mod packet;
+
 mod prims;
 
-use crate::simd::LaneBits;
+pub use crate::lanes::rays::{HitPacket, RayPacket};
+use crate::lanes::LaneBits;
 pub use brute::BruteForce;
 pub use bvh::{Bvh, BvhStats};
-pub use packet::{HitPacket, RayPacket};
 
 use crate::geometry::Ray;
 use crate::names::{display_from_table, Named};
@@ -35,14 +35,14 @@ pub trait Accel: Send + Sync {
     /// are left as they were). Among hits at the same `t` the lowest primitive id
     /// wins (see [`packet`]). The default traces the lanes one by one.
     fn intersect_packet(&self, rays: &RayPacket, active: LaneBits, hits: &mut HitPacket) {
-        for i in (0..crate::simd::LANES).filter(|&i| active >> i & 1 != 0) {
+        for i in (0..crate::lanes::LANES).filter(|&i| active >> i & 1 != 0) {
             hits.set(i, self.intersect(&rays.ray(i)));
         }
     }
 
     /// The lanes of `active` whose ray is occluded. The default traces them one by one.
     fn occluded_packet(&self, rays: &RayPacket, active: LaneBits) -> LaneBits {
-        (0..crate::simd::LANES)
+        (0..crate::lanes::LANES)
             .filter(|&i| active >> i & 1 != 0 && self.occluded(&rays.ray(i)))
             .fold(0, |m, i| m | 1 << i)
     }

@@ -103,7 +103,7 @@ fn measure(path: &Path, opts: &RenderBenchOptions) -> Result<Vec<RenderBenchRow>
             let job = RenderJob::new(scene, opts.accel, WIDTH, HEIGHT)?;
             let build_s = t1.elapsed().as_secs_f64();
             ran[k] = if settings.uses_packets(&job) {
-                format!("packets ({})", crate::simd::instruction_set())
+                format!("packets ({})", crate::lanes::instruction_set())
             } else {
                 "scalar".into()
             };

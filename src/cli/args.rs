@@ -6,6 +6,7 @@ use ember::accel::{Backend, BvhBuilder, EmbreeQuality};
 use ember::integrators::{DirectStrategy, Estimator};
 use ember::names::Named;
 use ember::render::{Engine, Shading};
+use ember::sampling::SamplerKind;
 use std::path::PathBuf;
 
 /// What `--help` adds after the options: stopping a render, and where ember differs
@@ -375,6 +376,12 @@ pub struct RenderArgs {
     /// The image is the same bit for bit; only the speed differs.
     #[arg(long, value_parser = named::<Engine>(), default_value_t = Engine::Auto)]
     pub engine: Engine,
+
+    /// Which numbers pixel samples draw: sobol stratifies every pair of numbers of every bounce
+    /// over a pixel's samples (Owen-scrambled Sobol points); independent draws uniform numbers
+    /// (for comparison).
+    #[arg(long, value_parser = named::<SamplerKind>(), default_value_t = SamplerKind::Sobol)]
+    pub sampler: SamplerKind,
 
     /// Estimator. auto: light tracing when every light is a point light and nothing is specular or self-emitting (CBempty: see BENCHMARKS.md, stability case 9); otherwise path tracing with MIS (light + BSDF sampling) when the scene has glossy surfaces or an ambient or environment (-e) light, light sampling otherwise. A direct-lighting strategy name means path tracing with it. -H forces hemisphere.
     #[arg(long, value_parser = integrator(), default_value = AUTO)]

@@ -480,7 +480,7 @@ impl RenderRun<'_> {
             (None, _, _) => format!("mean {mean:.1} spp"),
         };
         let engine = if s.uses_packets(self.job) {
-            format!("packets of 16 ({})", ember::simd::instruction_set())
+            format!("packets of 16 ({})", ember::lanes::instruction_set())
         } else {
             "one path at a time".into()
         };
@@ -605,7 +605,7 @@ pub(super) fn info(path: &Path, w: u32, h: u32) -> Result<()> {
     match defaults.packet_blocker(&scene, &camera) {
         None => ember::outln!(
             "--engine auto (the default) runs packets of 16 paths ({})",
-            ember::simd::instruction_set()
+            ember::lanes::instruction_set()
         )?,
         Some(why) => ember::outln!("--engine auto (the default) runs one path at a time: {why}")?,
     }

@@ -184,6 +184,7 @@ pub(super) fn settings_from(args: &RenderArgs) -> Result<RenderSettings> {
         seed: args.seed,
         spp_offset: args.spp_offset.unwrap_or(0),
         engine: args.engine,
+        sampler: args.sampler,
     })
 }
 

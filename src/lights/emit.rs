@@ -81,7 +81,7 @@ fn disk_emission(
     let frame = Frame::from_normal(dir);
     let d = concentric_disk(u) * r;
     EmissionSample {
-        origin: c - 1.01 * r * dir + frame.s * d.x + frame.t * d.y,
+        origin: c - 1.01 * r * dir + frame.s.vec3() * d.x + frame.t.vec3() * d.y,
         on_surface: None,
         dir,
         beta: value * (PI * r * r * dir_weight),

@@ -1,37 +1,36 @@
 //! Exact unpolarized Fresnel reflectance (spec §6): dielectric for glass, complex
 //! index for conductors. Never Schlick: the spec asks for the exact terms.
 
+use crate::lanes::{clamp, Real};
 use crate::Color;
 
 /// Reflectance of a smooth dielectric interface for light arriving at
 /// `cos_theta_i = |cos θi| ∈ [0, 1]` from the side of index `eta_i` toward
-/// `eta_t`. Returns 1 under total internal reflection.
-pub fn dielectric(cos_theta_i: f32, eta_i: f32, eta_t: f32) -> f32 {
-    let cos_i = cos_theta_i.clamp(0.0, 1.0);
-    let Some(cos_t) = refracted_cos(cos_i, eta_i / eta_t) else {
-        return 1.0;
-    };
+/// `eta_t`. 1 under total internal reflection.
+#[inline(always)]
+pub fn dielectric<F: Real>(cos_theta_i: F, eta_i: F, eta_t: F) -> F {
+    let c = |v: f32| cos_theta_i.splat_as(v);
+    let cos_i = clamp(cos_theta_i, c(0.0), c(1.0));
+    let (cos_t, refracts) = refracted_cos(cos_i, eta_i / eta_t);
     let rs_den = eta_i * cos_i + eta_t * cos_t;
     let rp_den = eta_t * cos_i + eta_i * cos_t;
-    if rs_den <= 0.0 || rp_den <= 0.0 {
-        // Grazing incidence on a degenerate interface: everything reflects.
-        return 1.0;
-    }
     let rs = (eta_i * cos_i - eta_t * cos_t) / rs_den;
     let rp = (eta_t * cos_i - eta_i * cos_t) / rp_den;
-    (0.5 * (rs * rs + rp * rp)).clamp(0.0, 1.0)
+    let r = clamp(c(0.5) * (rs * rs + rp * rp), c(0.0), c(1.0));
+    // Grazing incidence on a degenerate interface: everything reflects.
+    let ok = refracts & rs_den.gt(c(0.0)) & rp_den.gt(c(0.0));
+    F::select(ok, r, c(1.0))
 }
 
-/// `cos θt` from Snell's law with relative index `eta_ratio = ηi/ηt`,
-/// or `None` under total internal reflection.
-pub fn refracted_cos(cos_theta_i: f32, eta_ratio: f32) -> Option<f32> {
-    let sin2_i = (1.0 - cos_theta_i * cos_theta_i).max(0.0);
+/// `cos θt` from Snell's law with relative index `eta_ratio = ηi/ηt`, and the lanes
+/// where it exists (not under total internal reflection).
+#[inline(always)]
+pub fn refracted_cos<F: Real>(cos_theta_i: F, eta_ratio: F) -> (F, F::M) {
+    let c = |v: f32| cos_theta_i.splat_as(v);
+    let sin2_i = (c(1.0) - cos_theta_i * cos_theta_i).max(c(0.0));
     let sin2_t = eta_ratio * eta_ratio * sin2_i;
-    if sin2_t >= 1.0 {
-        None
-    } else {
-        Some((1.0 - sin2_t).sqrt())
-    }
+    let ok = sin2_t.lt(c(1.0));
+    ((c(1.0) - sin2_t).max(c(0.0)).sqrt(), ok)
 }
 
 /// Reflectance of a conductor with complex index `eta + i·k` (per channel) at

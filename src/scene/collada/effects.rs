@@ -2,7 +2,7 @@
 
 use super::xml::{child, extension_technique, path, Ctx};
 use super::LoadError;
-use crate::materials::{Conductor, Material};
+use crate::materials::Material;
 use crate::Color;
 use roxmltree::Node;
 
@@ -23,9 +23,7 @@ pub(crate) fn read_material<'a, 'i>(
     });
     match special {
         Some(node) => read_special(ctx, node),
-        None => Ok(Material::Lambertian {
-            albedo: diffuse_colour(ctx, effect)?,
-        }),
+        None => Ok(Material::lambertian(diffuse_colour(ctx, effect)?)),
     }
 }
 
@@ -48,32 +46,24 @@ fn diffuse_colour(ctx: &Ctx, effect: Node) -> Result<Color, LoadError> {
 fn read_special<'a, 'i>(ctx: &mut Ctx<'a, 'i>, node: Node<'a, 'i>) -> Result<Material, LoadError> {
     let mut p = Params { ctx, node };
     let m = match node.tag_name().name() {
-        "emission" => Material::Emission {
-            radiance: p.rgb("radiance", 1.0)?,
-        },
-        "mirror" => Material::Mirror {
-            reflectance: p.rgb("reflectance", 1.0)?,
-        },
+        "emission" => Material::emitter(p.rgb("radiance", 1.0)?),
+        "mirror" => Material::mirror(p.rgb("reflectance", 1.0)?),
         "glass" => {
             p.require_smooth()?;
-            Material::Glass {
-                ior: p.positive("ior", 1.5)?,
-                reflectance: p.rgb("reflectance", 1.0)?,
-                transmittance: p.rgb("transmittance", 1.0)?,
-            }
+            let ior = p.positive("ior", 1.5)?;
+            let r = p.rgb("reflectance", 1.0)?;
+            Material::glass(ior, r, p.rgb("transmittance", 1.0)?)
         }
         "refraction" => {
             p.require_smooth()?;
-            Material::Refraction {
-                ior: p.positive("ior", 1.5)?,
-                transmittance: p.rgb("transmittance", 1.0)?,
-            }
+            let ior = p.positive("ior", 1.5)?;
+            Material::refraction(ior, p.rgb("transmittance", 1.0)?)
         }
-        _ => Material::Microfacet(Conductor::new(
-            p.positive("alpha", 0.5)?,
-            p.rgb("eta", 1.0)?,
-            p.rgb("k", 0.0)?,
-        )),
+        _ => {
+            let alpha = p.positive("alpha", 0.5)?;
+            let eta = p.rgb("eta", 1.0)?;
+            Material::microfacet(alpha, eta, p.rgb("k", 0.0)?)
+        }
     };
     Ok(m)
 }

@@ -1,9 +1,15 @@
-//! The render driver: tiles over rayon, per-pixel deterministic sampling,
-//! plain or adaptive sample counts. `RenderJob` (job.rs) owns what is rendered.
+//! The render driver: it owns the pixel loop (tiles over rayon, fixed or adaptive
+//! sample counts, `pixels.rs`) and the splatting loop of adjoint integrators
+//! (`splats.rs`), and builds the integrator the settings ask for. Integrators see
+//! only blocks of pixel samples or numbered light paths (`crate::integrators`).
+//! `RenderJob` (job.rs) owns what is rendered.
 
+pub mod adaptive;
 mod job;
 mod memory;
+mod pixels;
 mod progressive;
+mod splats;
 mod stop;
 
 pub use job::{average, Halves, PixelRect, RenderJob};
@@ -12,17 +18,16 @@ pub use progressive::{pass_seed, pass_spp, render_passes, Film};
 pub use stop::{StopReason, StopToken};
 
 use crate::camera::Camera;
-use crate::color::{is_finite, luminance};
 use crate::film::{heat_map, Image};
-use crate::integrators::packet::{PacketPathIntegrator, TileWork};
+use crate::integrators::debug::{DebugView, View};
 use crate::integrators::{
-    debug, light_tracing, DirectStrategy, Estimator, PathIntegrator, PathSettings, Roulette,
+    light_tracing, DirectStrategy, Estimator, LightTracer, PathIntegrator, PathSettings, Roulette,
+    SampleIntegrator,
 };
 use crate::names::{display_from_table, Named};
-use crate::sampling::PixelStreams;
+use crate::sampling::SamplerKind;
 use crate::scene::Scene;
 use crate::Color;
-use rayon::prelude::*;
 
 /// What each pixel shows.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
@@ -56,8 +61,8 @@ impl Named for Shading {
 }
 display_from_table!(Shading);
 
-/// How camera paths run on the CPU. The image is the same bit for bit either way
-/// (`integrators::packet`); only the speed differs.
+/// How camera paths run on the CPU. The image is the same bit for bit either way (the
+/// transport is one code over its lane type); only the speed differs.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
 pub enum Engine {
     /// Packets wherever the render allows them ([`RenderSettings::packet_blocker`]).
@@ -66,7 +71,7 @@ pub enum Engine {
     /// One path at a time.
     Scalar,
     /// Sixteen paths at a time, one per SIMD lane; renders the engine cannot run
-    /// are refused by the CLI (a library caller gets the scalar engine).
+    /// are refused by the CLI (a library caller gets one path at a time).
     Packet,
 }
 
@@ -76,13 +81,13 @@ impl Named for Engine {
         (
             Engine::Auto,
             "auto",
-            "Sixteen paths per SIMD pass where the render allows (Lambertian surfaces, area lights, pinhole, light sampling or MIS, no -a), else one at a time",
+            "Sixteen paths per SIMD pass for every path-traced render; light tracing and the debug views one at a time",
         ),
-        (Engine::Scalar, "scalar", "One path at a time"),
+        (Engine::Scalar, "scalar", "One path at a time (the same code at one lane)"),
         (
             Engine::Packet,
             "packet",
-            "Sixteen paths per SIMD pass (AVX-512, AVX2 or portable code); an error where the render needs the scalar engine",
+            "Sixteen paths per SIMD pass (AVX-512, AVX2 or portable code); an error where the render cannot use them",
         ),
     ];
 }
@@ -105,7 +110,7 @@ pub enum StopRule {
     /// The course's rule on the pixel's own samples, after `min_samples_if_constant`.
     /// Biased where light is rare (stability case 7); kept for comparison.
     PerPixel,
-    /// `crate::adaptive` (default): a pixel of zeros after a count set by how often its
+    /// `render::adaptive` (default): a pixel of zeros after a count set by how often its
     /// neighbours find light; a constant non-zero pixel after `min_samples_if_constant`.
     Neighbourhood,
 }
@@ -138,6 +143,8 @@ pub struct RenderSettings {
     pub adaptive: Option<Adaptive>,
     pub shading: Shading,
     pub seed: u64,
+    /// Which numbers pixel samples draw.
+    pub sampler: SamplerKind,
     /// Index of the first sample of every pixel: a render takes samples
     /// `spp_offset .. spp_offset + spp`, so renders of disjoint sample ranges (sample
     /// shards, `--spp-offset`) merge into one render of all of them. Not with `adaptive`.
@@ -157,20 +164,16 @@ impl RenderSettings {
             .unwrap_or_else(|| DirectStrategy::auto_for(scene))
     }
 
-    /// Why these settings must render `job` one path at a time, if they must: the
-    /// packet engine covers plain radiance renders by path tracing of what
-    /// `packet::unsupported` accepts.
-    pub fn packet_blocker(&self, scene: &Scene, camera: &Camera) -> Option<&'static str> {
+    /// Why these settings must render `scene` one path at a time, if they must: every
+    /// path-traced radiance render runs in packets.
+    pub fn packet_blocker(&self, scene: &Scene, _camera: &Camera) -> Option<&'static str> {
         if self.shading != Shading::Radiance {
             return Some("debug shading (--shading)");
-        }
-        if self.adaptive.is_some() {
-            return Some("adaptive sampling (-a)");
         }
         if self.estimator_for(scene) != Estimator::Path {
             return Some("light tracing");
         }
-        crate::integrators::packet::unsupported(scene, camera, &self.path_settings(scene))
+        None
     }
 
     /// Whether `job` renders by packets with these settings.
@@ -185,6 +188,16 @@ impl RenderSettings {
             light_samples: self.light_samples,
             strategy: self.strategy_for(scene),
             roulette: self.roulette,
+            sampler: self.sampler,
+        }
+    }
+
+    /// The engine that runs `job`'s camera paths with these settings.
+    fn engine_for(&self, job: &RenderJob) -> Engine {
+        if self.uses_packets(job) {
+            Engine::Packet
+        } else {
+            Engine::Scalar
         }
     }
 }
@@ -202,6 +215,7 @@ impl Default for RenderSettings {
             adaptive: None,
             shading: Shading::Radiance,
             seed: 0,
+            sampler: SamplerKind::default(),
             spp_offset: 0,
             engine: Engine::Auto,
         }
@@ -278,52 +292,6 @@ impl RenderOutput {
     }
 }
 
-const TILE: u32 = 16;
-const TILE_PIXELS: usize = (TILE * TILE) as usize;
-
-/// The tiles covering `rect`, as their top-left pixels, in a scattered order: every
-/// stretch of the list samples the whole image, so progress (and its ETA) measured in
-/// pixels tracks the work, and a stopped render is spread over the frame, not
-/// a band of background at the top. The image does not depend on the order.
-fn tiles(rect: PixelRect) -> Vec<(u32, u32)> {
-    let rows: Vec<(u32, u32)> = (rect.y0..rect.y1)
-        .step_by(TILE as usize)
-        .flat_map(|y| {
-            (rect.x0..rect.x1)
-                .step_by(TILE as usize)
-                .map(move |x| (x, y))
-        })
-        .collect();
-    scattered(rows.len()).map(|i| rows[i]).collect()
-}
-
-/// `0..n` in a scattered order (every index once): work scheduled in this order
-/// samples the whole image early, so progress measured in pixels tracks the work.
-pub(crate) fn scattered(n: usize) -> impl Iterator<Item = usize> {
-    let stride = scatter_stride(n);
-    (0..n).map(move |i| i * stride % n)
-}
-
-/// A step near `n / φ` with no factor in common with `n`, so `i · step mod n` visits
-/// every index once, jumping across the image.
-fn scatter_stride(n: usize) -> usize {
-    let gcd = |mut a: usize, mut b: usize| {
-        while b != 0 {
-            (a, b) = (b, a % b);
-        }
-        a
-    };
-    (((n as f64) * 0.618_034) as usize..n.max(1))
-        .find(|&s| s > 0 && gcd(s, n) == 1)
-        .unwrap_or(1)
-}
-
-/// The pixels of the tile at `(x0, y0)` inside `rect`, row by row.
-fn tile_pixels(rect: PixelRect, (x0, y0): (u32, u32)) -> impl Iterator<Item = (u32, u32)> {
-    (y0..(y0 + TILE).min(rect.y1))
-        .flat_map(move |y| (x0..(x0 + TILE).min(rect.x1)).map(move |x| (x, y)))
-}
-
 /// Renders pixels `rect` of `job`. `progress` is called with the number of pixels finished.
 /// Once `stop` says so, the remaining pixels are left black with 0 samples.
 fn render_rect(
@@ -333,190 +301,41 @@ fn render_rect(
     progress: &(dyn Fn(u64) + Sync),
     stop: &StopToken,
 ) -> RenderOutput {
-    if settings.shading == Shading::Radiance {
-        if settings.estimator_for(&job.scene) == Estimator::LightTracing {
-            return light_tracing::render(job, settings, rect, progress, stop);
-        }
-        if let Some(a) = settings
-            .adaptive
-            .filter(|a| a.rule == StopRule::Neighbourhood)
-        {
-            return crate::adaptive::render(job, settings, a, rect, progress, stop);
-        }
-    }
-    let tiles = tiles(rect);
-    if settings.uses_packets(job) {
-        let packet = PacketPathIntegrator::new(
-            &job.scene,
-            job.accel.as_ref(),
-            &job.camera,
-            settings.path_settings(&job.scene),
-        );
-        if let Some(packet) = packet {
-            return render_packets(&packet, settings, rect, &tiles, progress, stop);
-        }
-    }
-    let integrator = PathIntegrator::new(
-        &job.scene,
-        job.accel.as_ref(),
-        settings.path_settings(&job.scene),
-    );
-    // Every tile's slot is allocated up front, so memory does not grow while rendering.
-    let mut results = vec![PixelResult::NOT_RENDERED; tiles.len() * TILE_PIXELS];
-    results
-        .par_chunks_mut(TILE_PIXELS)
-        .zip(tiles.par_iter())
-        .for_each(|(slots, &tile)| {
-            let mut n = 0;
-            for (slot, (x, y)) in slots.iter_mut().zip(tile_pixels(rect, tile)) {
-                if stop.should_stop() {
-                    break;
-                }
-                *slot = render_pixel(job, settings, &integrator, x, y);
-                n += 1;
-            }
-            progress(n);
-        });
-    assemble(rect, &tiles, &results)
-}
-
-/// `render_rect` by the packet engine: each tile's pixels, all their samples.
-fn render_packets(
-    packet: &PacketPathIntegrator,
-    settings: &RenderSettings,
-    rect: PixelRect,
-    tiles: &[(u32, u32)],
-    progress: &(dyn Fn(u64) + Sync),
-    stop: &StopToken,
-) -> RenderOutput {
-    let spp = settings.spp.max(1);
-    let mut results = vec![PixelResult::NOT_RENDERED; tiles.len() * TILE_PIXELS];
-    let should_stop = || stop.should_stop();
-    results
-        .par_chunks_mut(TILE_PIXELS)
-        .zip(tiles.par_iter())
-        .for_each(|(slots, &tile)| {
-            let pixels: Vec<(u32, u32)> = tile_pixels(rect, tile).collect();
-            let mut sums = vec![None; pixels.len()];
-            let work = TileWork {
-                pixels: &pixels,
-                spp,
-                spp_offset: settings.spp_offset,
-                seed: settings.seed,
-                stop: &should_stop,
-            };
-            packet.render_tile(&work, &mut sums);
-            let mut n = 0;
-            for (slot, sum) in slots.iter_mut().zip(sums) {
-                if let Some(p) = sum {
-                    *slot = PixelResult {
-                        value: p.sum / spp as f32,
-                        samples: spp,
-                        nonfinite: p.nonfinite,
-                    };
-                    n += 1;
-                }
-            }
-            progress(n);
-        });
-    assemble(rect, tiles, &results)
-}
-
-#[derive(Clone, Copy)]
-struct PixelResult {
-    value: Color,
-    samples: u32,
-    nonfinite: u32,
-}
-
-impl PixelResult {
-    /// A pixel skipped because the render was stopped.
-    const NOT_RENDERED: PixelResult = PixelResult {
-        value: Color::ZERO,
-        samples: 0,
-        nonfinite: 0,
+    let (scene, accel, camera) = (&job.scene, job.accel.as_ref(), &job.camera);
+    let engine = settings.engine_for(job);
+    let frame = (camera.width, camera.height);
+    let view = match settings.shading {
+        Shading::Radiance => None,
+        Shading::Normals => Some(View::Normals),
+        Shading::BvhCost => Some(View::TraversalCost),
     };
-}
-
-fn render_pixel(
-    job: &RenderJob,
-    s: &RenderSettings,
-    integrator: &PathIntegrator,
-    x: u32,
-    y: u32,
-) -> PixelResult {
-    let (camera, scene, accel) = (&job.camera, &job.scene, job.accel.as_ref());
-    let pixel = (y as u64) * (camera.width as u64) + x as u64;
-    let (mut sum, mut s1, mut s2) = (Color::ZERO, 0f64, 0f64);
-    let (mut n, mut nonfinite) = (0u32, 0u32);
-    let batch = s.adaptive.map_or(s.spp.max(1), |a| a.batch);
-    let streams = PixelStreams::new(s.seed, pixel);
-    while n < s.spp.max(1) {
-        for _ in 0..batch.min(s.spp.max(1) - n) {
-            let index = s.spp_offset as u64 + n as u64;
-            let mut sampler = streams.sample(index);
-            let ray = camera.sample_ray(x, y, &mut sampler);
-            let mut v = match s.shading {
-                Shading::Radiance => integrator.li(ray, &mut sampler),
-                Shading::Normals => debug::normal_color(scene, accel, &ray),
-                Shading::BvhCost => Color::splat(debug::traversal_cost(accel, &ray)),
-            };
-            if !is_finite(v) {
-                nonfinite += 1;
-                v = Color::ZERO;
-            }
-            sum += v;
-            let lum = luminance(v) as f64;
-            s1 += lum;
-            s2 += lum * lum;
-            n += 1;
-        }
-        if let Some(a) = s.adaptive {
-            if converged(a, n, s1, s2) {
-                break;
-            }
-        }
+    if let Some(view) = view {
+        let debug = DebugView {
+            scene,
+            accel,
+            camera,
+            view,
+            seed: settings.seed,
+            sampler: settings.sampler,
+        };
+        return pixels::render(&debug, settings, None, frame, rect, progress, stop);
     }
-    PixelResult {
-        value: sum / n as f32,
-        samples: n,
-        nonfinite,
+    let path = settings.path_settings(scene);
+    if settings.estimator_for(scene) == Estimator::LightTracing {
+        let tracer = LightTracer::new(scene, accel, camera, path, engine, settings.seed);
+        return splats::render(&tracer, camera, settings.spp.max(1), rect, progress, stop);
     }
-}
-
-/// The spec's stopping rule, plus a minimum count for pixels that look constant.
-fn converged(a: Adaptive, n: u32, s1: f64, s2: f64) -> bool {
-    if n < 2 {
-        return false;
-    }
-    let nf = n as f64;
-    let mu = s1 / nf;
-    let var = ((s2 - s1 * s1 / nf) / (nf - 1.0)).max(0.0);
-    if var == 0.0 && n < a.min_samples_if_constant {
-        return false;
-    }
-    1.96 * var.sqrt() / nf.sqrt() <= a.tol as f64 * mu
-}
-
-/// The image of `rect` (its own size, row-major) from the tiles' pixels.
-fn assemble(rect: PixelRect, tiles: &[(u32, u32)], results: &[PixelResult]) -> RenderOutput {
-    let (w, h) = (rect.width(), rect.height());
-    let mut image = Image::new(w, h);
-    let mut samples = vec![0u32; (w * h) as usize];
-    let mut nonfinite = 0u64;
-    for (&tile, pixels) in tiles.iter().zip(results.chunks(TILE_PIXELS)) {
-        for ((x, y), p) in tile_pixels(rect, tile).zip(pixels) {
-            let i = ((y - rect.y0) * w + (x - rect.x0)) as usize;
-            image.pixels[i] = p.value;
-            samples[i] = p.samples;
-            nonfinite += p.nonfinite as u64;
-        }
-    }
-    RenderOutput {
-        image,
-        samples,
-        nonfinite_samples: nonfinite,
-    }
+    let integrator = PathIntegrator::new(scene, accel, camera, path, engine, settings.seed);
+    let integrator: &dyn SampleIntegrator = &integrator;
+    pixels::render(
+        integrator,
+        settings,
+        settings.adaptive,
+        frame,
+        rect,
+        progress,
+        stop,
+    )
 }
 
 fn percentile(v: &[f32], q: f32) -> f32 {
@@ -531,11 +350,14 @@ fn percentile(v: &[f32], q: f32) -> f32 {
 /// Cases where the chosen estimator cannot converge to the right image, said out loud.
 fn render_warnings(scene: &Scene, s: &RenderSettings) -> Vec<String> {
     let light_tracing = s.estimator_for(scene) == Estimator::LightTracing;
-    let mut w = if light_tracing {
-        light_tracing::warnings(scene, s)
+    let mut w = if light_tracing && s.shading == Shading::Radiance {
+        light_tracing::warnings(scene, s.max_depth)
     } else {
         Vec::new()
     };
+    if light_tracing && s.adaptive.is_some() {
+        w.push("adaptive sampling (-a) does not apply to light tracing: ignored".into());
+    }
     let blind = match s.strategy_for(scene) {
         _ if light_tracing => None,
         DirectStrategy::Hemisphere => Some("hemisphere sampling (-H)"),
@@ -553,30 +375,9 @@ fn render_warnings(scene: &Scene, s: &RenderSettings) -> Vec<String> {
     }
     if s.shading == Shading::Radiance
         && scene.lights.is_empty()
-        && !scene.materials.iter().any(|m| m.flags().emissive)
+        && !scene.materials.iter().any(|m| m.emits())
     {
         w.push("the scene has no lights and no emissive surfaces: the image will be black".into());
     }
     w
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn scattered_tiles_cover_every_tile_once_and_jump_across_the_image() {
-        for (w, h) in [(1, 1), (16, 16), (480, 360), (100, 37)] {
-            let rect = PixelRect::full(w, h);
-            let t = tiles(rect);
-            let mut sorted = t.clone();
-            sorted.sort_unstable();
-            sorted.dedup();
-            assert_eq!(sorted.len(), t.len());
-            assert_eq!(t.len() as u32, w.div_ceil(TILE) * h.div_ceil(TILE));
-        }
-        // The first tenth of a 480x360 frame's tiles reaches its bottom half.
-        let t = tiles(PixelRect::full(480, 360));
-        assert!(t[..t.len() / 10].iter().any(|&(_, y)| y >= 180));
-    }
 }
