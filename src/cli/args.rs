@@ -29,13 +29,16 @@ Where ember differs from the CS184 binary on purpose:
   - <out>_rate.png is written only with -a.
   The full list is in docs/scene-semantics.md, section 9.";
 
-/// ember — a physically based CPU path tracer for the CS184 COLLADA scenes.
-///
-/// Without a command, renders SCENE with the CS184 pathtracer's command line, verbatim:
-///   ember -t 8 -s 64 -l 16 -m 5 -r 480 360 -f out.png scene.dae
+/// What `ember -h` and `--help` say first.
+const ABOUT: &str = "\
+ember: a physically based CPU path tracer for the CS184 COLLADA (.dae) scenes.
+Without a command it renders SCENE, and takes the CS184 pathtracer's command line verbatim:
+  ember -t 8 -s 64 -l 16 -m 5 -r 480 360 -f out.png scene.dae";
+
+/// The whole command line: the render's flags, or a subcommand.
 #[derive(Parser, Debug)]
 #[command(after_help = AFTER_HELP)]
-#[command(name = "ember", version, about, long_about = None, args_conflicts_with_subcommands = true, args_override_self = true, allow_negative_numbers = true)]
+#[command(name = "ember", version, about = ABOUT, long_about = None, args_conflicts_with_subcommands = true, args_override_self = true, allow_negative_numbers = true)]
 pub struct Cli {
     #[command(subcommand)]
     pub command: Option<Command>,

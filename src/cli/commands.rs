@@ -420,15 +420,12 @@ impl RenderRun<'_> {
         match done.stopped {
             Some(StopReason::Interrupted) => Err(Interrupted(format!(
                 "interrupted: wrote what was rendered so far ({}) to {}",
-                coverage(&done.output.samples),
+                coverage(done),
                 self.out.display()
             ))
             .into()),
             Some(StopReason::TimeUp) if !self.args.quiet => {
-                ember::errln!(
-                    "ember: time budget spent: wrote {}",
-                    coverage(&done.output.samples)
-                );
+                ember::errln!("ember: time budget spent: wrote {}", coverage(done));
                 Ok(())
             }
             _ => Ok(()),
@@ -571,14 +568,16 @@ impl RenderRun<'_> {
     }
 }
 
-/// "N of M pixels, mean X spp": how much of the image a stopped render holds.
-fn coverage(samples: &[u32]) -> String {
+/// "N of M pixels, mean X spp": how much of the pixels asked for (the image, cell or
+/// band) a stopped render holds.
+fn coverage(done: &Rendered) -> String {
+    let samples = &done.output.samples;
     let rendered = samples.iter().filter(|&&s| s > 0).count();
     let total: u64 = samples.iter().map(|&s| s as u64).sum();
+    let asked = done.frame.area().max(1);
     format!(
-        "{rendered} of {} pixels, mean {:.2} spp",
-        samples.len(),
-        total as f64 / samples.len().max(1) as f64
+        "{rendered} of {asked} pixels, mean {:.2} spp",
+        total as f64 / asked as f64
     )
 }
 
