@@ -1,6 +1,10 @@
 //! ember: a physically based CPU path tracer for the CS184 COLLADA scenes.
 //!
-//! The library holds everything; the `ember` binary only parses arguments.
+//! The library holds the renderer and everything it reads and writes. The `ember`
+//! binary (`src/main.rs`, `src/cli`) is its command line: it defines the flags, checks
+//! and converts them into library settings, runs each subcommand through the library,
+//! and reports to the terminal (warnings, progress bar, summary, Ctrl-C). Nothing in
+//! the library depends on it, so the library is used and tested without it.
 //! Scene semantics follow `docs/scene-semantics.md`.
 
 pub mod accel;

@@ -4,7 +4,7 @@
 
 mod common;
 
-use common::{chi2_p_value, ember, integrate_bins, mean_and_stderr, sidak_significance};
+use common::{chi2_p_value, command, integrate_bins, mean_and_stderr, run, sidak_significance};
 use ember::accel::{AccelKind, BvhBuilder};
 use ember::camera::Camera;
 use ember::film::Image;
@@ -352,19 +352,13 @@ fn cli_renders_with_e_and_refuses_bad_maps() {
     let dir = tempfile::tempdir().unwrap();
     let scene = common::repo("scenes/cs184/sky/CBspheres_lambertian.dae");
     let out = dir.path().join("env.exr");
-    let st = ember()
+    run(command()
         .args(["-s", "2", "-m", "2", "-r", "24", "18", "-q", "-e"])
         .arg(sun_map_path())
         .arg("-f")
         .arg(&out)
-        .arg(&scene)
-        .output()
-        .unwrap();
-    assert!(
-        st.status.success(),
-        "{}",
-        String::from_utf8_lossy(&st.stderr)
-    );
+        .arg(&scene))
+    .success();
     let img = ember::image_io::read_image(&out).unwrap();
     assert!(img.pixels.iter().all(|p| p.is_finite()));
     let meta = ember::image_io::read_metadata(&out).unwrap();
@@ -374,18 +368,13 @@ fn cli_renders_with_e_and_refuses_bad_maps() {
     assert!(meta.get("ember.env_map.fnv1a64").is_some());
 
     let bad = dir.path().join("bad.png");
-    let st = ember()
+    run(command()
         .args(["-s", "1", "-r", "8", "6", "-e", "no/such/map.exr", "-f"])
         .arg(&bad)
-        .arg(&scene)
-        .output()
-        .unwrap();
-    let err = String::from_utf8_lossy(&st.stderr);
-    assert!(!st.status.success());
-    assert_eq!(err.trim_end().lines().count(), 1, "{err}");
-    assert!(err.contains("no/such/map.exr"), "{err}");
+        .arg(&scene))
+    .fails_with("no/such/map.exr");
     assert!(!bad.exists(), "a failed render left {}", bad.display());
-    let st = ember()
+    run(command()
         .args([
             "-s",
             "1",
@@ -399,13 +388,9 @@ fn cli_renders_with_e_and_refuses_bad_maps() {
         .arg(sun_map_path())
         .arg("-f")
         .arg(&bad)
-        .arg(&scene)
-        .output()
-        .unwrap();
-    let err = String::from_utf8_lossy(&st.stderr);
-    assert!(!st.status.success());
-    assert_eq!(err.trim_end().lines().count(), 1, "{err}");
-    assert!(err.contains("light tracing") && err.contains("-e"), "{err}");
+        .arg(&scene))
+    .fails_with("light tracing")
+    .fails_with("-e");
     assert!(!bad.exists());
 }
 
@@ -462,20 +447,14 @@ fn mis_with_map_importance_beats_uniform_on_a_sun() {
 #[test]
 fn export_writes_the_map_in_mitsubas_orientation() {
     let dir = tempfile::tempdir().unwrap();
-    let st = ember()
+    run(command()
         .arg("export")
         .arg(common::repo("scenes/cs184/sky/CBspheres_lambertian.dae"))
         .arg("-e")
         .arg(sun_map_path())
         .arg("--out")
-        .arg(dir.path())
-        .output()
-        .unwrap();
-    assert!(
-        st.status.success(),
-        "{}",
-        String::from_utf8_lossy(&st.stderr)
-    );
+        .arg(dir.path()))
+    .success();
     let xml = std::fs::read_to_string(dir.path().join("CBspheres_lambertian.xml")).unwrap();
     assert!(xml.contains("CBspheres_lambertian_env.exr"), "{xml}");
     let img =

@@ -3,7 +3,7 @@
 
 mod common;
 
-use common::mean_and_stderr;
+use common::{mean_and_stderr, polygon_irradiance};
 use ember::geometry::Frame;
 use ember::lights::{AreaLight, Light};
 use ember::sampling::{uniform_hemisphere, uniform_hemisphere_pdf, uniform_sphere, Rng};
@@ -45,23 +45,6 @@ fn corners(light: &Light) -> [Vec3; 4] {
         centre + hx + hy,
         centre - hx + hy,
     ]
-}
-
-/// Lambert's closed form for a uniformly emitting polygon fully above the
-/// receiver's horizon: `E = L/2 · Σ Θi · (n · normalize(vi × vi+1))`.
-fn polygon_irradiance(p: Vec3, n: Vec3, vertices: &[Vec3], radiance: f64) -> f64 {
-    let v: Vec<_> = vertices
-        .iter()
-        .map(|q| (*q - p).as_dvec3().normalize())
-        .collect();
-    let n = n.as_dvec3();
-    let sum: f64 = (0..v.len())
-        .map(|i| {
-            let (a, b) = (v[i], v[(i + 1) % v.len()]);
-            a.angle_between(b) * n.dot(a.cross(b).normalize())
-        })
-        .sum();
-    0.5 * radiance * sum.abs()
 }
 
 /// Monte Carlo irradiance from `sample_li`, with its standard error.

@@ -1,6 +1,9 @@
 //! Analytic checks of the light transport: the furnace and the irradiance of a
 //! rectangular light. Tolerances come from the estimators' own standard errors.
 
+mod common;
+
+use common::polygon_irradiance;
 use ember::accel::{self, AccelKind, BvhBuilder};
 use ember::camera::Camera;
 use ember::geometry::Aabb;
@@ -141,20 +144,6 @@ fn furnace_converges_to_geometric_series_limit() {
     );
 }
 
-/// Irradiance at `x` (normal `n`) from a uniformly emitting polygon of radiance `le`
-/// (Lambert's closed form): `E = le/2 · Σ Θ_i (n · Γ_i)`.
-fn polygon_irradiance(x: Vec3, n: Vec3, verts: &[Vec3], le: f32) -> f32 {
-    let mut sum = 0.0f64;
-    for i in 0..verts.len() {
-        let a = (verts[i] - x).normalize().as_dvec3();
-        let b = (verts[(i + 1) % verts.len()] - x).normalize().as_dvec3();
-        let theta = a.dot(b).clamp(-1.0, 1.0).acos();
-        let gamma = a.cross(b).normalize();
-        sum += theta * n.as_dvec3().dot(gamma);
-    }
-    (0.5 * le as f64 * sum.abs()) as f32
-}
-
 /// A large Lambertian floor (y = 0) under a 1.0 × 0.8 area light at height 1.2 facing down.
 fn lit_floor(albedo: f32, le: f32) -> (Scene, [Vec3; 4]) {
     let (c, ex, ey) = (
@@ -248,7 +237,8 @@ fn area_light_irradiance_matches_closed_form() {
             11,
         );
         for (k, &x) in points.iter().enumerate() {
-            let want = albedo / std::f32::consts::PI * polygon_irradiance(x, Vec3::Y, &quad, le);
+            let want = albedo / std::f32::consts::PI
+                * polygon_irradiance(x, Vec3::Y, &quad, le as f64) as f32;
             let eye = x + Vec3::new(0.05, 0.1, 0.08);
             let n = if matches!(strategy, DirectStrategy::Hemisphere | DirectStrategy::Bsdf) {
                 200_000
@@ -449,7 +439,7 @@ fn light_tracing_matches_the_area_light_closed_form() {
                 let r = cam.generate_ray(x, y, xi);
                 let hit = accel.intersect(&r).map(|hh| scene.interaction(&r, &hh));
                 if let Some(si) = hit.filter(|si| si.material == 0) {
-                    let e = polygon_irradiance(si.p, Vec3::Y, &quad, le);
+                    let e = polygon_irradiance(si.p, Vec3::Y, &quad, le as f64) as f32;
                     s += (albedo / std::f32::consts::PI * e) as f64;
                 }
             }
