@@ -207,12 +207,7 @@ impl RenderRequest {
 
     fn warn_before_rendering(&self, args: &RenderArgs, job: &RenderJob) {
         for w in job.warnings(&self.settings) {
-            ember::errln!("ember: warning: {w}");
-        }
-        if self.settings.shading == Shading::Radiance {
-            if let Some(w) = unlit_warning(&job.scene) {
-                ember::errln!("ember: warning: {}: {w}", self.scene_path.display());
-            }
+            ember::errln!("ember: warning: {}: {w}", self.scene_path.display());
         }
         if self.cell.is_some()
             && self.settings.shading == Shading::BvhCost
@@ -220,49 +215,6 @@ impl RenderRequest {
         {
             ember::errln!("ember: warning: -p: the bvh-cost heat map is scaled to the cell's own pixels, not the full image's; --cost-scale fixes the scale");
         }
-    }
-}
-
-/// A scene whose lights all have zero radiance, intensity or irradiance, and whose
-/// surfaces emit nothing, renders black (the course's `*_unlit.dae` scenes, whose only
-/// light is an ambient light of radiance 0, are meant for `-e`). A scene without any
-/// light is the library's own warning ([`RenderJob::warnings`]).
-fn unlit_warning(scene: &Scene) -> Option<String> {
-    use ember::lights::Light;
-    let dark = |c: ember::Color| c.max_element() <= 0.0;
-    let emits_nothing = |l: &Light| match l {
-        Light::Area(a) => dark(a.radiance),
-        Light::Point { intensity, .. } => dark(*intensity),
-        Light::Directional { irradiance, .. } => dark(*irradiance),
-        Light::Ambient { radiance } => dark(*radiance),
-        Light::Environment(_) => false,
-    };
-    let lights = &scene.lights;
-    if lights.is_empty()
-        || !lights.iter().all(emits_nothing)
-        || scene.materials.iter().any(|m| m.flags().emissive)
-    {
-        return None;
-    }
-    let kinds: Vec<&str> = lights.iter().map(light_kind).collect();
-    let lights = match kinds.len() {
-        1 => format!("its one light ({}) has zero power", kinds[0]),
-        n => format!("its {n} lights ({}) all have zero power", kinds.join(", ")),
-    };
-    Some(format!(
-        "no light in the scene emits anything ({lights}), so the image will be black; \
-         light it with an environment map: -e FILE.exr"
-    ))
-}
-
-fn light_kind(l: &ember::lights::Light) -> &'static str {
-    use ember::lights::Light;
-    match l {
-        Light::Area(_) => "area",
-        Light::Point { .. } => "point",
-        Light::Directional { .. } => "directional",
-        Light::Ambient { .. } => "ambient",
-        Light::Environment(_) => "environment map",
     }
 }
 

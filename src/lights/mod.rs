@@ -88,6 +88,17 @@ impl<F: Real> Incident<F> {
 }
 
 impl Light {
+    /// The kind's name, for messages: `area`, `point`, …
+    pub fn kind(&self) -> &'static str {
+        match self {
+            Light::Area(_) => "area",
+            Light::Point { .. } => "point",
+            Light::Directional { .. } => "directional",
+            Light::Ambient { .. } => "ambient",
+            Light::Environment(_) => "environment map",
+        }
+    }
+
     pub fn is_delta(&self) -> bool {
         match self {
             Light::Point { .. } | Light::Directional { .. } => true,

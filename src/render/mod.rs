@@ -373,11 +373,32 @@ fn render_warnings(scene: &Scene, s: &RenderSettings) -> Vec<String> {
             ));
         }
     }
-    if s.shading == Shading::Radiance
-        && scene.lights.is_empty()
-        && !scene.materials.iter().any(|m| m.emits())
-    {
-        w.push("the scene has no lights and no emissive surfaces: the image will be black".into());
+    if s.shading == Shading::Radiance && !scene.materials.iter().any(|m| m.emits()) {
+        w.extend(darkness_warning(scene));
     }
     w
+}
+
+/// A scene that nothing lights renders black: no lights at all, or lights that all
+/// have zero power (the course's `*_unlit.dae` scenes, whose only light is an ambient
+/// light of radiance 0, are meant for `-e`).
+fn darkness_warning(scene: &Scene) -> Option<String> {
+    let lights = &scene.lights;
+    if lights.is_empty() {
+        return Some(
+            "the scene has no lights and no emissive surfaces: the image will be black".into(),
+        );
+    }
+    if lights.iter().any(|l| l.power(1.0) > 0.0) {
+        return None;
+    }
+    let kinds: Vec<&str> = lights.iter().map(|l| l.kind()).collect();
+    let lights = match kinds.len() {
+        1 => format!("its one light ({}) has zero power", kinds[0]),
+        n => format!("its {n} lights ({}) all have zero power", kinds.join(", ")),
+    };
+    Some(format!(
+        "no light in the scene emits anything ({lights}), so the image will be black; \
+         light it with an environment map: -e FILE.exr"
+    ))
 }
