@@ -27,6 +27,7 @@ pub mod sampling;
 pub mod scene;
 pub mod shard;
 pub mod simd;
+pub mod texture;
 
 pub use color::Color;
 pub use glam::{Vec2, Vec3};

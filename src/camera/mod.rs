@@ -60,7 +60,10 @@ impl Camera {
         } else {
             (bounds.centre(), bounds.diagonal().length())
         };
-        let eye = c - 1.5 * d * f;
+        let eye = match (desc.placement, desc.position) {
+            (crate::scene::Placement::File, Some(p)) => p,
+            _ => c - 1.5 * d * f,
+        };
         let (tx, ty) = output_fov(
             desc.tan_half_x,
             desc.tan_half_y,

@@ -129,7 +129,7 @@ impl<'a> LightTracer<'a> {
             if let Some(from) = from {
                 si = self.scene.on_line(&si, from, ray.d.normalize());
             }
-            let material = &self.scene.materials[si.material as usize];
+            let material = &self.scene.material_at(&si);
             if material.is_black() || bounces >= self.max_depth {
                 break;
             }

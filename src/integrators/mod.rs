@@ -105,7 +105,7 @@ impl Estimator {
             && scene
                 .lights
                 .iter()
-                .all(|l| matches!(l, crate::lights::Light::Point { .. }));
+                .all(|l| matches!(l, crate::lights::Light::Point { .. } | crate::lights::Light::Spot(_)));
         let specular = scene.materials.iter().any(|m| m.is_delta());
         if point_lights_only && !specular && !scene.has_unsampled_emitters() {
             Estimator::LightTracing

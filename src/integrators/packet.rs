@@ -35,6 +35,12 @@ pub fn unsupported(scene: &Scene, camera: &Camera, s: &PathSettings) -> Option<&
     if !matches!(s.strategy, DirectStrategy::Light | DirectStrategy::Mis) {
         return Some("hemisphere and BSDF-only sampling");
     }
+    if scene.lights.iter().any(|l| matches!(l, Light::Spot(_))) {
+        return Some("spot lights");
+    }
+    if scene.has_textures() {
+        return Some("textures");
+    }
     let lambertian = |m: &Material| matches!(m, Material::Lambertian { .. } | Material::Black);
     if !scene.materials.iter().all(lambertian) {
         return Some("materials other than Lambertian");

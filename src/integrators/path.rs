@@ -100,7 +100,7 @@ impl<'a> PathIntegrator<'a> {
                 si = self.scene.on_line(&si, v.p, w);
             }
             let wo_world = -w;
-            let material = &self.scene.materials[si.material as usize];
+            let material = &self.scene.material_at(&si);
             if self.counts(bounces) {
                 l += beta * self.emitted(&si, wo_world, prev);
             }

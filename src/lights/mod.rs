@@ -7,11 +7,13 @@ pub mod directional;
 pub mod emit;
 pub mod environment;
 pub mod point;
+pub mod spot;
 
 use crate::color::luminance;
 use crate::Color;
 pub use area::AreaLight;
 pub use environment::EnvironmentMap;
+pub use spot::SpotLight;
 use glam::{Vec2, Vec3};
 use std::f32::consts::PI;
 use std::sync::Arc;
@@ -22,6 +24,8 @@ pub enum Light {
     Area(AreaLight),
     /// Isotropic point light of radiant intensity `intensity` (W/sr).
     Point { position: Vec3, intensity: Color },
+    /// Point light whose intensity falls off away from its axis (COLLADA `<spot>`).
+    Spot(SpotLight),
     /// Light travelling along unit `direction`; `irradiance` on a surface facing it.
     Directional { direction: Vec3, irradiance: Color },
     /// Constant radiance from the upper hemisphere (world +Y).
@@ -49,7 +53,10 @@ pub struct LightSample {
 
 impl Light {
     pub fn is_delta(&self) -> bool {
-        matches!(self, Light::Point { .. } | Light::Directional { .. })
+        matches!(
+            self,
+            Light::Point { .. } | Light::Spot(_) | Light::Directional { .. }
+        )
     }
 
     /// True for a light that surrounds the scene (ambient, environment map), which
@@ -68,6 +75,7 @@ impl Light {
                 position,
                 intensity,
             } => point::sample_li(position, intensity, p),
+            Light::Spot(s) => s.sample_li(p),
             Light::Directional {
                 direction,
                 irradiance,
@@ -83,7 +91,7 @@ impl Light {
             Light::Area(a) => a.pdf_li(p, wi),
             Light::Ambient { .. } => ambient::pdf_li(wi),
             Light::Environment(ref env) => env.pdf_li(wi),
-            Light::Point { .. } | Light::Directional { .. } => 0.0,
+            Light::Point { .. } | Light::Spot(_) | Light::Directional { .. } => 0.0,
         }
     }
 
@@ -114,6 +122,7 @@ impl Light {
             // Lambertian emitter: π·L per unit area.
             Light::Area(a) => PI * a.area() * luminance(a.radiance),
             Light::Point { intensity, .. } => 4.0 * PI * luminance(intensity),
+            Light::Spot(s) => s.solid_angle_weight() * luminance(s.intensity),
             Light::Directional { irradiance, .. } => disk * luminance(irradiance),
             // Half of pbrt's uniform-sphere 4π·πr²·L.
             Light::Ambient { radiance } => 2.0 * PI * disk * luminance(radiance),

@@ -6,8 +6,10 @@ pub mod collada;
 use crate::geometry::{offset_ray_origin, ray::gamma, sphere::sphere_spawn_origin, Aabb, Ray};
 use crate::lights::{AreaLight, Light};
 use crate::materials::Material;
+use crate::texture::Texture;
 use crate::Color;
 use glam::{Vec2, Vec3};
+use std::sync::Arc;
 
 /// Marker for "no light" in `Triangle::light`.
 pub const NO_LIGHT: u32 = u32::MAX;
@@ -41,6 +43,22 @@ pub struct CameraDesc {
     pub tan_half_x: Option<f32>,
     /// `tan(yfov/2)` as given or derived from the file, if known.
     pub tan_half_y: Option<f32>,
+    /// The camera node's world position, when the file has a camera.
+    pub position: Option<Vec3>,
+    /// Where the eye goes: the course's rule or the file's own position.
+    pub placement: Placement,
+}
+
+/// Where the camera's eye is put.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum Placement {
+    /// The course's rule (spec §4): `centre − 1.5·diagonal·F` of the scene bounds,
+    /// whatever the file says.
+    #[default]
+    Course,
+    /// The camera node's own position (`CameraDesc::position`), as the file's author
+    /// put it; the course's rule where the file has no camera.
+    File,
 }
 
 impl Default for CameraDesc {
@@ -51,6 +69,8 @@ impl Default for CameraDesc {
             up: Vec3::Y,
             tan_half_x: Some((49.13434f32.to_radians() * 0.5).tan()),
             tan_half_y: None,
+            position: None,
+            placement: Placement::Course,
         }
     }
 }
@@ -85,6 +105,18 @@ pub struct Scene {
     /// The file's name of each material (parallel to `materials`; may be shorter for
     /// scenes built in code).
     pub material_names: Vec<String>,
+    /// Which camera placement the loader chose and why, for `ember info`.
+    pub placement_reason: String,
+    /// Texture coordinates, indexed by `triangle_uvs`.
+    pub uvs: Vec<Vec2>,
+    /// Each triangle's corner texture coordinates (indices into `uvs`), parallel to
+    /// `triangles`; shorter when later triangles (area-light quads) have none. Only
+    /// triangles of textured materials carry them.
+    pub triangle_uvs: Vec<Option<[u32; 3]>>,
+    pub textures: Vec<Arc<Texture>>,
+    /// The diffuse texture of each material (index into `textures`), parallel to
+    /// `materials`; may be shorter (no texture).
+    pub material_textures: Vec<Option<u32>>,
     /// Two-sided emission attached to primitives on top of their material, found only by
     /// BSDF sampling: the emitting, reflecting walls of the analytic furnace. Test builds
     /// only (feature `testing`); the loader has no such thing.
@@ -117,6 +149,8 @@ pub struct SurfaceInteraction {
     pub ng: Vec3,
     /// Unit shading normal, on the same side as `ng`.
     pub ns: Vec3,
+    /// Texture coordinates: interpolated from the triangle's corners where it has
+    /// them (`Scene::triangle_uvs`), else the barycentrics `(b1, b2)`.
     pub uv: Vec2,
     pub prim: PrimId,
     pub material: u32,
@@ -308,6 +342,59 @@ impl Scene {
                 .any(|s| self.materials[s.material as usize].flags().emissive)
     }
 
+    /// The texture coordinates at barycentrics `(b0, b1, b2)` of triangle `i`, or, for a
+    /// triangle without them, `(b1, b2)`.
+    #[inline]
+    fn texcoord(&self, i: usize, b0: f32, b1: f32, b2: f32) -> Vec2 {
+        match self.triangle_uvs.get(i).copied().flatten() {
+            Some([a, b, c]) => {
+                let uv = |k: u32| self.uvs[k as usize];
+                b0 * uv(a) + b1 * uv(b) + b2 * uv(c)
+            }
+            None => Vec2::new(b1, b2),
+        }
+    }
+
+    /// The diffuse albedo of `material` at texture coordinates `uv`: its albedo,
+    /// times its texture's colour there when it has one. The one place shading
+    /// reads textures (a scalar function, called per lane by vector code).
+    #[inline]
+    pub fn albedo(&self, material: u32, uv: Vec2) -> Color {
+        let base = match self.materials[material as usize] {
+            Material::Lambertian { albedo } => albedo,
+            _ => Color::ZERO,
+        };
+        match self.material_textures.get(material as usize).copied().flatten() {
+            Some(t) => base * self.textures[t as usize].eval(uv),
+            None => base,
+        }
+    }
+
+    /// The material at a hit, its texture applied: a Lambertian material with a
+    /// texture becomes the Lambertian of its albedo at `si.uv`.
+    #[inline]
+    pub fn material_at(&self, si: &SurfaceInteraction) -> Material {
+        let m = self.materials[si.material as usize];
+        match m {
+            Material::Lambertian { .. }
+                if self
+                    .material_textures
+                    .get(si.material as usize)
+                    .is_some_and(Option::is_some) =>
+            {
+                Material::Lambertian {
+                    albedo: self.albedo(si.material, si.uv),
+                }
+            }
+            _ => m,
+        }
+    }
+
+    /// Whether any material has a texture.
+    pub fn has_textures(&self) -> bool {
+        self.material_textures.iter().any(Option::is_some)
+    }
+
     pub fn num_prims(&self) -> usize {
         self.triangles.len() + self.spheres.len()
     }
@@ -401,7 +488,7 @@ impl Scene {
             p_error,
             ng,
             ns,
-            uv: Vec2::new(h.b1, h.b2),
+            uv: self.texcoord(i, b0, h.b1, h.b2),
             prim: h.prim,
             material: tri.material,
             light: tri.light,

@@ -50,7 +50,7 @@ pub(crate) fn local_matrix(ctx: &mut Ctx, node: Node) -> Result<DMat4, LoadError
 }
 
 /// A row-major `<matrix>`; missing trailing entries are 0 (spec §2).
-fn matrix(ctx: &mut Ctx, node: Node) -> Result<DMat4, LoadError> {
+pub(crate) fn matrix(ctx: &mut Ctx, node: Node) -> Result<DMat4, LoadError> {
     let v = ctx.numbers::<f64>(node)?;
     match v.len() {
         0 => return Err(ctx.err(node, "matrix has no numbers")),
@@ -70,12 +70,14 @@ fn matrix(ctx: &mut Ctx, node: Node) -> Result<DMat4, LoadError> {
     Ok(DMat4::from_cols_array(&a).transpose())
 }
 
-/// `<rotate> ax ay az deg`: right-handed rotation about the axis.
-fn rotation(ctx: &Ctx, node: Node) -> Result<DMat4, LoadError> {
+/// `<rotate> ax ay az deg`: right-handed rotation about the axis. A zero axis
+/// (`0 0 0 0`, written by some animation exporters) names no rotation: the identity.
+fn rotation(ctx: &mut Ctx, node: Node) -> Result<DMat4, LoadError> {
     let [x, y, z, deg] = ctx.exact::<4>(node)?;
     let axis = DVec3::new(x, y, z);
     if axis.length_squared() == 0.0 {
-        return Err(ctx.err(node, "rotation axis is zero"));
+        ctx.warn(node, "rotation axis is zero; read as no rotation");
+        return Ok(DMat4::IDENTITY);
     }
     Ok(DMat4::from_axis_angle(axis.normalize(), deg.to_radians()))
 }
