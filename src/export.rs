@@ -259,7 +259,11 @@ fn write_texture(
 /// at half-integers, which is Mitsuba's convention too). Mitsuba's PLY loader flips
 /// `v` by default (`flip_tex_coords`), so the file's OpenGL-style coordinates, `v = 0`
 /// at the image's bottom, are written unchanged.
-fn textured_bsdf_xml(file: &str, t: &crate::texture::Texture, warnings: &mut Vec<String>) -> String {
+fn textured_bsdf_xml(
+    file: &str,
+    t: &crate::texture::Texture,
+    warnings: &mut Vec<String>,
+) -> String {
     use crate::texture::Wrap;
     let mode = |w: Wrap| match w {
         Wrap::Repeat => "repeat",
@@ -478,12 +482,7 @@ fn sky_map(radiance: Color) -> Image {
 
 /// Binary PLY of the triangles, three vertices each (with normals when the mesh has them,
 /// and texture coordinates `u`, `v` when `uv`).
-fn write_ply(
-    scene: &Scene,
-    triangles: &[usize],
-    uv: bool,
-    path: &Path,
-) -> Result<(), ExportError> {
+fn write_ply(scene: &Scene, triangles: &[usize], uv: bool, path: &Path) -> Result<(), ExportError> {
     let io = |source| ExportError::Io {
         path: path.to_path_buf(),
         source,

@@ -174,8 +174,8 @@ mod tests {
         assert_eq!(t.eval(Vec2::new(0.75, 0.75)), Color::Y);
         assert_eq!(t.eval(Vec2::new(0.25, 0.25)), Color::Z);
         assert_eq!(t.eval(Vec2::new(0.75, 0.25)), Color::ONE);
-        // Repeat: one period over reads the same texel.
-        assert_eq!(t.eval(Vec2::new(1.25, -0.25)), Color::Z);
+        // Repeat: a period over reads the same texel ((1.25, −0.25) is (0.25, 0.75)).
+        assert_eq!(t.eval(Vec2::new(1.25, -0.25)), Color::X);
     }
 
     #[test]

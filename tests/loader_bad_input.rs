@@ -218,7 +218,10 @@ fn bad_translate_rotate_scale() {
     let doc = edit("<translate>0 0 1</translate>", "<rotate>0 0 1</rotate>");
     parse_err(
         &doc,
-        &["<node id=\"ball-node\">/rotate", "expected 4 numbers, found 3"],
+        &[
+            "<node id=\"ball-node\">/rotate",
+            "expected 4 numbers, found 3",
+        ],
     );
     let doc = edit("<translate>0 0 1</translate>", "<scale>1 1 1 1</scale>");
     parse_err(
@@ -428,7 +431,11 @@ fn scene_without_geometry_is_empty_not_an_error() {
         let end = doc.find(to).unwrap();
         format!("{}{}", &doc[..start], &doc[end..])
     };
-    let no_nodes = cut(TEMPLATE, "<node id=\"quad-node\">", "<node id=\"lamp-node\">");
+    let no_nodes = cut(
+        TEMPLATE,
+        "<node id=\"quad-node\">",
+        "<node id=\"lamp-node\">",
+    );
     let doc = cut(&no_nodes, "<geometry id=\"quad\">", "</library_geometries>");
     let s = parse_ok(&doc);
     assert!(s.warnings.is_empty(), "{:?}", s.warnings);
@@ -439,7 +446,10 @@ fn scene_without_geometry_is_empty_not_an_error() {
     let s = parse_ok(&no_nodes);
     assert_eq!(s.triangles.len(), 2);
     assert!(s.spheres.is_empty(), "only meshes are placed");
-    assert!(s.warnings.iter().any(|w| w.contains("instances no geometry")));
+    assert!(s
+        .warnings
+        .iter()
+        .any(|w| w.contains("instances no geometry")));
 }
 
 #[test]

@@ -39,7 +39,10 @@ fn grid_geometry(id: &str, prim: &str) -> String {
 }
 
 fn load_grid(prim: &str) -> Scene {
-    let nodes = format!("<node>{}</node>", geometry_instance("g", "grey-sym", "grey"));
+    let nodes = format!(
+        "<node>{}</node>",
+        geometry_instance("g", "grey-sym", "grey")
+    );
     parse_ok(&scene_doc("Y_UP", &grid_geometry("g", prim), &nodes))
 }
 
@@ -73,7 +76,10 @@ fn tristrips_and_trifans_are_triangulated() {
     assert!((area(&s) - 2.0).abs() < 1e-6, "{}", area(&s));
     // Every second triangle is flipped back, so the strip keeps one winding.
     let z = normal_z(&s);
-    assert!(z.iter().all(|&v| v < 0.0) || z.iter().all(|&v| v > 0.0), "{z:?}");
+    assert!(
+        z.iter().all(|&v| v < 0.0) || z.iter().all(|&v| v > 0.0),
+        "{z:?}"
+    );
     // A fan around the centre 4 over five outer corners, and a stub of two corners.
     let s = load_grid(
         r##"<trifans material="grey-sym" count="2"><input semantic="VERTEX" source="#g-vtx" offset="0"/>
@@ -93,7 +99,10 @@ fn polygons_with_holes_are_triangulated_around_the_hole() {
     let mut doc = scene_doc(
         "Y_UP",
         &grid_geometry("g", prim),
-        &format!("<node>{}</node>", geometry_instance("g", "grey-sym", "grey")),
+        &format!(
+            "<node>{}</node>",
+            geometry_instance("g", "grey-sym", "grey")
+        ),
     );
     // Four more positions: the square [0.5, 1.5]² (indices 9–12).
     doc = doc.replace(
@@ -143,13 +152,25 @@ fn instance_node_places_library_nodes() {
                     <node><instance_node url="#nothing"/></node>"##;
     let s = parse_ok(&scene_doc("Y_UP", &libs, nodes));
     assert_eq!(s.triangles.len(), 4);
-    assert!(close(s.positions[1], Vec3::new(1.0, 10.0, 0.0)), "{}", s.positions[1]);
+    assert!(
+        close(s.positions[1], Vec3::new(1.0, 10.0, 0.0)),
+        "{}",
+        s.positions[1]
+    );
     assert!(close(s.positions[4 + 1], Vec3::new(6.0, 10.0, 0.0)));
-    assert!(s.warnings.iter().any(|w| w.contains("instance_node") && w.contains("#nothing")));
+    assert!(s
+        .warnings
+        .iter()
+        .any(|w| w.contains("instance_node") && w.contains("#nothing")));
     // A node instancing itself ends in an error, not a hang or a stack overflow.
-    let libs = r##"<library_nodes><node id="loop"><instance_node url="#loop"/></node></library_nodes>"##;
+    let libs =
+        r##"<library_nodes><node id="loop"><instance_node url="#loop"/></node></library_nodes>"##;
     parse_err(
-        &scene_doc("Y_UP", libs, r##"<node><instance_node url="#loop"/></node>"##),
+        &scene_doc(
+            "Y_UP",
+            libs,
+            r##"<node><instance_node url="#loop"/></node>"##,
+        ),
         &["deeper than"],
     );
 }
@@ -175,8 +196,16 @@ fn skinned_meshes_load_at_their_bind_pose_with_one_warning() {
     assert_eq!(s.triangles.len(), 4);
     // bind_shape_matrix moves the quad up by 2; the instancing node's translation
     // does not enter (at the bind pose the skin is in world space).
-    assert!(close(s.positions[1], Vec3::new(1.0, 2.0, 0.0)), "{}", s.positions[1]);
-    let w: Vec<_> = s.warnings.iter().filter(|w| w.contains("bind pose")).collect();
+    assert!(
+        close(s.positions[1], Vec3::new(1.0, 2.0, 0.0)),
+        "{}",
+        s.positions[1]
+    );
+    let w: Vec<_> = s
+        .warnings
+        .iter()
+        .filter(|w| w.contains("bind pose"))
+        .collect();
     assert_eq!(w.len(), 1, "{:?}", s.warnings);
     parse_err(
         &skin_doc("1 0 0 0").replace("source=\"#quad\"", "source=\"#nothing\""),
@@ -213,10 +242,18 @@ fn decimal_commas_load_with_one_warning() {
     let reference = parse_ok(TEMPLATE);
     assert_eq!(s.materials, reference.materials);
     assert_eq!(s.spheres, reference.spheres);
-    let w: Vec<_> = s.warnings.iter().filter(|w| w.contains("decimal comma")).collect();
+    let w: Vec<_> = s
+        .warnings
+        .iter()
+        .filter(|w| w.contains("decimal comma"))
+        .collect();
     assert_eq!(w.len(), 1, "{:?}", s.warnings);
     // Mixed with decimal points, a comma is ambiguous: an error.
-    let mixed = doc.replacen("<translate>0 0 1</translate>", "<translate>0 0 1.5</translate>", 1);
+    let mixed = doc.replacen(
+        "<translate>0 0 1</translate>",
+        "<translate>0 0 1.5</translate>",
+        1,
+    );
     parse_err(&mixed, &["is not a finite number"]);
 }
 
@@ -228,14 +265,20 @@ fn a_zero_rotation_axis_is_the_identity_with_a_warning() {
     ));
     let reference = parse_ok(TEMPLATE);
     assert_eq!(s.spheres, reference.spheres);
-    assert!(s.warnings.iter().any(|w| w.contains("<node id=\"ball-node\">/rotate") && w.contains("zero")));
+    assert!(s
+        .warnings
+        .iter()
+        .any(|w| w.contains("<node id=\"ball-node\">/rotate") && w.contains("zero")));
 }
 
 #[test]
 fn a_dangling_material_binding_falls_back_with_a_warning() {
     let s = parse_ok(&edit("target=\"#grey\"", "target=\"#nothing\""));
     assert_eq!(s.triangles.len(), 2);
-    assert_eq!(s.materials[s.triangles[0].material as usize], Material::default());
+    assert_eq!(
+        s.materials[s.triangles[0].material as usize],
+        Material::default()
+    );
     assert!(s
         .warnings
         .iter()
@@ -273,7 +316,10 @@ fn utf16_and_byte_order_marks_are_read() {
     // An odd byte after the mark is not UTF-16: a one-line error.
     let p = write(dir.path(), "bad.dae", &[0xFF, 0xFE, 0x00, 0xD8, 0x41, 0x00]);
     let e = load(&p).unwrap_err().to_string();
-    assert!(e.contains("bad.dae") && e.contains("UTF-16") && !e.contains('\n'), "{e}");
+    assert!(
+        e.contains("bad.dae") && e.contains("UTF-16") && !e.contains('\n'),
+        "{e}"
+    );
 }
 
 fn zip_file(path: &Path, entries: &[(&str, &[u8])]) {
@@ -342,7 +388,10 @@ fn files_from_other_tools_keep_their_camera_position() {
     let cam = Camera::new(&maya.camera, &maya.bounds, 64, 48);
     assert!(close(cam.eye, Vec3::new(0.0, 1.0, -3.0)), "{}", cam.eye);
     let info = scene_info(&maya, 64, 48);
-    assert!(info.contains("placement: the file's camera position"), "{info}");
+    assert!(
+        info.contains("placement: the file's camera position"),
+        "{info}"
+    );
     assert!(info.contains("Maya 2020"), "{info}");
     // The course's exporter, and files naming no tool, keep the course's rule.
     for doc in [
@@ -381,7 +430,10 @@ fn emission_makes_a_surface_emit() {
     let s = parse_ok(&effect_doc(
         "<phong><emission><color>0 0 0 1</color></emission><diffuse><color>0.3 0.3 0.3 1</color></diffuse></phong>",
     ));
-    assert!(matches!(s.materials[s.triangles[0].material as usize], Material::Lambertian { .. }));
+    assert!(matches!(
+        s.materials[s.triangles[0].material as usize],
+        Material::Lambertian { .. }
+    ));
 }
 
 #[test]
@@ -398,8 +450,14 @@ fn specular_is_warned_about_once_per_material_outside_course_files() {
         &format!("<node>{}</node><node id=\"ball-node\">", quad_instance()),
     );
     let s = parse_ok(&doc);
-    assert!(matches!(s.materials[0], Material::Lambertian { albedo } if albedo == Vec3::splat(0.3)));
-    let w: Vec<_> = s.warnings.iter().filter(|w| w.contains("specular")).collect();
+    assert!(
+        matches!(s.materials[0], Material::Lambertian { albedo } if albedo == Vec3::splat(0.3))
+    );
+    let w: Vec<_> = s
+        .warnings
+        .iter()
+        .filter(|w| w.contains("specular"))
+        .collect();
     assert_eq!(w.len(), 1, "{:?}", s.warnings);
     // The course's files mean Lambertian by <phong> (spec §6): no warning there.
     let s = parse_ok(&effect_doc(phong));
@@ -420,8 +478,14 @@ fn spot_lights_are_read() {
     assert!(scene_info(&s, 8, 8).contains("spot: intensity (2, 2, 2)"));
     // Defaults: a 180° cone without falloff.
     let libs = r##"<library_lights><light id="s"><technique_common><spot><color>1 1 1</color></spot></technique_common></light></library_lights>"##;
-    let s = parse_ok(&scene_doc("Y_UP", libs, r##"<node><instance_light url="#s"/></node>"##));
-    let Light::Spot(spot) = s.lights[0] else { panic!() };
+    let s = parse_ok(&scene_doc(
+        "Y_UP",
+        libs,
+        r##"<node><instance_light url="#s"/></node>"##,
+    ));
+    let Light::Spot(spot) = s.lights[0] else {
+        panic!()
+    };
     assert!((spot.cutoff_degrees() - 90.0).abs() < 1e-4 && spot.exponent == 0.0);
 }
 
@@ -436,15 +500,18 @@ fn textures_bind_their_coordinate_set_and_are_listed() {
     // Every corner reads set 0, (x + 1)/2, (1 − z)/2, not the decoy set 1.
     for (i, tri) in s.triangles.iter().enumerate() {
         let uv = s.triangle_uvs[i].expect("textured triangles carry coordinates");
-        for c in 0..3 {
-            let p = s.positions[tri.v[c] as usize];
+        for (&v, &k) in tri.v.iter().zip(&uv) {
+            let p = s.positions[v as usize];
             let want = ember::Vec2::new((p.x + 1.0) / 2.0, (1.0 - p.z) / 2.0);
-            assert!((s.uvs[uv[c] as usize] - want).length() < 1e-6);
+            assert!((s.uvs[k as usize] - want).length() < 1e-6);
         }
     }
     let info = scene_info(&s, 8, 8);
     assert!(info.contains("textures: 1"), "{info}");
-    assert!(info.contains("texture4x4.png: 4x4, wrap CLAMP/CLAMP"), "{info}");
+    assert!(
+        info.contains("texture4x4.png: 4x4, wrap CLAMP/CLAMP"),
+        "{info}"
+    );
 }
 
 #[test]
@@ -455,7 +522,10 @@ fn a_missing_texture_is_an_error_unless_a_colour_stands_in() {
     let e = load(&write(dir.path(), "gone.dae", gone.as_bytes()))
         .unwrap_err()
         .to_string();
-    assert!(e.contains("gone.dae") && e.contains("<image id=\"tex-image\">/init_from"), "{e}");
+    assert!(
+        e.contains("gone.dae") && e.contains("<image id=\"tex-image\">/init_from"),
+        "{e}"
+    );
     assert!(e.contains("gone.png") && !e.contains('\n'), "{e}");
     let with_colour = gone.replace(
         "<diffuse><texture",
@@ -463,8 +533,14 @@ fn a_missing_texture_is_an_error_unless_a_colour_stands_in() {
     );
     let s = load(&write(dir.path(), "colour.dae", with_colour.as_bytes())).unwrap();
     assert!(s.textures.is_empty());
-    assert!(matches!(s.materials[0], Material::Lambertian { albedo } if close(albedo, Vec3::new(0.2, 0.4, 0.6))));
-    assert!(s.warnings.iter().any(|w| w.contains("gone.png")), "{:?}", s.warnings);
+    assert!(
+        matches!(s.materials[0], Material::Lambertian { albedo } if close(albedo, Vec3::new(0.2, 0.4, 0.6)))
+    );
+    assert!(
+        s.warnings.iter().any(|w| w.contains("gone.png")),
+        "{:?}",
+        s.warnings
+    );
     // A file that is no image is reported the same way.
     write(dir.path(), "texture4x4.png", b"not a png");
     let e = load(&write(dir.path(), "junk.dae", text.as_bytes()))

@@ -36,7 +36,10 @@ fn texels() -> (usize, usize, Vec<[f64; 3]>) {
         }
     };
     let (w, h) = (img.width() as usize, img.height() as usize);
-    let t = img.pixels().map(|p| [lin(p[0]), lin(p[1]), lin(p[2])]).collect();
+    let t = img
+        .pixels()
+        .map(|p| [lin(p[0]), lin(p[1]), lin(p[2])])
+        .collect();
     (w, h, t)
 }
 
@@ -176,7 +179,11 @@ fn spot_light_irradiance_matches_the_closed_form() {
         }
     }
     // Light tracing: the image mean within its standard error, pixels independent.
-    let out = render_scene(&scene, (n as u32, n as u32), &direct(256, Estimator::LightTracing));
+    let out = render_scene(
+        &scene,
+        (n as u32, n as u32),
+        &direct(256, Estimator::LightTracing),
+    );
     assert_eq!(out.nonfinite_samples, 0);
     let v: Vec<f64> = out.image.pixels.iter().map(|p| p.y as f64).collect();
     let m = v.len() as f64;
@@ -195,11 +202,19 @@ fn textures_and_spots_export_to_mitsuba() {
     for (name, needles) in [
         (
             "textured_quad.dae",
-            &["type=\"bitmap\"", "textured_quad_tex0.exr", "wrap_mode\" value=\"clamp\""][..],
+            &[
+                "type=\"bitmap\"",
+                "textured_quad_tex0.exr",
+                "wrap_mode\" value=\"clamp\"",
+            ][..],
         ),
         (
             "spot_plane.dae",
-            &["<emitter type=\"spot\">", "cutoff_angle\" value=\"45", "beam_width\" value=\"0\""][..],
+            &[
+                "<emitter type=\"spot\">",
+                "cutoff_angle\" value=\"45",
+                "beam_width\" value=\"0\"",
+            ][..],
         ),
     ] {
         let scene = load_data(name);
@@ -221,7 +236,10 @@ fn textures_and_spots_export_to_mitsuba() {
         } else {
             let ply = std::fs::read(dir.path().join("textured_quad_mesh0.ply")).unwrap();
             let text = String::from_utf8_lossy(&ply[..200]).to_string();
-            assert!(text.contains("property float u\nproperty float v"), "{text}");
+            assert!(
+                text.contains("property float u\nproperty float v"),
+                "{text}"
+            );
             let exr = image::open(dir.path().join("textured_quad_tex0.exr"))
                 .unwrap()
                 .into_rgb32f();
@@ -235,7 +253,10 @@ fn textures_and_spots_export_to_mitsuba() {
 
 #[test]
 fn the_packet_engine_hands_textures_and_spots_to_the_scalar_engine() {
-    for (name, why) in [("textured_quad.dae", "textures"), ("spot_plane.dae", "spot lights")] {
+    for (name, why) in [
+        ("textured_quad.dae", "textures"),
+        ("spot_plane.dae", "spot lights"),
+    ] {
         let scene = load_data(name);
         let job = RenderJob::new(scene, AccelKind::Native(BvhBuilder::Sah), 8, 8).unwrap();
         let s = RenderSettings {

@@ -13,8 +13,8 @@ use crate::color::luminance;
 use crate::Color;
 pub use area::AreaLight;
 pub use environment::EnvironmentMap;
-pub use spot::SpotLight;
 use glam::{Vec2, Vec3};
+pub use spot::SpotLight;
 use std::f32::consts::PI;
 use std::sync::Arc;
 

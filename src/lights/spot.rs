@@ -42,7 +42,11 @@ impl SpotLight {
             position,
             direction: direction.normalize(),
             intensity,
-            cos_cutoff: if falloff_angle >= 360.0 { -1.0 } else { half.cos() },
+            cos_cutoff: if falloff_angle >= 360.0 {
+                -1.0
+            } else {
+                half.cos()
+            },
             exponent: exponent.max(0.0),
         }
     }
@@ -155,7 +159,13 @@ mod tests {
     /// `solid_angle_weight` is the integral of the falloff (midpoint rule in cos θ).
     #[test]
     fn solid_angle_weight_is_the_falloff_integral() {
-        for (angle, e) in [(60.0, 0.0), (60.0, 3.0), (170.0, 1.5), (300.0, 0.0), (300.0, 2.0)] {
+        for (angle, e) in [
+            (60.0, 0.0),
+            (60.0, 3.0),
+            (170.0, 1.5),
+            (300.0, 0.0),
+            (300.0, 2.0),
+        ] {
             let s = spot(angle, e);
             let n = 200_000;
             let sum: f64 = (0..n)
@@ -166,7 +176,10 @@ mod tests {
                 .sum();
             let numeric = 2.0 * std::f64::consts::PI * sum * 2.0 / n as f64;
             let w = s.solid_angle_weight() as f64;
-            assert!((numeric - w).abs() < 2e-3 * w.max(1.0), "{angle} {e}: {numeric} vs {w}");
+            assert!(
+                (numeric - w).abs() < 2e-3 * w.max(1.0),
+                "{angle} {e}: {numeric} vs {w}"
+            );
         }
     }
 

@@ -81,12 +81,16 @@ impl Resources for Archive {
         let rel = uri_path(uri);
         let joined = normalize(&format!("{}{rel}", self.dir));
         let name = rel.rsplit('/').next().unwrap_or(&rel).to_string();
-        let found = self.entries.get(&joined).map(|b| (joined.clone(), b)).or_else(|| {
-            self.entries
-                .iter()
-                .find(|(k, _)| k.rsplit('/').next() == Some(name.as_str()))
-                .map(|(k, b)| (k.clone(), b))
-        });
+        let found = self
+            .entries
+            .get(&joined)
+            .map(|b| (joined.clone(), b))
+            .or_else(|| {
+                self.entries
+                    .iter()
+                    .find(|(k, _)| k.rsplit('/').next() == Some(name.as_str()))
+                    .map(|(k, b)| (k.clone(), b))
+            });
         found
             .map(|(k, b)| (k, b.clone()))
             .ok_or_else(|| format!("no entry \"{joined}\" in the archive"))
@@ -169,10 +173,19 @@ fn decode_text(file: &str, bytes: Vec<u8>) -> Result<String, LoadError> {
     let utf16 = |big: bool| {
         let units: Vec<u16> = bytes[2..]
             .chunks_exact(2)
-            .map(|c| if big { u16::from_be_bytes([c[0], c[1]]) } else { u16::from_le_bytes([c[0], c[1]]) })
+            .map(|c| {
+                if big {
+                    u16::from_be_bytes([c[0], c[1]])
+                } else {
+                    u16::from_le_bytes([c[0], c[1]])
+                }
+            })
             .collect();
         String::from_utf16(&units).map_err(|_| {
-            LoadError::invalid(file, "not a text file (invalid UTF-16 after its byte-order mark)")
+            LoadError::invalid(
+                file,
+                "not a text file (invalid UTF-16 after its byte-order mark)",
+            )
         })
     };
     match bytes.as_slice() {
@@ -186,7 +199,10 @@ fn decode_text(file: &str, bytes: Vec<u8>) -> Result<String, LoadError> {
 fn utf8(file: &str, bytes: Vec<u8>) -> Result<String, LoadError> {
     String::from_utf8(bytes).map_err(|e| {
         let at = e.utf8_error().valid_up_to();
-        LoadError::invalid(file, format!("not a text file (invalid UTF-8 at byte {at})"))
+        LoadError::invalid(
+            file,
+            format!("not a text file (invalid UTF-8 at byte {at})"),
+        )
     })
 }
 
@@ -210,7 +226,10 @@ fn load_zae(file: &str, bytes: &[u8]) -> Result<Scene, LoadError> {
         }
         total += entry.size();
         if entry.size() > MAX_ENTRY_BYTES || total > MAX_FILE_BYTES {
-            return Err(bad(format!("archive entry \"{}\" is too large", entry.name())));
+            return Err(bad(format!(
+                "archive entry \"{}\" is too large",
+                entry.name()
+            )));
         }
         let mut data = Vec::with_capacity(entry.size() as usize);
         std::io::Read::read_to_end(&mut entry, &mut data)
@@ -230,7 +249,9 @@ fn load_zae(file: &str, bytes: &[u8]) -> Result<Scene, LoadError> {
             normalize(&uri_path(root.split('#').next().unwrap_or(root)))
         }
         None => {
-            let mut daes = entries.keys().filter(|k| k.to_ascii_lowercase().ends_with(".dae"));
+            let mut daes = entries
+                .keys()
+                .filter(|k| k.to_ascii_lowercase().ends_with(".dae"));
             match (daes.next(), daes.next()) {
                 (Some(d), None) => d.clone(),
                 _ => return Err(bad("no manifest.xml and not exactly one .dae".into())),

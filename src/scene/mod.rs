@@ -364,7 +364,12 @@ impl Scene {
             Material::Lambertian { albedo } => albedo,
             _ => Color::ZERO,
         };
-        match self.material_textures.get(material as usize).copied().flatten() {
+        match self
+            .material_textures
+            .get(material as usize)
+            .copied()
+            .flatten()
+        {
             Some(t) => base * self.textures[t as usize].eval(uv),
             None => base,
         }

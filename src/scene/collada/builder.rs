@@ -275,8 +275,10 @@ impl<'a, 'i> Builder<'a, 'i, '_> {
                 .children()
                 .find(|c| c.has_tag_name("skin") || c.has_tag_name("morph"))
             else {
-                self.ctx
-                    .warn(controller, "controller has neither <skin> nor <morph>; skipped");
+                self.ctx.warn(
+                    controller,
+                    "controller has neither <skin> nor <morph>; skipped",
+                );
                 return Ok(());
             };
             if let Some(m) = child(kind, "bind_shape_matrix") {
@@ -393,7 +395,8 @@ impl<'a, 'i> Builder<'a, 'i, '_> {
             Some(Some(semantic)) => children(b, "bind_vertex_input")
                 .find(|v| {
                     v.attribute("semantic") == Some(semantic)
-                        && v.attribute("input_semantic").is_none_or(|s| s == "TEXCOORD")
+                        && v.attribute("input_semantic")
+                            .is_none_or(|s| s == "TEXCOORD")
                 })
                 .and_then(|v| v.attribute("input_set"))
                 .and_then(|s| s.trim().parse().ok()),
@@ -421,7 +424,8 @@ impl<'a, 'i> Builder<'a, 'i, '_> {
             let names = &mut self.scene.material_textures;
             names.resize(i as usize, None);
             names.push(Some(t));
-            self.texcoords.insert(i, read.texture.and_then(|t| t.texcoord));
+            self.texcoords
+                .insert(i, read.texture.and_then(|t| t.texcoord));
         }
         self.materials.insert(material.id(), i);
         Ok(i)

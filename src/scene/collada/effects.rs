@@ -83,7 +83,8 @@ pub(crate) fn read_material<'a, 'i>(
     let colour = diffuse_colour(ctx, model)?;
     let fallback = match colour {
         Some(c) => Some(c),
-        None => path(model, &["ambient", "color"]).and_then(|c| ctx.leading::<3>(c).ok().map(Color::from)),
+        None => path(model, &["ambient", "color"])
+            .and_then(|c| ctx.leading::<3>(c).ok().map(Color::from)),
     };
     let texture = path(model, &["diffuse", "texture"])
         .map(|t| texture_ref(ctx, effect, t, fallback))

@@ -47,7 +47,7 @@ pub(crate) fn read_light(
             }
             let angle = ctx.child_scalar(kind, "falloff_angle")?.unwrap_or(180.0);
             let exponent = ctx.child_scalar(kind, "falloff_exponent")?.unwrap_or(0.0);
-            if !(angle > 0.0) || exponent < 0.0 {
+            if angle <= 0.0 || exponent < 0.0 {
                 let msg = format!("falloff_angle {angle} must be positive and falloff_exponent {exponent} not negative");
                 return Err(ctx.err(kind, msg));
             }

@@ -233,7 +233,8 @@ fn read_texcoords(
     out
 }
 
-/// Appends a `<source>`'s 3-vectors to `out` once; returns their base and count.
+/// Appends a `<source>`'s 3-vectors to `out` once (2-vectors get z = 0); returns
+/// their base and count.
 fn load_source(
     ctx: &Ctx,
     source: Node,
@@ -243,14 +244,13 @@ fn load_source(
     if let Some(&range) = bases.get(&source.id()) {
         return Ok(range);
     }
-    let (values, stride, count) = source_values(ctx, source, 3)?;
+    let (values, stride, count) = source_values(ctx, source, 2)?;
+    let flat = stride == 2 || accessor_params(source) == Some(2);
     let base = out.len();
-    out.extend(
-        values
-            .chunks_exact(stride)
-            .take(count)
-            .map(|c| Vec3::new(c[0], c[1], c[2])),
-    );
+    out.extend(values.chunks_exact(stride).take(count).map(|c| {
+        // Two-component positions (2D meshes) lie in the z = 0 plane.
+        Vec3::new(c[0], c[1], if flat { 0.0 } else { c[2] })
+    }));
     let range = (base as u32, count as u32);
     bases.insert(source.id(), range);
     Ok(range)
@@ -277,6 +277,13 @@ fn load_uv_source(
     let range = (base as u32, count as u32);
     bases.insert(source.id(), range);
     Ok(range)
+}
+
+/// How many `<param>`s a source's accessor names, if it names any.
+fn accessor_params(source: Node) -> Option<usize> {
+    let accessor = child(source, "technique_common").and_then(|t| child(t, "accessor"))?;
+    let n = children(accessor, "param").count();
+    (n > 0).then_some(n)
 }
 
 /// A `<source>`'s numbers, its accessor's stride (at least `dims`) and element count.
@@ -351,7 +358,13 @@ struct Emitter<'l, 'm, 'a> {
 
 impl Emitter<'_, '_, '_> {
     /// Appends the triangle of corners `c` (each a slice of `stride` indices).
-    fn triangle(&mut self, ctx: &Ctx, p: Node, face: usize, c: [&[u32]; 3]) -> Result<(), LoadError> {
+    fn triangle(
+        &mut self,
+        ctx: &Ctx,
+        p: Node,
+        face: usize,
+        c: [&[u32]; 3],
+    ) -> Result<(), LoadError> {
         let l = self.layout;
         let index = |corner: &[u32], offset: usize, (base, n): (u32, u32), what: &str| {
             let i = corner[offset];
@@ -397,7 +410,13 @@ impl Emitter<'_, '_, '_> {
     }
 
     /// Fan-triangulates one polygon `(c0, ci, ci+1)` from its corners' indices.
-    fn polygon(&mut self, ctx: &Ctx, p: Node, face: usize, indices: &[u32]) -> Result<(), LoadError> {
+    fn polygon(
+        &mut self,
+        ctx: &Ctx,
+        p: Node,
+        face: usize,
+        indices: &[u32],
+    ) -> Result<(), LoadError> {
         let s = self.layout.stride;
         let corner = |k: usize| &indices[k * s..(k + 1) * s];
         for i in 1..indices.len() / s - 1 {
@@ -576,10 +595,7 @@ fn triangulate_with_holes<'l>(
 ) -> (Vec<&'l [u32]>, Vec<[usize; 3]>) {
     let s = layout.stride;
     let (base, count) = layout.positions;
-    let corners: Vec<Vec<&[u32]>> = loops
-        .iter()
-        .map(|l| l.chunks_exact(s).collect())
-        .collect();
+    let corners: Vec<Vec<&[u32]>> = loops.iter().map(|l| l.chunks_exact(s).collect()).collect();
     let pos = |c: &[u32]| {
         let i = c[layout.vertex_offset];
         if i < count {
@@ -710,7 +726,12 @@ fn ear_clip(p: &[Vec2]) -> Vec<[usize; 3]> {
             let convex = orient * cross2(p[b] - p[a], p[c] - p[b]) > 0.0;
             convex
                 && idx.iter().all(|&k| {
-                    k == a || k == b || k == c || p[k] == p[a] || p[k] == p[b] || p[k] == p[c]
+                    k == a
+                        || k == b
+                        || k == c
+                        || p[k] == p[a]
+                        || p[k] == p[b]
+                        || p[k] == p[c]
                         || !inside_triangle(p[k], p[a], p[b], p[c], orient)
                 })
         });

@@ -49,7 +49,6 @@ impl<'a, 'i> Ctx<'a, 'i> {
         }
     }
 
-
     /// An error about `node`, in the one-line form `FILE: <element>: what`.
     pub fn err(&self, node: Node, what: impl Display) -> LoadError {
         LoadError::Invalid {
@@ -88,7 +87,10 @@ impl<'a, 'i> Ctx<'a, 'i> {
     /// The `<image>` whose id is `id` (without `#`; some exporters write one).
     pub fn image_by_id(&self, id: &str) -> Option<Node<'a, 'i>> {
         let id = id.strip_prefix('#').unwrap_or(id);
-        self.ids.get(id).copied().filter(|n| n.has_tag_name("image"))
+        self.ids
+            .get(id)
+            .copied()
+            .filter(|n| n.has_tag_name("image"))
     }
 
     /// The element with id `id`, whatever it is.
@@ -119,8 +121,11 @@ impl<'a, 'i> Ctx<'a, 'i> {
         let url = node
             .attribute(attr)
             .ok_or_else(|| self.err(node, format!("missing attribute {attr}")))?;
-        let id = url.strip_prefix('#').ok_or_else(|| {
-            let msg = format!("{attr}=\"{}\" is not a local #id reference", clip(url));
+        let id = self.local_id(url).ok_or_else(|| {
+            let msg = format!(
+                "{attr}=\"{}\" is not a local #id reference (references into other files are not read)",
+                clip(url)
+            );
             self.err(node, msg)
         })?;
         let Some(&target) = self.ids.get(id) else {
@@ -135,6 +140,22 @@ impl<'a, 'i> Ctx<'a, 'i> {
             return Err(self.err(node, msg));
         }
         Ok(Some(target))
+    }
+
+    /// The id a URL names in this document: `#id`, or `file.dae#id` where `file.dae`
+    /// is this file's own name (some exporters write the document's name in).
+    fn local_id<'u>(&self, url: &'u str) -> Option<&'u str> {
+        if let Some(id) = url.strip_prefix('#') {
+            return Some(id);
+        }
+        let (doc, id) = url.rsplit_once('#')?;
+        let name = |p: &str| {
+            p.rsplit(['/', '\\'])
+                .next()
+                .unwrap_or(p)
+                .to_ascii_lowercase()
+        };
+        (!doc.is_empty() && name(doc) == name(self.file)).then_some(id)
     }
 
     /// Appends the whitespace-separated numbers of `node`'s text to `out`.
@@ -168,7 +189,11 @@ impl<'a, 'i> Ctx<'a, 'i> {
         if !T::FRACTIONAL || word.matches(',').count() != 1 {
             return None;
         }
-        let v = word.replace(',', ".").parse::<T>().ok().filter(|v| v.is_finite())?;
+        let v = word
+            .replace(',', ".")
+            .parse::<T>()
+            .ok()
+            .filter(|v| v.is_finite())?;
         if self.decimal_comma.borrow().is_none() {
             if self.has_decimal_point_numbers() {
                 return None;
@@ -187,7 +212,9 @@ impl<'a, 'i> Ctx<'a, 'i> {
             .any(|t| {
                 let mut words = t.split_ascii_whitespace().peekable();
                 words.peek().is_some()
-                    && words.clone().all(|w| w.replace(',', ".").parse::<f64>().is_ok())
+                    && words
+                        .clone()
+                        .all(|w| w.replace(',', ".").parse::<f64>().is_ok())
                     && words.any(|w| w.contains('.') && w.parse::<f64>().is_ok())
             })
     }
