@@ -555,3 +555,40 @@ fn parse_reads_images_relative_to_the_current_directory() {
     let text = std::fs::read_to_string(Path::new(DATA).join("textured_quad.dae")).unwrap();
     assert!(parse(&text, "quad.dae").is_err());
 }
+
+#[test]
+fn off_standard_references_and_arrays_load_with_a_warning_naming_the_file() {
+    // A binding into another file loses only the material.
+    let s = parse_ok(&edit("target=\"#grey\"", "target=\"materials.dae#grey\""));
+    assert_eq!(
+        s.materials[s.triangles[0].material as usize],
+        Material::default()
+    );
+    assert!(s
+        .warnings
+        .iter()
+        .any(|w| w.starts_with("scene.dae: ") && w.contains("materials.dae#grey")));
+    // The file's own name before '#' is a local reference.
+    let s = parse_ok(&edit(
+        "<instance_geometry url=\"#quad\">",
+        "<instance_geometry url=\"./scene.dae#quad\">",
+    ));
+    assert_eq!(s.triangles.len(), 2);
+    // More numbers than a float_array's count: the accessor's are read, with a warning.
+    let s = parse_ok(&edit(
+        "count=\"12\">0 0 0 1 0 0 1 1 0 0 1 0</float_array>",
+        "count=\"12\">0 0 0 1 0 0 1 1 0 0 1 0 7 7 7</float_array>",
+    ));
+    assert_eq!(s.positions, parse_ok(TEMPLATE).positions);
+    assert!(s
+        .warnings
+        .iter()
+        .any(|w| w.contains("extra ones are not read")));
+    // Two-component positions lie in z = 0.
+    let doc = edit(
+        "count=\"12\">0 0 0 1 0 0 1 1 0 0 1 0</float_array>\n          <technique_common><accessor source=\"#quad-pos-array\" count=\"4\" stride=\"3\"/>",
+        "count=\"8\">0 0 1 0 1 1 0 1</float_array>\n          <technique_common><accessor source=\"#quad-pos-array\" count=\"4\" stride=\"2\"/>",
+    );
+    let s = parse_ok(&doc);
+    assert_eq!(s.positions, parse_ok(TEMPLATE).positions);
+}

@@ -151,7 +151,8 @@ impl<'a, 'i> Builder<'a, 'i, '_> {
                             }),
                             None => {
                                 let url = super::xml::clip(node.attribute("url").unwrap_or(""));
-                                let msg = format!("url=\"{url}\" names nothing; skipped");
+                                let msg =
+                                    format!("url=\"{url}\" names nothing in this file; skipped");
                                 self.ctx.warn(node, msg);
                             }
                         }
@@ -206,7 +207,7 @@ impl<'a, 'i> Builder<'a, 'i, '_> {
             let url = super::xml::clip(inst.attribute("url").unwrap_or_default());
             self.ctx.warn(
                 inst,
-                format!("url=\"{url}\" names nothing; the {tag} is skipped"),
+                format!("url=\"{url}\" names nothing in this file; the {tag} is skipped"),
             );
         }
         Ok(target)
@@ -386,7 +387,9 @@ impl<'a, 'i> Builder<'a, 'i, '_> {
         };
         let Some(material) = self.ctx.resolve_if_present(b, "target", "material")? else {
             let target = super::xml::clip(b.attribute("target").unwrap_or(""));
-            let msg = format!("target=\"{target}\" names nothing; using the default material");
+            let msg = format!(
+                "target=\"{target}\" names nothing in this file; using the default material"
+            );
             self.ctx.warn(b, msg);
             return Ok((self.default_material(inst), None));
         };

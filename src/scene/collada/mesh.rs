@@ -244,7 +244,7 @@ fn load_source(
     if let Some(&range) = bases.get(&source.id()) {
         return Ok(range);
     }
-    let (values, stride, count) = source_values(ctx, source, 2)?;
+    let (values, stride, count) = source_values(ctx, source, 2, 3)?;
     let flat = stride == 2 || accessor_params(source) == Some(2);
     let base = out.len();
     out.extend(values.chunks_exact(stride).take(count).map(|c| {
@@ -266,7 +266,7 @@ fn load_uv_source(
     if let Some(&range) = bases.get(&source.id()) {
         return Ok(range);
     }
-    let (values, stride, count) = source_values(ctx, source, 2)?;
+    let (values, stride, count) = source_values(ctx, source, 2, 2)?;
     let base = out.len();
     out.extend(
         values
@@ -286,11 +286,13 @@ fn accessor_params(source: Node) -> Option<usize> {
     (n > 0).then_some(n)
 }
 
-/// A `<source>`'s numbers, its accessor's stride (at least `dims`) and element count.
+/// A `<source>`'s numbers, its accessor's stride (at least `dims`; `default_stride`
+/// without an accessor) and element count.
 fn source_values(
     ctx: &Ctx,
     source: Node,
     dims: u64,
+    default_stride: u64,
 ) -> Result<(Vec<f32>, usize, usize), LoadError> {
     let array = child(source, "float_array").ok_or_else(|| ctx.err(source, "no <float_array>"))?;
     let values = float_array(ctx, array)?;
@@ -301,7 +303,7 @@ fn source_values(
     }
     let stride = match accessor {
         Some(a) => ctx.uint_attr(a, "stride")?.unwrap_or(1),
-        None => dims,
+        None => default_stride,
     };
     if stride < dims {
         let at = accessor.unwrap_or(source);
@@ -333,15 +335,28 @@ fn source_values(
     Ok((values, stride as usize, count as usize))
 }
 
-/// The numbers of a `<float_array>`, which must match its `count`.
+/// The numbers of a `<float_array>`. Fewer than its `count` is an error; more is read
+/// with a warning (the accessors say which are used).
 fn float_array(ctx: &Ctx, array: Node) -> Result<Vec<f32>, LoadError> {
     let values = ctx.numbers::<f32>(array)?;
     if let Some(count) = ctx.uint_attr(array, "count")? {
-        if count != values.len() as u64 {
+        if count > values.len() as u64 {
             return Err(ctx.err(
                 array,
                 format!("count is {count} but {} numbers are present", values.len()),
             ));
+        }
+        if count < values.len() as u64 {
+            ctx.note(
+                array,
+                format!(
+                    "count is {count} but {} numbers are present; the extra ones are not read",
+                    values.len()
+                ),
+            );
+            let mut values = values;
+            values.truncate(count as usize);
+            return Ok(values);
         }
     }
     Ok(values)

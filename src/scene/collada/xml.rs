@@ -27,6 +27,8 @@ pub(crate) struct Ctx<'a, 'i> {
     /// (`1,5`), once the whole file was found to write every number that way.
     /// Held as the element's label, for the one warning `into_warnings` adds.
     decimal_comma: RefCell<Option<String>>,
+    /// Warnings from readers that hold the context shared (`note`).
+    notes: RefCell<Vec<String>>,
 }
 
 impl<'a, 'i> Ctx<'a, 'i> {
@@ -46,6 +48,7 @@ impl<'a, 'i> Ctx<'a, 'i> {
             warnings: Vec::new(),
             seen_warnings: HashSet::new(),
             decimal_comma: RefCell::new(None),
+            notes: RefCell::new(Vec::new()),
         }
     }
 
@@ -57,10 +60,10 @@ impl<'a, 'i> Ctx<'a, 'i> {
         }
     }
 
-    /// A non-fatal problem about `node`. Repeats are kept once so that a
-    /// large mesh cannot flood the list.
+    /// A non-fatal problem about `node`, in the one-line form `FILE: <element>: what`.
+    /// Repeats are kept once so that a large mesh cannot flood the list.
     pub fn warn(&mut self, node: Node, what: impl Display) {
-        let w = format!("{}: {what}", describe(node));
+        let w = format!("{}: {}: {what}", self.file, describe(node));
         if self.seen_warnings.insert(w.clone()) {
             self.warnings.push(w);
         }
@@ -74,11 +77,24 @@ impl<'a, 'i> Ctx<'a, 'i> {
         }
     }
 
+    /// `warn` for readers that hold the context shared; added after the others.
+    pub fn note(&self, node: Node, what: impl Display) {
+        self.notes
+            .borrow_mut()
+            .push(format!("{}: {}: {what}", self.file, describe(node)));
+    }
+
     pub fn into_warnings(mut self) -> Vec<String> {
+        for w in self.notes.take() {
+            if self.seen_warnings.insert(w.clone()) {
+                self.warnings.push(w);
+            }
+        }
         if let Some(label) = self.decimal_comma.take() {
             self.warnings.push(format!(
-                "{label}: numbers are written with decimal commas (as under a comma \
-                 locale); read as decimal points throughout the file"
+                "{}: {label}: numbers are written with decimal commas (as under a comma \
+                 locale); read as decimal points throughout the file",
+                self.file
             ));
         }
         self.warnings
@@ -107,11 +123,17 @@ impl<'a, 'i> Ctx<'a, 'i> {
     ) -> Result<Node<'a, 'i>, LoadError> {
         self.resolve_if_present(node, attr, tag)?.ok_or_else(|| {
             let url = node.attribute(attr).unwrap_or_default();
-            self.err(node, format!("{attr}=\"{}\" names nothing", clip(url)))
+            let what = if self.local_id(url).is_some() {
+                "names nothing"
+            } else {
+                "is not a local #id reference (references into other files are not read)"
+            };
+            self.err(node, format!("{attr}=\"{}\" {what}", clip(url)))
         })
     }
 
-    /// Like `resolve`, but `None` when the URL names no element at all.
+    /// Like `resolve`, but `None` when the URL names no element of this file (nothing,
+    /// or something in another file).
     pub fn resolve_if_present(
         &self,
         node: Node<'a, 'i>,
@@ -121,14 +143,8 @@ impl<'a, 'i> Ctx<'a, 'i> {
         let url = node
             .attribute(attr)
             .ok_or_else(|| self.err(node, format!("missing attribute {attr}")))?;
-        let id = self.local_id(url).ok_or_else(|| {
-            let msg = format!(
-                "{attr}=\"{}\" is not a local #id reference (references into other files are not read)",
-                clip(url)
-            );
-            self.err(node, msg)
-        })?;
-        let Some(&target) = self.ids.get(id) else {
+        // A reference into another file names nothing in this one.
+        let Some(&target) = self.local_id(url).and_then(|id| self.ids.get(id)) else {
             return Ok(None);
         };
         if target.tag_name().name() != tag {
