@@ -592,3 +592,30 @@ fn off_standard_references_and_arrays_load_with_a_warning_naming_the_file() {
     let s = parse_ok(&doc);
     assert_eq!(s.positions, parse_ok(TEMPLATE).positions);
 }
+
+#[test]
+fn concave_polygons_are_ear_clipped_and_convex_ones_fanned() {
+    // An L of six corners over the grid, the notch [1, 2]² at the upper right, starting
+    // at (1, 2), from where a fan would cover part of the notch.
+    let s = load_grid(
+        r##"<polylist material="grey-sym" count="2"><input semantic="VERTEX" source="#g-vtx" offset="0"/>
+             <vcount>6 4</vcount><p>7 6 0 2 5 4  0 1 4 3</p></polylist>"##,
+    );
+    assert_eq!(s.triangles.len(), 4 + 2);
+    assert!((area(&s) - (3.0 + 1.0)).abs() < 1e-6, "{}", area(&s));
+    // No triangle of the L reaches into the notch (the fan's (1,2) (2,0) (2,1) would).
+    let q = Vec3::new(1.4, 1.5, 0.0);
+    for i in 0..4 {
+        let [a, b, c] = s.triangle_positions(i);
+        let n = (b - a).cross(c - a);
+        let inside = [(a, b), (b, c), (c, a)]
+            .iter()
+            .all(|(p, r)| (*r - *p).cross(q - *p).dot(n) > 0.0);
+        assert!(!inside, "triangle {i} covers the notch");
+    }
+    // The convex quad keeps the fan (0, 1, 4), (0, 4, 3).
+    let quad: Vec<_> = (4..6).map(|i| s.triangle_positions(i)).collect();
+    assert!(
+        close(quad[0][2], Vec3::new(1.0, 1.0, 0.0)) && close(quad[1][1], Vec3::new(1.0, 1.0, 0.0))
+    );
+}

@@ -424,7 +424,9 @@ impl Emitter<'_, '_, '_> {
         Ok(())
     }
 
-    /// Fan-triangulates one polygon `(c0, ci, ci+1)` from its corners' indices.
+    /// Triangulates one polygon from its corners' indices: a convex one as the fan
+    /// `(c0, ci, ci+1)`, a concave one (SketchUp and CAD exporters write them) by ear
+    /// clipping, so no triangle covers a notch. Both give `k − 2` triangles.
     fn polygon(
         &mut self,
         ctx: &Ctx,
@@ -433,6 +435,14 @@ impl Emitter<'_, '_, '_> {
         indices: &[u32],
     ) -> Result<(), LoadError> {
         let s = self.layout.stride;
+        if indices.len() / s > 3 && is_concave(&self.mesh.positions, self.layout, indices) {
+            let (corners, tris) =
+                triangulate_with_holes(&self.mesh.positions, self.layout, &[indices]);
+            for t in tris {
+                self.triangle(ctx, p, face, t.map(|k| corners[k]))?;
+            }
+            return Ok(());
+        }
         let corner = |k: usize| &indices[k * s..(k + 1) * s];
         for i in 1..indices.len() / s - 1 {
             self.triangle(ctx, p, face, [corner(0), corner(i), corner(i + 1)])?;
@@ -687,6 +697,28 @@ fn triangulate_with_holes<'l>(
         .map(|t| t.map(|k| ring[k]))
         .collect();
     (all, tris)
+}
+
+/// Whether a polygon (corners of `layout.stride` indices) turns both ways in its plane.
+fn is_concave(positions: &[Vec3], layout: &Layout, indices: &[u32]) -> bool {
+    let (base, count) = layout.positions;
+    let p: Vec<Vec3> = indices
+        .chunks_exact(layout.stride)
+        .map(|c| c[layout.vertex_offset])
+        .map(|i| {
+            if i < count {
+                positions[(base + i) as usize]
+            } else {
+                Vec3::ZERO
+            }
+        })
+        .collect();
+    let n = newell_normal(&p);
+    let scale = p.iter().map(|v| v.abs().max_element()).fold(0.0, f32::max);
+    (0..p.len()).any(|i| {
+        let (a, b, c) = (p[i], p[(i + 1) % p.len()], p[(i + 2) % p.len()]);
+        (b - a).cross(c - b).dot(n) < -1e-6 * scale * scale
+    })
 }
 
 fn newell_normal(p: &[Vec3]) -> Vec3 {
