@@ -5,7 +5,10 @@ mod common;
 
 use common::ember;
 
-const SCENE: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/tests/data/collada/spot_plane.dae");
+const SCENE: &str = concat!(
+    env!("CARGO_MANIFEST_DIR"),
+    "/tests/data/collada/spot_plane.dae"
+);
 
 /// The eye (`pos`) of the course camera file `ember camera` prints.
 fn eye(placement: Option<&str>) -> Vec<f64> {
@@ -33,7 +36,10 @@ fn the_flag_overrides_the_loaders_placement() {
     assert_eq!(eye(Some("file")), vec![0.0, 1.5, 0.0]);
     // The course's rule: the floor's centre (0, 0, 0), 1.5 diagonals (8√2) back along −Y.
     let course = eye(Some("course"));
-    assert!((course[1] - 1.5 * 8.0 * 2f64.sqrt()).abs() < 1e-4, "{course:?}");
+    assert!(
+        (course[1] - 1.5 * 8.0 * 2f64.sqrt()).abs() < 1e-4,
+        "{course:?}"
+    );
     let o = ember()
         .args(["camera", "--camera-placement", "nowhere", SCENE])
         .output()
