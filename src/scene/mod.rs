@@ -32,7 +32,8 @@ pub struct Sphere {
     pub material: u32,
 }
 
-/// What the file says about the view; the eye itself comes from the scene bounds (spec §4).
+/// What the file says about the view. The eye comes from the scene bounds (spec §4), or,
+/// for files other tools wrote, from the camera node (`placement`, issue 26).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct CameraDesc {
     /// Unit forward direction `F`.
