@@ -662,7 +662,12 @@ impl<'a, 'i> Builder<'a, 'i, '_> {
             None => {
                 self.ctx
                     .warn(root, "no camera; using the default view down −Z");
-                CameraDesc::default()
+                // Without a camera position the course's rule places the eye whatever
+                // the placement (`ember info` says so).
+                CameraDesc {
+                    placement: self.placement,
+                    ..CameraDesc::default()
+                }
             }
         };
         self.scene.warnings = self.ctx.into_warnings();
