@@ -55,6 +55,15 @@ fn area(s: &Scene) -> f32 {
         .sum()
 }
 
+/// Whether triangle `i` covers point `q` of its plane (strictly inside).
+fn covers(s: &Scene, i: usize, q: Vec3) -> bool {
+    let [a, b, c] = s.triangle_positions(i);
+    let n = (b - a).cross(c - a);
+    [(a, b), (b, c), (c, a)]
+        .iter()
+        .all(|(p, r)| (*r - *p).cross(q - *p).dot(n) > 0.0)
+}
+
 /// Signed z of each triangle's geometric normal.
 fn normal_z(s: &Scene) -> Vec<f32> {
     (0..s.triangles.len())
@@ -118,14 +127,11 @@ fn polygons_with_holes_are_triangulated_around_the_hole() {
     // 4 + 4 corners and two bridge corners: 8 triangles covering 4 − 1.
     assert_eq!(s.triangles.len(), 8);
     assert!((area(&s) - 3.0).abs() < 1e-5, "area {}", area(&s));
-    let centre = Vec3::new(1.0, 1.0, 0.0);
     for i in 0..s.triangles.len() {
-        let [a, b, c] = s.triangle_positions(i);
-        let n = (b - a).cross(c - a);
-        let inside = [(a, b), (b, c), (c, a)]
-            .iter()
-            .all(|(p, q)| (*q - *p).cross(centre - *p).dot(n) > 0.0);
-        assert!(!inside, "triangle {i} covers the hole");
+        assert!(
+            !covers(&s, i, Vec3::new(1.0, 1.0, 0.0)),
+            "triangle {i} covers the hole"
+        );
     }
 }
 
@@ -273,16 +279,18 @@ fn a_zero_rotation_axis_is_the_identity_with_a_warning() {
 
 #[test]
 fn a_dangling_material_binding_falls_back_with_a_warning() {
-    let s = parse_ok(&edit("target=\"#grey\"", "target=\"#nothing\""));
-    assert_eq!(s.triangles.len(), 2);
-    assert_eq!(
-        s.materials[s.triangles[0].material as usize],
-        Material::default()
-    );
-    assert!(s
-        .warnings
-        .iter()
-        .any(|w| w.contains("instance_material") && w.contains("#nothing")));
+    // A target naming nothing, or something in another file, loses only the material.
+    for target in ["#nothing", "materials.dae#grey"] {
+        let s = parse_ok(&edit("target=\"#grey\"", &format!("target=\"{target}\"")));
+        assert_eq!(s.triangles.len(), 2);
+        assert_eq!(
+            s.materials[s.triangles[0].material as usize],
+            Material::default()
+        );
+        assert!(s.warnings.iter().any(|w| w.starts_with("scene.dae: ")
+            && w.contains("instance_material")
+            && w.contains(target)));
+    }
 }
 
 fn write(dir: &Path, name: &str, bytes: &[u8]) -> std::path::PathBuf {
@@ -558,16 +566,6 @@ fn parse_reads_images_relative_to_the_current_directory() {
 
 #[test]
 fn off_standard_references_and_arrays_load_with_a_warning_naming_the_file() {
-    // A binding into another file loses only the material.
-    let s = parse_ok(&edit("target=\"#grey\"", "target=\"materials.dae#grey\""));
-    assert_eq!(
-        s.materials[s.triangles[0].material as usize],
-        Material::default()
-    );
-    assert!(s
-        .warnings
-        .iter()
-        .any(|w| w.starts_with("scene.dae: ") && w.contains("materials.dae#grey")));
     // The file's own name before '#' is a local reference.
     let s = parse_ok(&edit(
         "<instance_geometry url=\"#quad\">",
@@ -604,14 +602,11 @@ fn concave_polygons_are_ear_clipped_and_convex_ones_fanned() {
     assert_eq!(s.triangles.len(), 4 + 2);
     assert!((area(&s) - (3.0 + 1.0)).abs() < 1e-6, "{}", area(&s));
     // No triangle of the L reaches into the notch (the fan's (1,2) (2,0) (2,1) would).
-    let q = Vec3::new(1.4, 1.5, 0.0);
     for i in 0..4 {
-        let [a, b, c] = s.triangle_positions(i);
-        let n = (b - a).cross(c - a);
-        let inside = [(a, b), (b, c), (c, a)]
-            .iter()
-            .all(|(p, r)| (*r - *p).cross(q - *p).dot(n) > 0.0);
-        assert!(!inside, "triangle {i} covers the notch");
+        assert!(
+            !covers(&s, i, Vec3::new(1.4, 1.5, 0.0)),
+            "triangle {i} covers the notch"
+        );
     }
     // The convex quad keeps the fan (0, 1, 4), (0, 4, 3).
     let quad: Vec<_> = (4..6).map(|i| s.triangle_positions(i)).collect();

@@ -241,19 +241,11 @@ fn load_source(
     out: &mut Vec<Vec3>,
     bases: &mut HashMap<roxmltree::NodeId, (u32, u32)>,
 ) -> Result<(u32, u32), LoadError> {
-    if let Some(&range) = bases.get(&source.id()) {
-        return Ok(range);
-    }
-    let (values, stride, count) = source_values(ctx, source, 2, 3)?;
-    let flat = stride == 2 || accessor_params(source) == Some(2);
-    let base = out.len();
-    out.extend(values.chunks_exact(stride).take(count).map(|c| {
+    let flat = accessor_params(source) == Some(2);
+    load_source_as(ctx, source, out, bases, 3, |c| {
         // Two-component positions (2D meshes) lie in the z = 0 plane.
-        Vec3::new(c[0], c[1], if flat { 0.0 } else { c[2] })
-    }));
-    let range = (base as u32, count as u32);
-    bases.insert(source.id(), range);
-    Ok(range)
+        Vec3::new(c[0], c[1], if flat || c.len() == 2 { 0.0 } else { c[2] })
+    })
 }
 
 /// Appends a `<source>`'s texture coordinates (its first two components) to `out` once.
@@ -263,17 +255,25 @@ fn load_uv_source(
     out: &mut Vec<Vec2>,
     bases: &mut HashMap<roxmltree::NodeId, (u32, u32)>,
 ) -> Result<(u32, u32), LoadError> {
+    load_source_as(ctx, source, out, bases, 2, |c| Vec2::new(c[0], c[1]))
+}
+
+/// Appends a `<source>`'s elements (at least two components each; `default_stride`
+/// without an accessor), made by `make`, to `out` once; returns their base and count.
+fn load_source_as<T>(
+    ctx: &Ctx,
+    source: Node,
+    out: &mut Vec<T>,
+    bases: &mut HashMap<roxmltree::NodeId, (u32, u32)>,
+    default_stride: u64,
+    make: impl Fn(&[f32]) -> T,
+) -> Result<(u32, u32), LoadError> {
     if let Some(&range) = bases.get(&source.id()) {
         return Ok(range);
     }
-    let (values, stride, count) = source_values(ctx, source, 2, 2)?;
+    let (values, stride, count) = source_values(ctx, source, 2, default_stride)?;
     let base = out.len();
-    out.extend(
-        values
-            .chunks_exact(stride)
-            .take(count)
-            .map(|c| Vec2::new(c[0], c[1])),
-    );
+    out.extend(values.chunks_exact(stride).take(count).map(make));
     let range = (base as u32, count as u32);
     bases.insert(source.id(), range);
     Ok(range)
