@@ -391,7 +391,7 @@ impl<'a, 'i> Builder<'a, 'i, '_> {
                 "target=\"{target}\" names nothing in this file; using the default material"
             );
             self.ctx.warn(b, msg);
-            return Ok((self.default_material(inst), None));
+            return Ok((self.default_index(), None));
         };
         let index = self.material_index(material)?;
         let set = match self.texcoords.get(&index) {
@@ -485,11 +485,18 @@ impl<'a, 'i> Builder<'a, 'i, '_> {
         }
     }
 
+    /// The default material for an instance that binds none (warned once per file:
+    /// exporters that write no bindings write none for every node).
     fn default_material(&mut self, inst: Node) -> u32 {
-        self.ctx.warn(
+        self.ctx.warn_once(
+            "unbound",
             inst,
             "no material bound; using the default Lambertian (albedo 0.5)",
         );
+        self.default_index()
+    }
+
+    fn default_index(&mut self) -> u32 {
         match self.default_material {
             Some(i) => i,
             None => {

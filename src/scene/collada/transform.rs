@@ -77,7 +77,11 @@ fn rotation(ctx: &mut Ctx, node: Node) -> Result<DMat4, LoadError> {
     let [x, y, z, deg] = ctx.exact::<4>(node)?;
     let axis = DVec3::new(x, y, z);
     if axis.length_squared() == 0.0 {
-        ctx.warn(node, "rotation axis is zero; read as no rotation");
+        ctx.warn_once(
+            "zero axis",
+            node,
+            "rotation axis is zero; read as no rotation",
+        );
         return Ok(DMat4::IDENTITY);
     }
     Ok(DMat4::from_axis_angle(axis.normalize(), deg.to_radians()))
