@@ -86,18 +86,33 @@ pub fn write_mitsuba(
     );
     xml += &integrator_xml(settings);
     xml += &sensor_xml(camera, settings.spp, scene);
+    let mut texture_files = BTreeMap::new();
     for (g, group) in triangle_groups(scene).into_iter().enumerate() {
         let name = format!("{stem}_mesh{g}.ply");
         let path = dir.join(&name);
-        write_ply(scene, &group.triangles, &path)?;
+        let texture = group_texture(scene, &group);
+        write_ply(scene, &group.triangles, texture.is_some(), &path)?;
         summary.files.push(path);
         let emitter = group_emitter(scene, &group);
+        let bsdf = match texture {
+            Some(t) => {
+                let file = match texture_files.get(&group.material) {
+                    Some(f) => f,
+                    None => {
+                        let f = write_texture(scene, group.material, t, dir, stem, &mut summary)?;
+                        texture_files.entry(group.material).or_insert(f)
+                    }
+                };
+                textured_bsdf_xml(file, &scene.textures[t as usize], &mut summary.warnings)
+            }
+            None => bsdf_xml(&group_material(scene, &group), &mut summary.warnings),
+        };
         let _ = writeln!(
             xml,
             "  <shape type=\"ply\">\n    <string name=\"filename\" value=\"{name}\"/>\n    \
              <boolean name=\"face_normals\" value=\"{}\"/>\n{}{}  </shape>",
             !group.smooth,
-            bsdf_xml(&group_material(scene, &group), &mut summary.warnings),
+            bsdf,
             emitter.map(area_emitter_xml).unwrap_or_default()
         );
     }
@@ -197,6 +212,77 @@ fn group_material(scene: &Scene, g: &TriangleGroup) -> Material {
     scene.materials[g.material as usize]
 }
 
+/// The texture of a group's material, if it has one (area-light surfaces never do).
+fn group_texture(scene: &Scene, g: &TriangleGroup) -> Option<u32> {
+    if g.light != NO_LIGHT {
+        return None;
+    }
+    scene
+        .material_textures
+        .get(g.material as usize)
+        .copied()
+        .flatten()
+}
+
+/// Writes `<stem>_tex<material>.exr`: the material's albedo times its texture, in
+/// linear colour, so Mitsuba's `bitmap` (which reads EXR as linear) shows exactly
+/// the albedo `Scene::albedo` gives, with no product texture needed.
+fn write_texture(
+    scene: &Scene,
+    material: u32,
+    texture: u32,
+    dir: &Path,
+    stem: &str,
+    summary: &mut ExportSummary,
+) -> Result<String, ExportError> {
+    let t = &scene.textures[texture as usize];
+    let base = match scene.materials[material as usize].bsdf {
+        Bsdf::Lambertian(b) => b.albedo.vec3(),
+        _ => Color::ONE,
+    };
+    let mut img = Image::new(t.width() as u32, t.height() as u32);
+    for y in 0..t.height() {
+        for x in 0..t.width() {
+            img.pixels[y * t.width() + x] = base * t.texel(x, y);
+        }
+    }
+    let name = format!("{stem}_tex{material}.exr");
+    let path = dir.join(&name);
+    write_image(&img, &path)?;
+    summary.files.push(path);
+    Ok(name)
+}
+
+/// A diffuse BSDF reading `file`, filtered as ember filters (bilinear, texel centres
+/// at half-integers, which is Mitsuba's convention too). Mitsuba's PLY loader flips
+/// `v` by default (`flip_tex_coords`), so the file's OpenGL-style coordinates, `v = 0`
+/// at the image's bottom, are written unchanged.
+fn textured_bsdf_xml(
+    file: &str,
+    t: &crate::texture::Texture,
+    warnings: &mut Vec<String>,
+) -> String {
+    use crate::texture::Wrap;
+    let mode = |w: Wrap| match w {
+        Wrap::Repeat => "repeat",
+        Wrap::Mirror => "mirror",
+        Wrap::Clamp => "clamp",
+    };
+    if t.wrap_s != t.wrap_t {
+        warnings.push(format!(
+            "texture {}: Mitsuba has one wrap mode for both axes; {} (the s axis's) is used",
+            t.source,
+            t.wrap_s.name()
+        ));
+    }
+    format!(
+        "    <bsdf type=\"twosided\">\n      <bsdf type=\"diffuse\"><texture type=\"bitmap\" name=\"reflectance\">\
+         <string name=\"filename\" value=\"{file}\"/><string name=\"filter_type\" value=\"bilinear\"/>\
+         <string name=\"wrap_mode\" value=\"{}\"/></texture></bsdf>\n    </bsdf>\n",
+        mode(t.wrap_s)
+    )
+}
+
 fn group_emitter(scene: &Scene, g: &TriangleGroup) -> Option<Color> {
     match scene.lights.get(g.light as usize) {
         Some(Light::Area(area)) => Some(area.radiance),
@@ -285,6 +371,7 @@ fn light_xml(
             xyz(position),
             rgb(intensity)
         ),
+        Light::Spot(spot) => spot_xml(&spot, &mut summary.warnings),
         Light::Directional {
             direction,
             irradiance,
@@ -313,6 +400,40 @@ fn light_xml(
             )
         }
     })
+}
+
+/// Mitsuba's `spot`: intensity `I` on the axis, 1 out to `beam_width`, falling
+/// linearly in angle to 0 at `cutoff_angle` (both half angles). ember's (COLLADA's)
+/// spot is `cos^e θ` inside the half angle `falloff_angle/2`, 0 outside. With `e = 0`
+/// the two agree exactly (`beam_width = cutoff_angle` = the half angle). With `e > 0`
+/// no linear ramp is `cos^e`: the export uses the ramp from the axis (`beam_width`
+/// 0) that crosses ½ where `cos^e θ` does, capped at the half angle, and warns.
+fn spot_xml(spot: &crate::lights::SpotLight, warnings: &mut Vec<String>) -> String {
+    let half = spot.cutoff_degrees();
+    let (cutoff, beam) = if spot.exponent == 0.0 {
+        (half, half)
+    } else {
+        let half_power = 0.5f32.powf(1.0 / spot.exponent).acos().to_degrees();
+        warnings.push(format!(
+            "spot light (falloff exponent {}): Mitsuba's spot falls off linearly in angle, \
+             not as cos^e; approximated by a ramp to 0 at {:.3}°",
+            spot.exponent,
+            (2.0 * half_power).min(half)
+        ));
+        ((2.0 * half_power).min(half), 0.0)
+    };
+    let up = spot.direction.any_orthonormal_vector();
+    format!(
+        "  <emitter type=\"spot\">\n    <rgb name=\"intensity\" value=\"{}\"/>\n    \
+         <float name=\"cutoff_angle\" value=\"{cutoff}\"/>\n    \
+         <float name=\"beam_width\" value=\"{beam}\"/>\n    \
+         <transform name=\"to_world\">\n      <lookat origin=\"{}\" target=\"{}\" up=\"{}\"/>\n    \
+         </transform>\n  </emitter>\n",
+        rgb(spot.intensity),
+        csv(spot.position),
+        csv(spot.position + spot.direction),
+        csv(up)
+    )
 }
 
 /// Texels of the exported environment map per ember texel (each side), so that
@@ -350,8 +471,9 @@ fn sky_map(radiance: Color) -> Image {
     img
 }
 
-/// Binary PLY of the triangles, three vertices each (with normals when the mesh has them).
-fn write_ply(scene: &Scene, triangles: &[usize], path: &Path) -> Result<(), ExportError> {
+/// Binary PLY of the triangles, three vertices each (with normals when the mesh has them,
+/// and texture coordinates `u`, `v` when `uv`).
+fn write_ply(scene: &Scene, triangles: &[usize], uv: bool, path: &Path) -> Result<(), ExportError> {
     let io = |source| ExportError::Io {
         path: path.to_path_buf(),
         source,
@@ -367,6 +489,9 @@ fn write_ply(scene: &Scene, triangles: &[usize], path: &Path) -> Result<(), Expo
     if smooth {
         header += "property float nx\nproperty float ny\nproperty float nz\n";
     }
+    if uv {
+        header += "property float u\nproperty float v\n";
+    }
     let _ = write!(
         header,
         "element face {}\nproperty list uchar int vertex_indices\nend_header\n",
@@ -379,6 +504,12 @@ fn write_ply(scene: &Scene, triangles: &[usize], path: &Path) -> Result<(), Expo
             push_vec(&mut bytes, scene.positions[t.v[c] as usize]);
             if let Some(n) = t.n {
                 push_vec(&mut bytes, scene.normals[n[c] as usize]);
+            }
+            if uv {
+                let k = scene.triangle_uvs.get(i).copied().flatten();
+                let p = k.map_or(glam::Vec2::ZERO, |k| scene.uvs[k[c] as usize]);
+                bytes.extend_from_slice(&p.x.to_le_bytes());
+                bytes.extend_from_slice(&p.y.to_le_bytes());
             }
         }
     }

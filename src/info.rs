@@ -6,7 +6,7 @@ use crate::camera::Camera;
 use crate::color::compact as v;
 use crate::image_io::{ImageIoError, OutputFormat};
 use crate::lights::Light;
-use crate::scene::{Scene, NO_LIGHT};
+use crate::scene::{Placement, Scene, NO_LIGHT};
 use std::fmt::Write;
 use std::path::Path;
 
@@ -43,6 +43,26 @@ fn write_info(out: &mut String, scene: &Scene, width: u32, height: u32) -> std::
             Some(name) => writeln!(out, "  [{i}] {name}: {}", m.describe())?,
             None => writeln!(out, "  [{i}] {}", m.describe())?,
         }
+    }
+    writeln!(out, "textures: {}", scene.textures.len())?;
+    for (i, t) in scene.textures.iter().enumerate() {
+        let users: Vec<String> = scene
+            .material_textures
+            .iter()
+            .enumerate()
+            .filter(|(_, m)| **m == Some(i as u32))
+            .map(|(k, _)| format!("[{k}]"))
+            .collect();
+        writeln!(
+            out,
+            "  [{i}] {}: {}x{}, wrap {}/{}, material {}",
+            t.source,
+            t.width(),
+            t.height(),
+            t.wrap_s.name(),
+            t.wrap_t.name(),
+            users.join(", ")
+        )?;
     }
     write_camera(out, scene, width, height)?;
     if scene.bounds.is_empty() {
@@ -104,6 +124,15 @@ fn write_camera(out: &mut String, scene: &Scene, width: u32, height: u32) -> std
     let cam = Camera::new(&scene.camera, &scene.bounds, width.max(1), height.max(1));
     let (hfov, vfov) = cam.fov_degrees();
     writeln!(out, "camera ({width}x{height}):")?;
+    let placement = match (scene.camera.placement, scene.camera.position) {
+        (Placement::File, Some(_)) => "the file's camera position",
+        (Placement::File, None) => "course rule (the file has no camera)",
+        (Placement::Course, _) => "course rule (centre - 1.5 x diagonal x forward)",
+    };
+    writeln!(out, "  placement: {placement}")?;
+    if !scene.placement_reason.is_empty() {
+        writeln!(out, "  why: {}", scene.placement_reason)?;
+    }
     writeln!(out, "  eye {}", v(cam.eye))?;
     writeln!(out, "  forward {}", v(cam.forward))?;
     writeln!(out, "  up {}", v(cam.up))?;
@@ -128,6 +157,14 @@ fn describe_light(l: &Light) -> String {
             "point: intensity {}, position {}",
             v(intensity),
             v(position)
+        ),
+        Light::Spot(s) => format!(
+            "spot: intensity {} on the axis, position {}, direction {}, cone half angle {:.4} deg, falloff exponent {}",
+            v(s.intensity),
+            v(s.position),
+            v(s.direction),
+            s.cutoff_degrees(),
+            s.exponent
         ),
         Light::Directional {
             direction,

@@ -31,6 +31,7 @@ pub mod render;
 pub mod sampling;
 pub mod scene;
 pub mod shard;
+pub mod texture;
 
 pub use color::Color;
 pub use glam::{Vec2, Vec3};

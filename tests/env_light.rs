@@ -85,6 +85,7 @@ fn floor_job(a: f32, light: Light) -> RenderJob {
         up: Vec3::Z,
         tan_half_x: Some(0.8),
         tan_half_y: None,
+        ..CameraDesc::default()
     };
     let mut cam = Camera::new(&desc, &scene.bounds, 16, 16);
     cam.eye = Vec3::new(0.3, 1.0, -0.2);

@@ -1,4 +1,5 @@
-//! The camera of spec §4: direction from the file, eye from the bounds, field of view
+//! The camera of spec §4: direction from the file, eye from the bounds (or the file's own
+//! camera position, `CameraDesc::placement`), field of view
 //! independent of the pixel count; a pinhole unless a thin lens is set (course project
 //! 3-2 part 4, README "Thin lens"). `course_file` reads and writes the course's camera
 //! settings files (`-c`).
@@ -61,7 +62,10 @@ impl Camera {
         } else {
             (bounds.centre(), bounds.diagonal().length())
         };
-        let eye = c - 1.5 * d * f;
+        let eye = match (desc.placement, desc.position) {
+            (crate::scene::Placement::File, Some(p)) => p,
+            _ => c - 1.5 * d * f,
+        };
         let (tx, ty) = output_fov(
             desc.tan_half_x,
             desc.tan_half_y,

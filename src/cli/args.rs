@@ -129,6 +129,22 @@ pub struct LensArgs {
     /// course: must be positive.
     #[arg(short = 'd', value_name = "DISTANCE", allow_negative_numbers = true)]
     pub focal_distance: Option<f32>,
+
+    /// Where the camera's eye goes. auto: the course's rule for the course's files (they use its
+    /// CGL/CMU462 extension, were written by its Blender 2.72/2.74, or name no authoring tool), the
+    /// camera node's own position for files other tools wrote (`ember info` says which and why);
+    /// course: the course's rule (the scene's centre, 1.5 diagonals back along the view); file:
+    /// the camera node's position (the course's rule when the file has no camera).
+    #[arg(long = "camera-placement", value_enum, value_name = "PLACEMENT", default_value_t = CameraPlacement::Auto)]
+    pub camera_placement: CameraPlacement,
+}
+
+/// `--camera-placement`.
+#[derive(clap::ValueEnum, Clone, Copy, Debug, PartialEq, Eq)]
+pub enum CameraPlacement {
+    Auto,
+    Course,
+    File,
 }
 
 #[derive(Args, Debug)]

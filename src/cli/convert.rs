@@ -2,7 +2,7 @@
 
 #[cfg(feature = "bench")]
 use super::args::{BenchAccelArgs, BenchConvergeArgs, BenchRenderArgs, BenchStabilityArgs};
-use super::args::{LensArgs, RenderArgs};
+use super::args::{CameraPlacement, LensArgs, RenderArgs};
 use anyhow::{bail, Context, Result};
 use ember::accel::Backend;
 #[cfg(feature = "bench")]
@@ -416,6 +416,18 @@ pub(super) fn apply_env_map(env_map: Option<&Path>, scene: &mut ember::scene::Sc
     }
     Ok(())
 }
+/// The scene's camera with `--camera-placement` applied.
+fn placed(scene: &Scene, lens: &LensArgs) -> ember::scene::CameraDesc {
+    use ember::scene::Placement;
+    let mut desc = scene.camera;
+    match lens.camera_placement {
+        CameraPlacement::Auto => {}
+        CameraPlacement::Course => desc.placement = Placement::Course,
+        CameraPlacement::File => desc.placement = Placement::File,
+    }
+    desc
+}
+
 /// `-b` and `-d` on their own: a radius of at least 0, a positive distance.
 pub(super) fn check_lens(lens: &LensArgs) -> Result<()> {
     if let Some(b) = lens.lens_radius {
@@ -442,7 +454,7 @@ pub(super) fn camera(
     let (mut cam, warning) = match file {
         Some(f) => f.camera(width, height),
         None => (
-            Camera::new(&scene.camera, &scene.bounds, width, height),
+            Camera::new(&placed(scene, lens), &scene.bounds, width, height),
             None,
         ),
     };

@@ -143,7 +143,7 @@ impl<'a> LightTracer<'a> {
             if let Some(from) = from {
                 si = self.scene.on_line(&si, from, ray.d.normalize());
             }
-            let material = &self.scene.materials[si.material as usize];
+            let material = &self.scene.material_at(&si);
             if !material.scatters() || bounces >= self.s.max_depth {
                 break;
             }

@@ -179,10 +179,12 @@ impl Estimator {
     /// present, which light tracing cannot show (see `light_tracing`).
     pub fn auto_for(scene: &crate::scene::Scene) -> Estimator {
         let point_lights_only = !scene.lights.is_empty()
-            && scene
-                .lights
-                .iter()
-                .all(|l| matches!(l, crate::lights::Light::Point { .. }));
+            && scene.lights.iter().all(|l| {
+                matches!(
+                    l,
+                    crate::lights::Light::Point { .. } | crate::lights::Light::Spot(_)
+                )
+            });
         let specular = scene.materials.iter().any(|m| m.is_delta());
         if point_lights_only && !specular && !scene.has_unsampled_emitters() {
             Estimator::LightTracing

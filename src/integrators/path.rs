@@ -30,7 +30,7 @@ use crate::sampling::warps::{uniform_hemisphere_l, uniform_hemisphere_pdf};
 use crate::sampling::{pixel_key, SampleStream, FIRST_PATH_PAIR};
 use crate::scene::{Hits, Scene, NO_LIGHT};
 use crate::Color;
-use glam::Vec3;
+use glam::{Vec2, Vec3};
 
 /// Shadow rays stop this fraction short of the sampled light point, so the light's own
 /// surface does not occlude it; relative, so it works at every scene scale.
@@ -488,8 +488,9 @@ impl<'k, 'a, L: Lanes> Kernel<'k, 'a, L> {
         if seen != 0 {
             self.emitted(seen, &hit, w);
         }
+        let uv = (hit.uv.0.to_array(), hit.uv.1.to_array());
         let bsdf = BsdfLanes::gather(l, lanes, |i| {
-            &scene.materials[hit.material[i] as usize].bsdf
+            scene.bsdf_at(hit.material[i], Vec2::new(uv.0[i], uv.1[i]))
         });
         // Paths end at the depth cap and on surfaces that scatter nothing.
         let stop = (self.at_depth_cap(lanes) | !bsdf.scattering) & lanes;

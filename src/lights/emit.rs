@@ -44,6 +44,7 @@ impl Light {
                 dir: uniform_sphere(u_dir),
                 beta: intensity / uniform_sphere_pdf(),
             },
+            Light::Spot(s) => s.sample_le(u_dir)?,
             Light::Directional {
                 direction,
                 irradiance,

@@ -8,6 +8,7 @@ pub mod directional;
 pub mod emit;
 pub mod environment;
 pub mod point;
+pub mod spot;
 
 use crate::color::luminance;
 use crate::lanes::{per_lane, per_lane_v3, LaneMask, Lanes, One, Real, LANES, V3};
@@ -15,6 +16,7 @@ use crate::Color;
 pub use area::AreaLight;
 pub use environment::EnvironmentMap;
 use glam::{Vec2, Vec3};
+pub use spot::SpotLight;
 use std::f32::consts::PI;
 use std::sync::Arc;
 
@@ -24,6 +26,8 @@ pub enum Light {
     Area(AreaLight),
     /// Isotropic point light of radiant intensity `intensity` (W/sr).
     Point { position: Vec3, intensity: Color },
+    /// Point light whose intensity falls off away from its axis (COLLADA `<spot>`).
+    Spot(SpotLight),
     /// Light travelling along unit `direction`; `irradiance` on a surface facing it.
     Directional { direction: Vec3, irradiance: Color },
     /// Constant radiance from the upper hemisphere (world +Y).
@@ -93,6 +97,7 @@ impl Light {
         match self {
             Light::Area(_) => "area",
             Light::Point { .. } => "point",
+            Light::Spot(_) => "spot",
             Light::Directional { .. } => "directional",
             Light::Ambient { .. } => "ambient",
             Light::Environment(_) => "environment map",
@@ -101,7 +106,7 @@ impl Light {
 
     pub fn is_delta(&self) -> bool {
         match self {
-            Light::Point { .. } | Light::Directional { .. } => true,
+            Light::Point { .. } | Light::Spot(_) | Light::Directional { .. } => true,
             Light::Area(_) | Light::Ambient { .. } | Light::Environment(_) => false,
         }
     }
@@ -112,7 +117,9 @@ impl Light {
     pub fn is_environment(&self) -> bool {
         match self {
             Light::Ambient { .. } | Light::Environment(_) => true,
-            Light::Area(_) | Light::Point { .. } | Light::Directional { .. } => false,
+            Light::Area(_) | Light::Point { .. } | Light::Spot(_) | Light::Directional { .. } => {
+                false
+            }
         }
     }
 
@@ -127,6 +134,7 @@ impl Light {
                 position,
                 intensity,
             } => point::sample_incident(l, *position, *intensity, p),
+            Light::Spot(s) => s.sample_incident(l, p),
             Light::Directional {
                 direction,
                 irradiance,
@@ -146,7 +154,7 @@ impl Light {
             Light::Area(a) => a.pdf_incident(l, p, wi),
             Light::Ambient { .. } => ambient::pdf_incident(wi),
             Light::Environment(env) => per_lane(wi.x, |i| env.pdf_li(wi.lane(i))),
-            Light::Point { .. } | Light::Directional { .. } => l.f(0.0),
+            Light::Point { .. } | Light::Spot(_) | Light::Directional { .. } => l.f(0.0),
         }
     }
 
@@ -160,7 +168,9 @@ impl Light {
                 V3::select(w.y.gt(l.f(0.0)), V3::splat(l, *radiance), zero)
             }
             Light::Environment(env) => per_lane_v3(w.x, |i| env.le(w.lane(i))),
-            Light::Area(_) | Light::Point { .. } | Light::Directional { .. } => zero,
+            Light::Area(_) | Light::Point { .. } | Light::Spot(_) | Light::Directional { .. } => {
+                zero
+            }
         }
     }
 
@@ -214,6 +224,7 @@ impl Light {
             // Lambertian emitter: π·L per unit area.
             Light::Area(a) => PI * a.area() * luminance(a.radiance),
             Light::Point { intensity, .. } => 4.0 * PI * luminance(intensity),
+            Light::Spot(s) => s.solid_angle_weight() * luminance(s.intensity),
             Light::Directional { irradiance, .. } => disk * luminance(irradiance),
             // Half of pbrt's uniform-sphere 4π·πr²·L.
             Light::Ambient { radiance } => 2.0 * PI * disk * luminance(radiance),

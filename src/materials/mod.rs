@@ -217,7 +217,7 @@ macro_rules! bsdfs {
         impl<L: Lanes> BsdfLanes<L> {
             /// The BSDF of each lane in `lanes`, `bsdf(i)` for lane `i`.
             #[inline(always)]
-            pub fn gather<'m>(l: L, lanes: LaneBits, bsdf: impl Fn(usize) -> &'m Bsdf) -> Self {
+            pub fn gather(l: L, lanes: LaneBits, bsdf: impl Fn(usize) -> Bsdf) -> Self {
                 let mut of_kind = [0 as LaneBits; KINDS];
                 let mut first = [usize::MAX; KINDS];
                 for i in each_lane(lanes) {
@@ -231,8 +231,8 @@ macro_rules! bsdfs {
                 $(#[allow(non_snake_case)] let $kind = {
                     let k = Kind::$kind as usize;
                     (of_kind[k] != 0).then(|| {
-                        let Bsdf::$kind(fill) = *bsdf(first[k]) else { unreachable!() };
-                        let each = <L::F as Real>::array(|i| match *bsdf(i) {
+                        let Bsdf::$kind(fill) = bsdf(first[k]) else { unreachable!() };
+                        let each = <L::F as Real>::array(|i| match bsdf(i) {
                             Bsdf::$kind(b) if of_kind[k] >> i & 1 != 0 => b,
                             _ => fill,
                         });
@@ -442,7 +442,7 @@ impl Material {
 
     /// The BSDF for one path.
     fn one(&self) -> BsdfLanes<crate::lanes::One> {
-        BsdfLanes::gather(crate::lanes::One, 1, |_| &self.bsdf)
+        BsdfLanes::gather(crate::lanes::One, 1, |_| self.bsdf)
     }
 
     /// `f(wo, wi)` without the cosine; zero for delta materials.

@@ -19,6 +19,8 @@ pub struct Hits<L: Lanes> {
     pub ng: V3<L::F>,
     /// Unit shading normal, on the same side as `ng`.
     pub ns: V3<L::F>,
+    /// Texture coordinates where the triangle has them, else its `(b1, b2)`.
+    pub uv: (L::F, L::F),
     pub prim: [u32; LANES],
     pub material: [u32; LANES],
     /// The area light whose surface each lane hit (`NO_LIGHT` if none).
@@ -116,11 +118,23 @@ impl Scene {
             ng = V3::select(m, n, ng);
             ns = V3::select(m, n, ns);
         }
+        let uv = if self.has_textures() {
+            let mut uv = [[0.0f32; LANES]; 2];
+            for i in each_lane(triangles) {
+                let (b1, b2) = (h.b1[i], h.b2[i]);
+                let t = self.texcoord(h.prim[i] as usize, 1.0 - b1 - b2, b1, b2);
+                (uv[0][i], uv[1][i]) = (t.x, t.y);
+            }
+            (l.f_from(uv[0]), l.f_from(uv[1]))
+        } else {
+            (b1, b2)
+        };
         Hits {
             p,
             p_error,
             ng,
             ns,
+            uv,
             prim: h.prim,
             material,
             light,

@@ -10,9 +10,11 @@ use crate::geometry::{ray::gamma, Aabb, Ray};
 use crate::lanes::rays::HitPacket;
 use crate::lanes::{One, V3};
 use crate::lights::{AreaLight, Light};
-use crate::materials::Material;
+use crate::materials::{Bsdf, Material};
+use crate::texture::Texture;
 use crate::Color;
 use glam::{Vec2, Vec3};
+use std::sync::Arc;
 
 /// Marker for "no light" in `Triangle::light`.
 pub const NO_LIGHT: u32 = u32::MAX;
@@ -35,7 +37,8 @@ pub struct Sphere {
     pub material: u32,
 }
 
-/// What the file says about the view; the eye itself comes from the scene bounds (spec §4).
+/// What the file says about the view. The eye comes from the scene bounds (spec §4), or,
+/// for files other tools wrote, from the camera node (`placement`, issue 26).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct CameraDesc {
     /// Unit forward direction `F`.
@@ -46,6 +49,22 @@ pub struct CameraDesc {
     pub tan_half_x: Option<f32>,
     /// `tan(yfov/2)` as given or derived from the file, if known.
     pub tan_half_y: Option<f32>,
+    /// The camera node's world position, when the file has a camera.
+    pub position: Option<Vec3>,
+    /// Where the eye goes: the course's rule or the file's own position.
+    pub placement: Placement,
+}
+
+/// Where the camera's eye is put.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum Placement {
+    /// The course's rule (spec §4): `centre − 1.5·diagonal·F` of the scene bounds,
+    /// whatever the file says.
+    #[default]
+    Course,
+    /// The camera node's own position (`CameraDesc::position`), as the file's author
+    /// put it; the course's rule where the file has no camera.
+    File,
 }
 
 impl Default for CameraDesc {
@@ -56,6 +75,8 @@ impl Default for CameraDesc {
             up: Vec3::Y,
             tan_half_x: Some((49.13434f32.to_radians() * 0.5).tan()),
             tan_half_y: None,
+            position: None,
+            placement: Placement::Course,
         }
     }
 }
@@ -90,6 +111,18 @@ pub struct Scene {
     /// The file's name of each material (parallel to `materials`; may be shorter for
     /// scenes built in code).
     pub material_names: Vec<String>,
+    /// Which camera placement the loader chose and why, for `ember info`.
+    pub placement_reason: String,
+    /// Texture coordinates, indexed by `triangle_uvs`.
+    pub uvs: Vec<Vec2>,
+    /// Each triangle's corner texture coordinates (indices into `uvs`), parallel to
+    /// `triangles`; shorter when later triangles (area-light quads) have none. Only
+    /// triangles of textured materials carry them.
+    pub triangle_uvs: Vec<Option<[u32; 3]>>,
+    pub textures: Vec<Arc<Texture>>,
+    /// The diffuse texture of each material (index into `textures`), parallel to
+    /// `materials`; may be shorter (no texture).
+    pub material_textures: Vec<Option<u32>>,
 }
 
 /// A primitive id: triangles first, then spheres.
@@ -117,6 +150,8 @@ pub struct SurfaceInteraction {
     pub ng: Vec3,
     /// Unit shading normal, on the same side as `ng`.
     pub ns: Vec3,
+    /// Texture coordinates: interpolated from the triangle's corners where it has
+    /// them (`Scene::triangle_uvs`), else the barycentrics `(b1, b2)`.
     pub uv: Vec2,
     pub prim: PrimId,
     pub material: u32,
@@ -169,6 +204,7 @@ impl SurfaceInteraction {
             p_error: self.p_error.into(),
             ng: self.ng.into(),
             ns: self.ns.into(),
+            uv: (self.uv.x, self.uv.y),
             prim: lane(self.prim),
             material: lane(self.material),
             light: lane(self.light),
@@ -187,7 +223,7 @@ impl SurfaceInteraction {
             p_error: h.p_error.vec3(),
             ng: h.ng.vec3(),
             ns: h.ns.vec3(),
-            uv: Vec2::ZERO,
+            uv: Vec2::new(h.uv.0, h.uv.1),
             prim: h.prim[0],
             material: h.material[0],
             light: h.light[0],
@@ -328,6 +364,52 @@ impl Scene {
             .iter()
             .any(|t| t.light == NO_LIGHT && emits(t.material))
             || self.spheres.iter().any(|s| emits(s.material))
+    }
+
+    /// The texture coordinates at barycentrics `(b0, b1, b2)` of triangle `i`, or, for a
+    /// triangle without them, `(b1, b2)`.
+    #[inline]
+    pub(crate) fn texcoord(&self, i: usize, b0: f32, b1: f32, b2: f32) -> Vec2 {
+        match self.triangle_uvs.get(i).copied().flatten() {
+            Some([a, b, c]) => {
+                let uv = |k: u32| self.uvs[k as usize];
+                b0 * uv(a) + b1 * uv(b) + b2 * uv(c)
+            }
+            None => Vec2::new(b1, b2),
+        }
+    }
+
+    /// The BSDF of `material` at texture coordinates `uv`: a Lambertian material with
+    /// a diffuse texture has its albedo times the texture's colour there. The one
+    /// place shading reads textures (per lane, by the transport).
+    #[inline]
+    pub fn bsdf_at(&self, material: u32, uv: Vec2) -> Bsdf {
+        let bsdf = self.materials[material as usize].bsdf;
+        let texture = self
+            .material_textures
+            .get(material as usize)
+            .copied()
+            .flatten();
+        match (bsdf, texture) {
+            (Bsdf::Lambertian(mut b), Some(t)) => {
+                b.albedo = (b.albedo.vec3() * self.textures[t as usize].eval(uv)).into();
+                Bsdf::Lambertian(b)
+            }
+            _ => bsdf,
+        }
+    }
+
+    /// The material at a hit, its texture applied.
+    pub fn material_at(&self, si: &SurfaceInteraction) -> Material {
+        Material {
+            bsdf: self.bsdf_at(si.material, si.uv),
+            ..self.materials[si.material as usize]
+        }
+    }
+
+    /// Whether any material has a texture.
+    pub fn has_textures(&self) -> bool {
+        self.material_textures.iter().any(Option::is_some)
     }
 
     pub fn num_prims(&self) -> usize {

@@ -60,6 +60,7 @@ pub fn sun_sky_scene(env: EnvironmentMap) -> Scene {
         up: Vec3::Y,
         tan_half_x: Some(0.6),
         tan_half_y: None,
+        ..CameraDesc::default()
     });
     scene.set_environment(Arc::new(env));
     scene

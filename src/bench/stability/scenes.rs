@@ -45,6 +45,7 @@ pub fn transformed(scene: &Scene, scale: f32, offset: Vec3) -> Scene {
                 a.ey *= scale;
             }
             Light::Point { position, .. } => *position = map(*position),
+            Light::Spot(spot) => spot.position = map(spot.position),
             Light::Directional { .. } | Light::Ambient { .. } | Light::Environment(_) => {}
         }
     }
@@ -164,6 +165,7 @@ pub fn slab_in_front_of_light(radiance: f32) -> Scene {
         up: Vec3::Y,
         tan_half_x: Some(0.05),
         tan_half_y: None,
+        ..CameraDesc::default()
     })
 }
 
@@ -219,6 +221,7 @@ pub fn grid_plane() -> Scene {
         up: Vec3::Y,
         tan_half_x: Some(0.4),
         tan_half_y: None,
+        ..CameraDesc::default()
     })
 }
 
@@ -281,5 +284,6 @@ pub fn degenerate_room() -> Scene {
         up: Vec3::Y,
         tan_half_x: Some(0.5),
         tan_half_y: None,
+        ..CameraDesc::default()
     })
 }
