@@ -70,18 +70,19 @@ pub fn offset_origin<F: Real>(p: V3<F>, p_error: V3<F>, ng: V3<F>, w: V3<F>) -> 
     let offset = V3::select(w.dot(ng).lt(zero), -offset, offset);
     let po = p + offset;
     // Round away from p so the offset survives the addition's own rounding.
-    let away = |v: F, o: F| {
-        F::select(
-            o.gt(zero),
-            next_up(v),
-            F::select(o.lt(zero), next_down(v), v),
-        )
-    };
     V3::new(
-        away(po.x, offset.x),
-        away(po.y, offset.y),
-        away(po.z, offset.z),
+        round_away(po.x, offset.x),
+        round_away(po.y, offset.y),
+        round_away(po.z, offset.z),
     )
+}
+
+/// `v` moved one float in the direction of `offset`'s sign (unchanged where it is 0).
+#[inline(always)]
+fn round_away<F: Real>(v: F, offset: F) -> F {
+    let zero = v.splat_as(0.0);
+    let up = F::select(offset.gt(zero), next_up(v), v);
+    F::select(offset.lt(zero), next_down(v), up)
 }
 
 /// Smallest float greater than `v`.

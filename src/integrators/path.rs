@@ -603,7 +603,9 @@ impl<'k, 'a, L: Lanes> Kernel<'k, 'a, L> {
             let ids = best_light.to_array();
             let area = |i: usize| lights[ids[i] as usize].as_area().expect("an area light");
             let le = per_lane_v3(w.x, |i| area(i).radiance);
-            let pdf = per_lane(w.x, |i| area(i).pdf_li(prev.lane(i), w.lane(i)));
+            let (p, d) = (prev.to_arrays(), w.to_arrays());
+            let at = |v: &[[f32; LANES]; 3], i: usize| Vec3::new(v[0][i], v[1][i], v[2][i]);
+            let pdf = per_lane(w.x, |i| area(i).pdf_li(at(&p, i), at(&d, i)));
             let weight = self.hit_weight(counted, Some(pdf));
             self.add_radiance(counted, le * weight);
         }
@@ -635,15 +637,18 @@ impl<'k, 'a, L: Lanes> Kernel<'k, 'a, L> {
     #[inline(always)]
     fn emitted(&mut self, lanes: LaneBits, hit: &Hits<L>, w: V3<L::F>) {
         let scene = self.it.scene;
-        let cos_out = (-w).dot(hit.ng);
+        let cos_out = (-w).dot(hit.ng).to_array();
         let on_light = !self.l.u_from(hit.light).eq(self.l.u(NO_LIGHT)).bits();
         let camera_on_light = lanes & on_light & !self.has_prev;
         if camera_on_light != 0 {
             let le = per_lane_v3(w.x, |i| match scene.lights.get(hit.light[i] as usize) {
-                Some(Light::Area(a)) if camera_on_light >> i & 1 != 0 => a.emitted(cos_out.lane(i)),
+                Some(Light::Area(a)) if camera_on_light >> i & 1 != 0 => a.emitted(cos_out[i]),
                 _ => Vec3::ZERO,
             });
             self.add_radiance(camera_on_light, le);
+        }
+        if !self.it.unsampled_emitters {
+            return;
         }
         let emissive = each_lane(lanes & !on_light)
             .filter(|&i| scene.materials[hit.material[i] as usize].emits())
@@ -651,7 +656,7 @@ impl<'k, 'a, L: Lanes> Kernel<'k, 'a, L> {
         if emissive != 0 {
             let le = per_lane_v3(w.x, |i| {
                 let m = &scene.materials[hit.material[i] as usize];
-                m.emitted(Vec3::new(0.0, 0.0, cos_out.lane(i)))
+                m.emitted(Vec3::new(0.0, 0.0, cos_out[i]))
             });
             let weight = self.hit_weight(emissive, None);
             self.add_radiance(emissive, le * weight);

@@ -12,11 +12,18 @@ pub const COS_POLY: [f32; 3] = [2.443_315_7e-5, -1.388_731_6e-3, 4.166_664_6e-2]
 /// `(sin x, cos x)` for `|x| ≤ π/4`.
 #[inline(always)]
 pub fn sin_cos_quarter<F: Real>(x: F) -> (F, F) {
-    let c = |v: f32| x.splat_as(v);
     let z = x * x;
-    let sin = ((c(SIN_POLY[0]) * z + c(SIN_POLY[1])) * z + c(SIN_POLY[2])) * z * x + x;
-    let cos =
-        ((c(COS_POLY[0]) * z + c(COS_POLY[1])) * z + c(COS_POLY[2])) * z * z - c(0.5) * z + c(1.0);
+    let sin = ((x.splat_as(SIN_POLY[0]) * z + x.splat_as(SIN_POLY[1])) * z
+        + x.splat_as(SIN_POLY[2]))
+        * z
+        * x
+        + x;
+    let cos = ((x.splat_as(COS_POLY[0]) * z + x.splat_as(COS_POLY[1])) * z
+        + x.splat_as(COS_POLY[2]))
+        * z
+        * z
+        - x.splat_as(0.5) * z
+        + x.splat_as(1.0);
     (sin, cos)
 }
 
@@ -31,12 +38,11 @@ pub fn round<F: Real>(x: F) -> F {
 /// (`u` needs no π), then the quarter polynomials.
 #[inline(always)]
 pub fn sin_cos_turns<F: Real>(u: F) -> (F, F) {
-    let c = |v: f32| u.splat_as(v);
-    let t = u * c(4.0);
+    let t = u * u.splat_as(4.0);
     let k = round(t);
-    let (s, co) = sin_cos_quarter((t - k) * c(std::f32::consts::FRAC_PI_2));
+    let (s, co) = sin_cos_quarter((t - k) * u.splat_as(std::f32::consts::FRAC_PI_2));
     // Quarter turns k mod 4: (sin, cos) rotated by k·90°.
-    let q = (k + c(12_582_912.0)).to_bits();
+    let q = (k + u.splat_as(12_582_912.0)).to_bits();
     let one = q.splat_as(1);
     let odd = (q & one).eq(one);
     let two = q.splat_as(2);
@@ -48,23 +54,23 @@ pub fn sin_cos_turns<F: Real>(u: F) -> (F, F) {
 /// Natural logarithm of `x > 0` (Cephes `logf`): NaN below 0, `−∞` at 0, `x` for `+∞`.
 #[inline(always)]
 pub fn ln<F: Real>(x: F) -> F {
-    let c = |v: f32| x.splat_as(v);
     let bits = x.to_bits();
     // x = m·2^e with m in [1, 2) (normal numbers; subnormals are scaled first).
-    let tiny = x.lt(c(f32::MIN_POSITIVE));
-    let xs = F::select(tiny, x * c(8_388_608.0), x); // 2²³
+    let tiny = x.lt(x.splat_as(f32::MIN_POSITIVE));
+    let xs = F::select(tiny, x * x.splat_as(8_388_608.0), x); // 2²³
     let bits = F::U::select(tiny, xs.to_bits(), bits);
     let exp_bits = bits.shr::<23>() & bits.splat_as(0xff);
     let mant = (bits & bits.splat_as(0x007f_ffff)) | bits.splat_as(0x3f80_0000);
     let mut m = mant.as_f32_bits();
-    let mut e = exp_bits.to_f32() - c(127.0) - F::select(tiny, c(23.0), c(0.0));
+    let mut e =
+        exp_bits.to_f32() - x.splat_as(127.0) - F::select(tiny, x.splat_as(23.0), x.splat_as(0.0));
     // Centre the mantissa on 1: m in [√½, √2).
-    let big = m.gt(c(std::f32::consts::SQRT_2));
-    m = F::select(big, m * c(0.5), m);
-    e = F::select(big, e + c(1.0), e);
-    let f = m - c(1.0);
+    let big = m.gt(x.splat_as(std::f32::consts::SQRT_2));
+    m = F::select(big, m * x.splat_as(0.5), m);
+    e = F::select(big, e + x.splat_as(1.0), e);
+    let f = m - x.splat_as(1.0);
     let z = f * f;
-    let mut y = c(7.037_683_6e-2);
+    let mut y = x.splat_as(7.037_683_6e-2);
     for k in [
         -1.151_461e-1,
         1.167_699_9e-1,
@@ -75,27 +81,26 @@ pub fn ln<F: Real>(x: F) -> F {
         -2.499_999_4e-1,
         3.333_333e-1,
     ] {
-        y = y * f + c(k);
+        y = y * f + x.splat_as(k);
     }
     y = y * f * z;
-    y = y - c(0.5) * z;
-    let r = f + y + e * c(std::f32::consts::LN_2);
-    let zero = c(0.0);
-    let r = F::select(x.eq(zero), c(f32::NEG_INFINITY), r);
-    let r = F::select(x.lt(zero) | !x.eq(x), c(f32::NAN), r);
-    F::select(x.eq(c(f32::INFINITY)), x, r)
+    y = y - x.splat_as(0.5) * z;
+    let r = f + y + e * x.splat_as(std::f32::consts::LN_2);
+    let zero = x.splat_as(0.0);
+    let r = F::select(x.eq(zero), x.splat_as(f32::NEG_INFINITY), r);
+    let r = F::select(x.lt(zero) | !x.eq(x), x.splat_as(f32::NAN), r);
+    F::select(x.eq(x.splat_as(f32::INFINITY)), x, r)
 }
 
 /// `eˣ` (Cephes `expf`): 0 below about −103, `+∞` above about 88.7, NaN for NaN.
 #[inline(always)]
 pub fn exp<F: Real>(x: F) -> F {
-    let c = |v: f32| x.splat_as(v);
-    let xc = x.max(c(-103.0)).min(c(88.72));
-    let k = round(xc * c(std::f32::consts::LOG2_E));
+    let xc = x.max(x.splat_as(-103.0)).min(x.splat_as(88.72));
+    let k = round(xc * x.splat_as(std::f32::consts::LOG2_E));
     // x − k·ln 2 in two parts, exact for |k| < 2⁸.
-    let r = xc - k * c(0.693_359_4) + k * c(2.121_944_4e-4);
+    let r = xc - k * x.splat_as(0.693_359_4) + k * x.splat_as(2.121_944_4e-4);
     let z = r * r;
-    let mut p = c(1.987_569_1e-4);
+    let mut p = x.splat_as(1.987_569_1e-4);
     for v in [
         1.398_199_9e-3,
         8.333_452e-3,
@@ -103,21 +108,24 @@ pub fn exp<F: Real>(x: F) -> F {
         1.666_666_5e-1,
         5e-1,
     ] {
-        p = p * r + c(v);
+        p = p * r + x.splat_as(v);
     }
-    let y = p * z + r + c(1.0);
+    let y = p * z + r + x.splat_as(1.0);
     // y·2^k, as two halves so that 2^k stays a normal number down to k = −149. For an
     // integer j, the low byte of the bits of `(j + 127) + 1.5·2²³` is j's biased exponent.
-    let k1 = round(k * c(0.5));
+    let k1 = round(k * x.splat_as(0.5));
     let k2 = k - k1;
-    let pow = |j: F| {
-        let bits = (j + c(127.0 + 12_582_912.0)).to_bits();
-        (bits & bits.splat_as(0xff)).shl::<23>().as_f32_bits()
-    };
-    let v = y * pow(k1) * pow(k2);
-    let v = F::select(x.gt(c(88.72)), c(f32::INFINITY), v);
-    let v = F::select(x.lt(c(-103.0)), c(0.0), v);
+    let v = y * pow2(k1) * pow2(k2);
+    let v = F::select(x.gt(x.splat_as(88.72)), x.splat_as(f32::INFINITY), v);
+    let v = F::select(x.lt(x.splat_as(-103.0)), x.splat_as(0.0), v);
     F::select(x.eq(x), v, x)
+}
+
+/// `2^j` for an integer `j` in `[−126, 127]`.
+#[inline(always)]
+fn pow2<F: Real>(j: F) -> F {
+    let bits = (j + j.splat_as(127.0 + 12_582_912.0)).to_bits();
+    (bits & bits.splat_as(0xff)).shl::<23>().as_f32_bits()
 }
 
 #[cfg(test)]

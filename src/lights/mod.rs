@@ -141,7 +141,8 @@ impl Light {
             } => directional::sample_incident(l, *direction, *irradiance),
             Light::Ambient { radiance } => ambient::sample_incident(l, *radiance, u),
             Light::Environment(env) => {
-                Incident::per_lane(u.0, |i| env.sample_li(Vec2::new(u.0.lane(i), u.1.lane(i))))
+                let (u0, u1) = (u.0.to_array(), u.1.to_array());
+                Incident::per_lane(u.0, |i| env.sample_li(Vec2::new(u0[i], u1[i])))
             }
         }
     }
@@ -153,7 +154,12 @@ impl Light {
         match self {
             Light::Area(a) => a.pdf_incident(l, p, wi),
             Light::Ambient { .. } => ambient::pdf_incident(wi),
-            Light::Environment(env) => per_lane(wi.x, |i| env.pdf_li(wi.lane(i))),
+            Light::Environment(env) => {
+                let wi_l = wi.to_arrays();
+                per_lane(wi.x, |i| {
+                    env.pdf_li(Vec3::new(wi_l[0][i], wi_l[1][i], wi_l[2][i]))
+                })
+            }
             Light::Point { .. } | Light::Spot(_) | Light::Directional { .. } => l.f(0.0),
         }
     }
@@ -167,7 +173,10 @@ impl Light {
             Light::Ambient { radiance } => {
                 V3::select(w.y.gt(l.f(0.0)), V3::splat(l, *radiance), zero)
             }
-            Light::Environment(env) => per_lane_v3(w.x, |i| env.le(w.lane(i))),
+            Light::Environment(env) => {
+                let w_l = w.to_arrays();
+                per_lane_v3(w.x, |i| env.le(Vec3::new(w_l[0][i], w_l[1][i], w_l[2][i])))
+            }
             Light::Area(_) | Light::Point { .. } | Light::Spot(_) | Light::Directional { .. } => {
                 zero
             }

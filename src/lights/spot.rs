@@ -67,13 +67,16 @@ impl SpotLight {
     /// [`falloff`](Self::falloff) per lane (`cos^e` as `exp(e·ln cos)`).
     #[inline(always)]
     pub fn falloff_l<F: Real>(&self, cos_theta: F) -> F {
-        let c = |v: f32| cos_theta.splat_as(v);
         let power = if self.exponent == 0.0 {
-            c(1.0)
+            cos_theta.splat_as(1.0)
         } else {
-            exp(c(self.exponent) * ln(cos_theta.max(c(0.0))))
+            exp(cos_theta.splat_as(self.exponent) * ln(cos_theta.max(cos_theta.splat_as(0.0))))
         };
-        F::select(cos_theta.lt(c(self.cos_cutoff)), c(0.0), power)
+        F::select(
+            cos_theta.lt(cos_theta.splat_as(self.cos_cutoff)),
+            cos_theta.splat_as(0.0),
+            power,
+        )
     }
 
     /// The lowest `cos θ` at which light leaves: the cone's edge, or the axis's

@@ -104,12 +104,11 @@ impl<F: Real> Scatter<F> for Conductor<F> {
 
     #[inline(always)]
     fn sample(&self, wo: V3<F>, _u_lobe: F, u: (F, F)) -> BsdfSample<F> {
-        let c = |v: f32| wo.z.splat_as(v);
-        let flip = wo.z.lt(c(0.0));
+        let flip = wo.z.lt(wo.z.splat_as(0.0));
         let wo_up = mirror_z(wo, flip);
         let h = beckmann_normal(u, self.alpha);
         let wo_dot_h = wo_up.dot(h);
-        let wi_up = (h * (c(2.0) * wo_dot_h) - wo_up).normalize();
+        let wi_up = (h * (wo.z.splat_as(2.0) * wo_dot_h) - wo_up).normalize();
         // Reflected below the surface: that mass is lost (pdf() is 0 there).
         let wi = mirror_z(wi_up, flip);
         let pdf = self.pdf(wo, wi);
@@ -118,10 +117,10 @@ impl<F: Real> Scatter<F> for Conductor<F> {
             wi,
             weight,
             pdf,
-            valid: !wo.z.eq(c(0.0))
-                & wo_dot_h.gt(c(0.0))
-                & wi_up.z.gt(c(0.0))
-                & pdf.gt(c(0.0))
+            valid: !wo.z.eq(wo.z.splat_as(0.0))
+                & wo_dot_h.gt(wo.z.splat_as(0.0))
+                & wi_up.z.gt(wo.z.splat_as(0.0))
+                & pdf.gt(wo.z.splat_as(0.0))
                 & pdf.is_finite()
                 & weight.is_finite(),
         }
@@ -132,16 +131,17 @@ impl<F: Real> Conductor<F> {
     /// Smith masking of one direction; 0 when `w` sees the back of the microfacet.
     #[inline(always)]
     fn g1(&self, w: V3<F>, h: V3<F>) -> F {
-        let c = |v: f32| w.z.splat_as(v);
-        let lambda = per_lane(w.z, |i| beckmann_lambda(w.z.lane(i), self.alpha.lane(i)));
-        let g = c(1.0) / (c(1.0) + lambda);
-        F::select((w.dot(h) * w.z).le(c(0.0)), c(0.0), g)
+        let (cos, alpha) = (w.z.to_array(), self.alpha.to_array());
+        let lambda = per_lane(w.z, |i| beckmann_lambda(cos[i], alpha[i]));
+        let g = w.z.splat_as(1.0) / (w.z.splat_as(1.0) + lambda);
+        F::select((w.dot(h) * w.z).le(w.z.splat_as(0.0)), w.z.splat_as(0.0), g)
     }
 
     /// Each lane's conductor reflectance at `|cos θ|`.
     #[inline(always)]
     fn fresnel(&self, cos_theta: F) -> V3<F> {
-        per_lane_v3(cos_theta, |i| self.ior[i].reflectance(cos_theta.lane(i)))
+        let cos = cos_theta.to_array();
+        per_lane_v3(cos_theta, |i| self.ior[i].reflectance(cos[i]))
     }
 }
 
@@ -166,23 +166,23 @@ pub fn beckmann_lambda(cos_theta: f32, alpha: f32) -> f32 {
 /// `D(h) = exp(−tan²θh/α²) / (π·α²·cos⁴θh)`, 0 below the surface.
 #[inline(always)]
 pub fn beckmann_d<F: Real>(h: V3<F>, alpha: F) -> F {
-    let c = |v: f32| alpha.splat_as(v);
     let cos2 = h.z * h.z;
-    let tan2 = (c(1.0) - cos2).max(c(0.0)) / cos2;
+    let tan2 = (alpha.splat_as(1.0) - cos2).max(alpha.splat_as(0.0)) / cos2;
     let alpha2 = alpha * alpha;
-    let d = exp(-tan2 / alpha2) / (c(PI) * alpha2 * cos2 * cos2);
-    let ok = h.z.gt(c(0.0)) & cos2.gt(c(0.0)) & d.is_finite();
-    F::select(ok, d, c(0.0))
+    let d = exp(-tan2 / alpha2) / (alpha.splat_as(PI) * alpha2 * cos2 * cos2);
+    let ok = h.z.gt(alpha.splat_as(0.0)) & cos2.gt(alpha.splat_as(0.0)) & d.is_finite();
+    F::select(ok, d, alpha.splat_as(0.0))
 }
 
 /// Microfacet normal drawn with density `D(h)·cos θh` (projected-area normalised,
 /// so it integrates to 1): `tan²θ = −α²·ln(1−u)`.
 #[inline(always)]
 pub fn beckmann_normal<F: Real>(u: (F, F), alpha: F) -> V3<F> {
-    let c = |v: f32| alpha.splat_as(v);
-    let tan2 = -(alpha * alpha) * ln(c(1.0) - u.0);
-    let cos_theta = c(1.0) / (c(1.0) + tan2).sqrt();
-    let sin_theta = (c(1.0) - cos_theta * cos_theta).max(c(0.0)).sqrt();
+    let tan2 = -(alpha * alpha) * ln(alpha.splat_as(1.0) - u.0);
+    let cos_theta = alpha.splat_as(1.0) / (alpha.splat_as(1.0) + tan2).sqrt();
+    let sin_theta = (alpha.splat_as(1.0) - cos_theta * cos_theta)
+        .max(alpha.splat_as(0.0))
+        .sqrt();
     let (sin_phi, cos_phi) = sin_cos_turns(u.1);
     V3::new(sin_theta * cos_phi, sin_theta * sin_phi, cos_theta)
 }

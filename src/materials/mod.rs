@@ -15,7 +15,7 @@ pub mod lambertian;
 pub mod microfacet;
 pub mod specular;
 
-use crate::lanes::{each_lane, LaneBits, LaneMask, Lanes, Real, LANES, V3};
+use crate::lanes::{LaneBits, LaneMask, Lanes, Real, LANES, V3};
 use crate::Color;
 use glam::{Vec2, Vec3};
 pub use lambertian::Lambertian;
@@ -220,13 +220,19 @@ macro_rules! bsdfs {
             pub fn gather(l: L, lanes: LaneBits, bsdf: impl Fn(usize) -> Bsdf) -> Self {
                 let mut of_kind = [0 as LaneBits; KINDS];
                 let mut first = [usize::MAX; KINDS];
-                for i in each_lane(lanes) {
-                    let k = bsdf(i).kind() as usize;
+                let all = <L::F as Real>::array(|i| {
+                    if lanes >> i & 1 == 0 {
+                        return None;
+                    }
+                    let b = bsdf(i);
+                    let k = b.kind() as usize;
                     of_kind[k] |= 1 << i;
                     if first[k] == usize::MAX {
                         first[k] = i;
                     }
-                }
+                    Some(b)
+                });
+                let bsdf = |i: usize| all[i].expect("a lane with a BSDF");
                 let (mut delta, mut scattering, mut glossy) = (0, 0, 0);
                 $(#[allow(non_snake_case)] let $kind = {
                     let k = Kind::$kind as usize;

@@ -105,20 +105,20 @@ impl<F: Real> Scatter<F> for Glass<F> {
     /// reflection is the only lobe.
     #[inline(always)]
     fn sample(&self, wo: V3<F>, u_lobe: F, _u: (F, F)) -> BsdfSample<F> {
-        let c = |v: f32| wo.z.splat_as(v);
         let (eta_i, eta_t) = indices(wo, self.ior);
         let f = fresnel::dielectric(wo.z.abs(), eta_i, eta_t);
         let (wt, refracts) = refract(wo, eta_i, eta_t);
-        let tir = !(f.lt(c(1.0)) & refracts);
-        let p_reflect_unnorm = f * luminance_l(self.reflectance).max(c(0.0));
-        let p_refract_unnorm = (c(1.0) - f) * luminance_l(self.transmittance).max(c(0.0));
+        let tir = !(f.lt(wo.z.splat_as(1.0)) & refracts);
+        let p_reflect_unnorm = f * luminance_l(self.reflectance).max(wo.z.splat_as(0.0));
+        let p_refract_unnorm =
+            (wo.z.splat_as(1.0) - f) * luminance_l(self.transmittance).max(wo.z.splat_as(0.0));
         let total = p_reflect_unnorm + p_refract_unnorm;
         let p_reflect = p_reflect_unnorm / total;
         let reflects = tir | u_lobe.lt(p_reflect);
-        let p_refract = c(1.0) - p_reflect;
+        let p_refract = wo.z.splat_as(1.0) - p_reflect;
         let scale = (eta_i / eta_t) * (eta_i / eta_t);
         let w_reflect = self.reflectance * (f / p_reflect);
-        let w_refract = self.transmittance * ((c(1.0) - f) * scale / p_refract);
+        let w_refract = self.transmittance * ((wo.z.splat_as(1.0) - f) * scale / p_refract);
         BsdfSample {
             wi: V3::select(reflects, reflect(wo), wt),
             weight: V3::select(
@@ -126,8 +126,12 @@ impl<F: Real> Scatter<F> for Glass<F> {
                 self.reflectance,
                 V3::select(reflects, w_reflect, w_refract),
             ),
-            pdf: F::select(tir, c(1.0), F::select(reflects, p_reflect, p_refract)),
-            valid: valid_ior(self.ior) & wo.is_finite() & (tir | total.gt(c(0.0))),
+            pdf: F::select(
+                tir,
+                wo.z.splat_as(1.0),
+                F::select(reflects, p_reflect, p_refract),
+            ),
+            valid: valid_ior(self.ior) & wo.is_finite() & (tir | total.gt(wo.z.splat_as(0.0))),
         }
     }
 

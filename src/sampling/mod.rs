@@ -73,15 +73,16 @@ impl<L: Lanes> SampleStream<L> {
     /// The point of dimension pair `pair` (per lane).
     #[inline(always)]
     pub fn get_2d(&self, pair: L::U) -> (L::F, L::F) {
-        let c = |v: u32| pair.splat_as(v);
         let pair_seed = hash32(
-            self.key
-                .xor(hash32(pair.wrapping_mul(c(0x9e37_79b9)).wrapping_add(c(1)))),
+            self.key.xor(hash32(
+                pair.wrapping_mul(pair.splat_as(0x9e37_79b9))
+                    .wrapping_add(pair.splat_as(1)),
+            )),
         );
         match self.kind {
             SamplerKind::Sobol => sobol_2d(self.index, pair_seed),
             SamplerKind::Independent => independent_2d(hash32(
-                pair_seed.xor(self.index.wrapping_mul(c(0x85eb_ca6b))),
+                pair_seed.xor(self.index.wrapping_mul(pair.splat_as(0x85eb_ca6b))),
             )),
         }
     }

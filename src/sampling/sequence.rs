@@ -26,12 +26,11 @@ pub fn hash32<U: UInt>(x: U) -> U {
 /// value's bits reversed, it is an Owen scramble of the value.
 #[inline(always)]
 fn laine_karras<U: UInt>(x: U, seed: U) -> U {
-    let c = |v: u32| x.splat_as(v);
-    let v = x.xor(x.wrapping_mul(c(0x3d20_adea)));
+    let v = x.xor(x.wrapping_mul(x.splat_as(0x3d20_adea)));
     let v = v.wrapping_add(seed);
-    let v = v.wrapping_mul(seed.shr::<16>() | c(1));
-    let v = v.xor(v.wrapping_mul(c(0x0552_6c56)));
-    v.xor(v.wrapping_mul(c(0x53a2_2864)))
+    let v = v.wrapping_mul(seed.shr::<16>() | x.splat_as(1));
+    let v = v.xor(v.wrapping_mul(x.splat_as(0x0552_6c56)));
+    v.xor(v.wrapping_mul(x.splat_as(0x53a2_2864)))
 }
 
 /// The Owen scramble of the value whose bits reversed are `reversed`.
@@ -45,12 +44,11 @@ pub fn owen_scrambled<U: UInt>(reversed: U, seed: U) -> U {
 /// `k ⊇ j` (Lucas), a superset sum done one bit of `j` at a time.
 #[inline(always)]
 pub fn sobol_pascal<U: UInt>(i: U) -> U {
-    let c = |v: u32| i.splat_as(v);
-    let y = i.xor(i.shr::<1>() & c(0x5555_5555));
-    let y = y.xor(y.shr::<2>() & c(0x3333_3333));
-    let y = y.xor(y.shr::<4>() & c(0x0f0f_0f0f));
-    let y = y.xor(y.shr::<8>() & c(0x00ff_00ff));
-    y.xor(y.shr::<16>() & c(0x0000_ffff))
+    let y = i.xor(i.shr::<1>() & i.splat_as(0x5555_5555));
+    let y = y.xor(y.shr::<2>() & i.splat_as(0x3333_3333));
+    let y = y.xor(y.shr::<4>() & i.splat_as(0x0f0f_0f0f));
+    let y = y.xor(y.shr::<8>() & i.splat_as(0x00ff_00ff));
+    y.xor(y.shr::<16>() & i.splat_as(0x0000_ffff))
 }
 
 /// The top 24 bits as a float in `[0, 1)`.
@@ -64,12 +62,14 @@ pub fn to_unit<U: UInt>(bits: U) -> U::F {
 /// the index shuffled within its aligned blocks, each Owen-scrambled.
 #[inline(always)]
 pub fn sobol_2d<U: UInt>(index: U, seed: U) -> (U::F, U::F) {
-    let c = |v: u32| index.splat_as(v);
     // The nested uniform scramble of the index: `owen_scrambled` of its reversal.
     let j = owen_scrambled(index.reverse_bits(), seed);
     // Dimension 0 (van der Corput) at j, bits reversed, is j itself.
-    let x = owen_scrambled(j, hash32(seed.xor(c(0xa511_e9b3))));
-    let y = owen_scrambled(sobol_pascal(j), hash32(seed.xor(c(0x63d8_3595))));
+    let x = owen_scrambled(j, hash32(seed.xor(index.splat_as(0xa511_e9b3))));
+    let y = owen_scrambled(
+        sobol_pascal(j),
+        hash32(seed.xor(index.splat_as(0x63d8_3595))),
+    );
     (to_unit(x), to_unit(y))
 }
 

@@ -12,16 +12,21 @@ use std::f32::consts::{FRAC_1_PI, FRAC_PI_4};
 /// no range reduction.
 #[inline(always)]
 pub fn concentric_disk_l<F: Real>(u1: F, u2: F) -> (F, F) {
-    let c = |v: f32| u1.splat_as(v);
-    let (ox, oy) = (c(2.0) * u1 - c(1.0), c(2.0) * u2 - c(1.0));
-    let centre = ox.eq(c(0.0)) & oy.eq(c(0.0));
+    let (ox, oy) = (
+        u1.splat_as(2.0) * u1 - u1.splat_as(1.0),
+        u1.splat_as(2.0) * u2 - u1.splat_as(1.0),
+    );
+    let centre = ox.eq(u1.splat_as(0.0)) & oy.eq(u1.splat_as(0.0));
     let x_major = ox.abs().gt(oy.abs());
     let r = F::select(x_major, ox, oy);
     let ratio = F::select(x_major, oy / ox, ox / oy);
-    let (sin, cos) = sin_cos_quarter(c(FRAC_PI_4) * ratio);
+    let (sin, cos) = sin_cos_quarter(u1.splat_as(FRAC_PI_4) * ratio);
     let x = F::select(x_major, r * cos, r * sin);
     let y = F::select(x_major, r * sin, r * cos);
-    (F::select(centre, c(0.0), x), F::select(centre, c(0.0), y))
+    (
+        F::select(centre, u1.splat_as(0.0), x),
+        F::select(centre, u1.splat_as(0.0), y),
+    )
 }
 
 /// Cosine-weighted direction on the hemisphere `z ≥ 0` (Malley's method).

@@ -244,20 +244,31 @@ fn into_triangles<L: Lanes>(
     let area2 = (p1 - p0).cross(p2 - p0).length();
     let margin = (p.abs() * l.f(4.0 * gamma(1))).length();
     let b0 = l.f(1.0) - b1 - b2;
-    let near_edge = |bk: L::F, edge: V3<L::F>| (bk * area2).le(margin * edge.length());
-    let near = near_edge(b0, p2 - p1) | near_edge(b1, p2 - p0) | near_edge(b2, p1 - p0);
+    let near = near_edge(b0, p2 - p1, area2, margin)
+        | near_edge(b1, p2 - p0, area2, margin)
+        | near_edge(b2, p1 - p0, area2, margin);
     let moved = near.bits() & lanes;
     if moved == 0 {
         return p;
     }
     let mut out = p.to_arrays();
+    let (b1, b2) = (b1.to_array(), b2.to_array());
+    let [p0, p1, p2, a, b] = [p0, p1, p2, a, b].map(V3::to_arrays);
+    let at = |v: &[[f32; LANES]; 3], i: usize| glam::Vec3::new(v[0][i], v[1][i], v[2][i]);
     for i in each_lane(moved) {
-        let bary = [1.0 - b1.lane(i) - b2.lane(i), b1.lane(i), b2.lane(i)];
-        let corners = [p0.lane(i), p1.lane(i), p2.lane(i)];
-        let q = into_triangle(p.lane(i), a.lane(i), b.lane(i), corners, bary);
+        let bary = [1.0 - b1[i] - b2[i], b1[i], b2[i]];
+        let corners = [at(&p0, i), at(&p1, i), at(&p2, i)];
+        let q = into_triangle(at(&out, i), at(&a, i), at(&b, i), corners, bary);
         (out[0][i], out[1][i], out[2][i]) = q.into();
     }
     V3::from_arrays(l, &out)
+}
+
+/// Whether the point at barycentric `bk` is within `margin` of the edge `edge`
+/// opposite corner k (`area2`: twice the triangle's area).
+#[inline(always)]
+fn near_edge<F: Real>(bk: F, edge: V3<F>, area2: F, margin: F) -> F::M {
+    (bk * area2).le(margin * edge.length())
 }
 
 impl<L: Lanes> Hits<L> {
@@ -318,11 +329,13 @@ impl<L: Lanes> Hits<L> {
             return offset;
         }
         let mut out = offset.to_arrays();
+        let (p, ng, w) = (self.p.to_arrays(), self.ng.to_arrays(), w.to_arrays());
+        let (c, r) = (self.centre.to_arrays(), self.radius.to_array());
+        let at = |v: &[[f32; LANES]; 3], i: usize| glam::Vec3::new(v[0][i], v[1][i], v[2][i]);
         for i in each_lane(spheres) {
-            let (p, ng) = (self.p.lane(i), self.ng.lane(i));
-            let outward = w.lane(i).dot(ng) > 0.0;
-            let (c, r) = (self.centre.lane(i), self.radius.lane(i));
-            if let Some(o) = sphere_spawn_origin(p, ng, outward, c, r) {
+            let (p, ng) = (at(&p, i), at(&ng, i));
+            let outward = at(&w, i).dot(ng) > 0.0;
+            if let Some(o) = sphere_spawn_origin(p, ng, outward, at(&c, i), r[i]) {
                 (out[0][i], out[1][i], out[2][i]) = o.into();
             }
         }

@@ -409,7 +409,7 @@ impl Scene {
 
     /// Whether any material has a texture.
     pub fn has_textures(&self) -> bool {
-        self.material_textures.iter().any(Option::is_some)
+        !self.textures.is_empty() && self.material_textures.iter().any(Option::is_some)
     }
 
     pub fn num_prims(&self) -> usize {
