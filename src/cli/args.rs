@@ -3,6 +3,7 @@
 use clap::builder::{PossibleValue, PossibleValuesParser, TypedValueParser};
 use clap::{Args, Parser, Subcommand, ValueEnum};
 use ember::accel::{Backend, BvhBuilder, EmbreeQuality};
+use ember::export::MitsubaSampler;
 use ember::integrators::{DirectStrategy, Estimator};
 use ember::names::Named;
 use ember::render::{Engine, Shading};
@@ -137,6 +138,10 @@ pub struct ExportArgs {
     /// Environment map replacing the scene's ambient light, as the renderer's -e (exported in Mitsuba's orientation).
     #[arg(short = 'e', value_name = "FILE.exr")]
     pub env_map: Option<PathBuf>,
+    /// Mitsuba's sampler. Default multijitter: the lowest error of Mitsuba's samplers in ember's measurements, and it
+    /// takes nearly any count. A count the sampler does not take is rounded up as Mitsuba would, with a warning.
+    #[arg(long, value_parser = named::<MitsubaSampler>(), default_value_t = MitsubaSampler::default())]
+    pub sampler: MitsubaSampler,
 }
 
 #[derive(Clone, Copy, Debug, ValueEnum)]
@@ -203,8 +208,9 @@ pub enum BenchCommand {
         #[arg(long)]
         out: Option<PathBuf>,
     },
-    /// Error against render time for each method (direct: hemisphere / light / MIS; GI: roulette, -l, adaptive, backends).
-    /// Writes <out>/<scene>_m<M>.csv and error-vs-time charts (PNG and SVG), prints the time each method needs to reach an error.
+    /// Error against render time for each method (direct: hemisphere / light / MIS; GI: roulette, -l, adaptive, backends;
+    /// peers: Mitsuba 3 with each sampler, Blender Cycles). Writes <out>/<scene>_m<M>.csv and error-vs-time charts (PNG and
+    /// SVG); prints each method's RMSE at the render times and spp of ember's default at 16, 64 and 256 spp.
     #[command(allow_negative_numbers = true)]
     Converge {
         /// The .dae scene.
@@ -230,11 +236,8 @@ pub enum BenchCommand {
         /// spp of ember's own reference.
         #[arg(long, default_value_t = 8192)]
         reference_spp: u32,
-        /// RMSE whose time-to-reach is tabulated (default: the median of the methods' final RMSEs).
-        #[arg(long)]
-        target_rmse: Option<f64>,
         /// Output folder.
-        #[arg(long, default_value = "bench-out")]
+        #[arg(long, default_value = "bench-out/converge")]
         out: PathBuf,
         /// Random seed.
         #[arg(long, default_value_t = 0)]
@@ -245,6 +248,16 @@ pub enum BenchCommand {
         /// Mitsuba variants to run with --mitsuba, comma-separated.
         #[arg(long, value_delimiter = ',', default_value = "llvm_ad_rgb")]
         mitsuba_variants: Vec<String>,
+        /// Mitsuba samplers to run with --mitsuba, comma-separated: each variant with each sampler is one method.
+        /// Each renders the doubling sequence rounded up to the counts it takes (ldsampler: 4, 16, 64, ...).
+        #[arg(long, value_delimiter = ',', value_parser = named::<MitsubaSampler>(),
+              default_value = "independent,stratified,multijitter,ldsampler,orthogonal")]
+        mitsuba_samplers: Vec<MitsubaSampler>,
+        /// Also run Blender Cycles as a method, through this Python (one that imports `bpy`; scripts/cycles-env
+        /// creates one and prints its path). Scenes of Lambertian surfaces and rectangular area lights only; its
+        /// image mean is checked against --reference's manifest.
+        #[arg(long, value_name = "PYTHON")]
+        cycles: Option<PathBuf>,
         /// Worker threads (default: all cores).
         #[arg(short = 't', value_name = "THREADS")]
         threads: Option<usize>,

@@ -76,11 +76,12 @@ fn run_on_pool(which: BenchCommand) -> Result<()> {
             max_spp,
             max_seconds,
             reference_spp,
-            target_rmse,
             out,
             seed,
             mitsuba,
             mitsuba_variants,
+            mitsuba_samplers,
+            cycles,
             ..
         } => {
             check_resolution(resolution[0], resolution[1])?;
@@ -95,13 +96,14 @@ fn run_on_pool(which: BenchCommand) -> Result<()> {
                 max_seconds_per_point: max_seconds,
                 reference_spp,
                 out_dir: out,
-                target_rmse,
                 seed,
                 compare_backends: true,
                 mitsuba: mitsuba.map(|python| bench::converge::MitsubaPeer {
                     python,
                     variants: mitsuba_variants,
+                    samplers: mitsuba_samplers,
                 }),
+                cycles,
             })
         }
         BenchCommand::Render {
