@@ -153,7 +153,7 @@ where
                 .draw()
                 .map_err(|e| anyhow::anyhow!("chart: {e}"))?;
             for (i, s) in series.iter().enumerate() {
-                let color = Palette99::pick(i).to_rgba();
+                let color = series_color(i);
                 let pts: Vec<(f64, f64)> = s
                     .points
                     .iter()
@@ -199,6 +199,18 @@ where
     Ok(())
 }
 
+/// The palette's `i`-th colour, darkened where it is too pale to read on white.
+fn series_color(i: usize) -> RGBAColor {
+    let c = Palette99::pick(i).to_rgba();
+    let luma = 0.299 * f64::from(c.0) + 0.587 * f64::from(c.1) + 0.114 * f64::from(c.2);
+    if luma > 170.0 {
+        let dark = |v: u8| (f64::from(v) * 0.6) as u8;
+        RGBAColor(dark(c.0), dark(c.1), dark(c.2), c.3)
+    } else {
+        c
+    }
+}
+
 /// One row per series, in the chart's colours, from the top of `area`.
 fn draw_legend<DB: DrawingBackend>(
     area: &DrawingArea<DB, plotters::coord::Shift>,
@@ -209,7 +221,7 @@ where
 {
     let font = ("sans-serif", 14).into_font().color(&BLACK);
     for (i, s) in series.iter().enumerate() {
-        let color = Palette99::pick(i).to_rgba();
+        let color = series_color(i);
         let y = 60 + 22 * i as i32;
         area.draw(&PathElement::new(
             vec![(5, y), (30, y)],

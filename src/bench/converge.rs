@@ -109,9 +109,10 @@ const DIRECT_METHODS: &[(&str, Tweak)] = &[
     ("MIS", |s| s.strategy = Some(DirectStrategy::Mis)),
 ];
 
-/// ember's methods beyond `-m 1`. The first is ember's default on diffuse scenes,
-/// the one the tables divide by each peer's figure. A variant (another sampler,
-/// say) is one more row.
+/// The name of ember's default settings, the first method.
+pub const DEFAULT_METHOD: &str = "ember default (auto)";
+
+/// ember's methods beyond `-m 1`. A variant (another sampler, say) is one more row.
 const PATH_METHODS: &[(&str, Tweak)] = &[
     ("light sampling, RR", |s| {
         s.strategy = Some(DirectStrategy::Light)
@@ -131,9 +132,9 @@ const PATH_METHODS: &[(&str, Tweak)] = &[
     }),
 ];
 
-/// The methods compared for depth `m`: the rows of [`DIRECT_METHODS`] or
-/// [`PATH_METHODS`], light tracing where it can converge, adaptive sampling and
-/// (optionally) Embree, the last two with the scene's default strategy.
+/// The methods compared for depth `m`: ember's default, the rows of [`DIRECT_METHODS`]
+/// or [`PATH_METHODS`], light tracing where it can converge, adaptive sampling and
+/// (optionally) Embree, the last two with the default settings otherwise.
 pub fn methods(base: &RenderSettings, scene: &Scene, compare_backends: bool) -> Vec<Method> {
     let native = AccelKind::Native(BvhBuilder::Sah);
     let with = |name: &str, tweak: Tweak, accel: AccelKind| {
@@ -150,10 +151,10 @@ pub fn methods(base: &RenderSettings, scene: &Scene, compare_backends: bool) -> 
     } else {
         PATH_METHODS
     };
-    let mut v: Vec<Method> = table
-        .iter()
-        .map(|&(name, tweak)| with(name, tweak, native))
-        .collect();
+    // First ember's default, whatever `--integrator auto` picks for the scene: the
+    // method the tables divide by each peer's figure.
+    let mut v = vec![with(DEFAULT_METHOD, |_| {}, native)];
+    v.extend(table.iter().map(|&(name, tweak)| with(name, tweak, native)));
     // Light tracing cannot show specular surfaces to the camera: only where it can converge.
     if !scene.materials.iter().any(|mat| mat.is_delta()) {
         let light_tracing: Tweak = |s| s.estimator = Some(Estimator::LightTracing);
@@ -487,7 +488,8 @@ impl ConvergeReport {
             .collect()
     }
 
-    /// ember's default (the first method) at [`TABLE_SPP`]: (spp, its render seconds).
+    /// ember's default (the first method, [`DEFAULT_METHOD`]) at [`TABLE_SPP`]:
+    /// (spp, its render seconds).
     fn default_points(&self) -> Vec<(u32, f64)> {
         let Some(first) = self.points.first() else {
             return Vec::new();
