@@ -432,7 +432,9 @@ def main():
     p.add_argument("--threads", type=int, default=0, help="0: all cores")
     p.add_argument("--pattern", default="AUTOMATIC",
                    help="Cycles sampling pattern: AUTOMATIC, TABULATED_SOBOL or BLUE_NOISE")
-    p.add_argument("--out", required=True, help="the rendered image (OpenEXR)")
+    p.add_argument("--out", help="the rendered image (OpenEXR); required unless --check-only")
+    p.add_argument("--check-only", action="store_true",
+                   help="only translate the scene: exit 0 if it can, 2 naming what it cannot")
     p.add_argument("--mesh-lights", action="store_true",
                    help="rectangular area lights as emissive meshes too (a check of that path)")
     p.add_argument("--reference", help="reference EXR to check the image against")
@@ -444,7 +446,12 @@ def main():
         fail(f"cannot import bpy ({e}); scripts/cycles-env installs it")
     if not os.path.exists(a.scene):
         fail(f"{a.scene}: no such file")
+    if not a.out and not a.check_only:
+        fail("--out is required")
     width, height, spp, max_depth = build(bpy, np, a.scene, a.mesh_lights)
+    if a.check_only:
+        print(json.dumps({"translated": a.scene}), flush=True)
+        return 0
     spp = a.spp or spp
     if spp < 2:
         fail("--spp must be at least 2 (a 1-spp render is subtracted as fixed cost)")

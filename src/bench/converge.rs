@@ -109,6 +109,13 @@ const DIRECT_METHODS: &[(&str, Tweak)] = &[
     ("MIS", |s| s.strategy = Some(DirectStrategy::Mis)),
 ];
 
+/// `--integrator auto`: the estimator and direct-lighting strategy the scene calls
+/// for (`RenderSettings::default()` fixes path tracing with light sampling).
+fn auto(s: &mut RenderSettings) {
+    s.estimator = None;
+    s.strategy = None;
+}
+
 /// The name of ember's default settings, the first method.
 pub const DEFAULT_METHOD: &str = "ember default (auto)";
 
@@ -133,8 +140,9 @@ const PATH_METHODS: &[(&str, Tweak)] = &[
 ];
 
 /// The methods compared for depth `m`: ember's default, the rows of [`DIRECT_METHODS`]
-/// or [`PATH_METHODS`], light tracing where it can converge, adaptive sampling and
-/// (optionally) Embree, the last two with the default settings otherwise.
+/// or [`PATH_METHODS`] (path tracing unless a row says otherwise), light tracing where
+/// it can converge, adaptive sampling and (optionally) Embree, the last two with
+/// `--integrator auto` otherwise.
 pub fn methods(base: &RenderSettings, scene: &Scene, compare_backends: bool) -> Vec<Method> {
     let native = AccelKind::Native(BvhBuilder::Sah);
     let with = |name: &str, tweak: Tweak, accel: AccelKind| {
@@ -153,18 +161,21 @@ pub fn methods(base: &RenderSettings, scene: &Scene, compare_backends: bool) -> 
     };
     // First ember's default, whatever `--integrator auto` picks for the scene: the
     // method the tables divide by each peer's figure.
-    let mut v = vec![with(DEFAULT_METHOD, |_| {}, native)];
+    let mut v = vec![with(DEFAULT_METHOD, auto, native)];
     v.extend(table.iter().map(|&(name, tweak)| with(name, tweak, native)));
     // Light tracing cannot show specular surfaces to the camera: only where it can converge.
     if !scene.materials.iter().any(|mat| mat.is_delta()) {
         let light_tracing: Tweak = |s| s.estimator = Some(Estimator::LightTracing);
         v.push(with("light tracing", light_tracing, native));
     }
-    let adaptive: Tweak = |s| s.adaptive = Some(Adaptive::new(16, 0.05));
+    let adaptive: Tweak = |s| {
+        auto(s);
+        s.adaptive = Some(Adaptive::new(16, 0.05));
+    };
     v.push(with("adaptive (-a 16 0.05)", adaptive, native));
     if compare_backends && cfg!(any(feature = "embree", feature = "embree4")) {
         let embree = AccelKind::embree(EmbreeQuality::Medium);
-        v.push(with("Embree backend", |_| {}, embree));
+        v.push(with("Embree backend", auto, embree));
     }
     v
 }
@@ -184,13 +195,14 @@ pub fn run(opts: &ConvergeOptions, log: &mut dyn FnMut(&str)) -> Result<Converge
         ..Default::default()
     };
     let reference = reference(opts, &scene, &base, log)?;
+    let camera = Camera::new(&scene.camera, &scene.bounds, opts.width, opts.height);
+    let mut peer_notes = Vec::new();
+    let cycles = cycles_peer(opts, &scene, &camera, log, &mut peer_notes)?;
     let mut points = Vec::new();
     for method in methods(&base, &scene, opts.compare_backends) {
         log(&format!("method: {}", method.name));
         points.extend(run_method(&scene, &method, opts, &reference)?);
     }
-    let camera = Camera::new(&scene.camera, &scene.bounds, opts.width, opts.height);
-    let mut peer_notes = Vec::new();
     if let Some(peer) = &opts.mitsuba {
         let dir = opts.out_dir.join("mitsuba");
         for variant in &peer.variants {
@@ -206,9 +218,7 @@ pub fn run(opts: &ConvergeOptions, log: &mut dyn FnMut(&str)) -> Result<Converge
             }
         }
     }
-    if let Some(python) = &opts.cycles {
-        let dir = opts.out_dir.join("cycles");
-        let runner = CyclesRunner::new(python, &dir, opts.reference.as_deref())?;
+    if let Some(runner) = cycles {
         log(&format!("method: {}", runner.name()));
         let render = |spp, seed, log: &mut dyn FnMut(&str)| {
             runner.render(&scene, &camera, opts.max_depth, spp, seed, log)
@@ -232,6 +242,31 @@ pub fn run(opts: &ConvergeOptions, log: &mut dyn FnMut(&str)) -> Result<Converge
         points,
         reference_note: reference.note,
         peer_notes,
+    })
+}
+
+/// Cycles, when asked for and able to translate the scene exactly; otherwise a note
+/// says why it is left out. Checked before the long run.
+fn cycles_peer(
+    opts: &ConvergeOptions,
+    scene: &Scene,
+    camera: &Camera,
+    log: &mut dyn FnMut(&str),
+    notes: &mut Vec<String>,
+) -> Result<Option<CyclesRunner>> {
+    let Some(python) = &opts.cycles else {
+        return Ok(None);
+    };
+    let dir = opts.out_dir.join("cycles");
+    let runner = CyclesRunner::new(python, &dir, opts.reference.as_deref())?;
+    Ok(match runner.check(scene, camera, opts.max_depth) {
+        Ok(()) => Some(runner),
+        Err(e) => {
+            let note = format!("Blender Cycles left out: {e}");
+            log(&note);
+            notes.push(note);
+            None
+        }
     })
 }
 
@@ -646,6 +681,25 @@ mod tests {
             rmse,
             rel_mse: 0.0,
         }
+    }
+
+    /// The first method is what `ember SCENE` renders (`--integrator auto`), not
+    /// `RenderSettings::default()`'s light sampling: on glossy spheres that is MIS.
+    #[test]
+    fn the_first_method_is_embers_default() {
+        let path = format!(
+            "{}/scenes/cs184/sky/CBspheres_microfacet_al_ag.dae",
+            env!("CARGO_MANIFEST_DIR")
+        );
+        let scene = collada::load(Path::new(&path)).unwrap();
+        let base = RenderSettings::default();
+        let all = methods(&base, &scene, false);
+        assert_eq!(all[0].name, DEFAULT_METHOD);
+        let s = &all[0].settings;
+        assert_eq!(s.strategy_for(&scene), DirectStrategy::Mis);
+        assert_eq!(s.estimator_for(&scene), Estimator::auto_for(&scene));
+        let adaptive = all.iter().find(|m| m.settings.adaptive.is_some()).unwrap();
+        assert_eq!(adaptive.settings.strategy_for(&scene), DirectStrategy::Mis);
     }
 
     #[test]

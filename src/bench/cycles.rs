@@ -67,6 +67,23 @@ impl CyclesRunner {
             .collect()
     }
 
+    /// Whether the script can translate `scene` exactly (`Err` says what it cannot),
+    /// checked before a long run so that a scene Cycles cannot render costs nothing.
+    pub fn check(&self, scene: &Scene, camera: &Camera, max_depth: u32) -> Result<()> {
+        let settings = MitsubaSettings::for_ember(1, max_depth, &Roulette::default());
+        let xml = export(scene, camera, &settings, &self.dir, "scene_check_cycles")?;
+        let out = Command::new(&self.python)
+            .arg(&self.script)
+            .arg(&xml)
+            .arg("--check-only")
+            .output()
+            .with_context(|| format!("{}: cannot run", self.python.display()))?;
+        if !out.status.success() {
+            bail!("{}", last_line(&out.stderr));
+        }
+        Ok(())
+    }
+
     /// Exports `scene` as ember renders it and renders it with Cycles at `spp`;
     /// the time is that of `spp` samples without the render call's fixed cost.
     /// Fails when the script cannot translate the scene, or when its image mean
