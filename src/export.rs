@@ -14,6 +14,7 @@ use crate::image_io::{write_image, ImageIoError};
 use crate::integrators::Roulette;
 use crate::lights::Light;
 use crate::materials::{Bsdf, Material};
+use crate::names::{display_from_table, Named};
 use crate::scene::{Scene, NO_LIGHT};
 use crate::Color;
 use glam::Vec3;
@@ -28,19 +29,92 @@ pub struct MitsubaSettings {
     pub spp: u32,
     /// ember's `-m`: bounces. Mitsuba's `max_depth` counts path segments, so it is `m + 1`.
     pub max_depth: u32,
-    /// The bounce from which ember's default roulette runs; Mitsuba's `rr_depth`.
+    /// The bounce from which ember's roulette runs; Mitsuba's `rr_depth` (the same number).
     /// `None` turns roulette off (Mitsuba: `rr_depth` past `max_depth`).
     pub roulette_start: Option<u32>,
+    /// Mitsuba's `<sampler>`; `spp` is rounded to a count it takes.
+    pub sampler: MitsubaSampler,
+}
+
+/// Mitsuba 3's samplers (`ember export --sampler`). Some take only certain counts and
+/// round others up ([`MitsubaSampler::sample_count`]).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum MitsubaSampler {
+    Independent,
+    Stratified,
+    /// The default: the lowest error of Mitsuba's samplers in issue 24's measurements
+    /// (CBbunny, CBspheres_lambertian, CBspheres), and it takes nearly every count.
+    #[default]
+    Multijitter,
+    Ldsampler,
+    Orthogonal,
+}
+
+impl Named for MitsubaSampler {
+    const WHAT: &'static str = "Mitsuba sampler";
+    const TABLE: &'static [(Self, &'static str, &'static str)] = &[
+        (
+            Self::Independent,
+            "independent",
+            "Independent uniform numbers; any count",
+        ),
+        (
+            Self::Stratified,
+            "stratified",
+            "Jittered on a k×k grid; squares",
+        ),
+        (
+            Self::Multijitter,
+            "multijitter",
+            "Correlated multi-jittered (Kensler); a·b with a = ⌊√n⌋, nearly any count",
+        ),
+        (
+            Self::Ldsampler,
+            "ldsampler",
+            "Scrambled (0, 2)-sequence; squares of powers of two, at least 4",
+        ),
+        (
+            Self::Orthogonal,
+            "orthogonal",
+            "Orthogonal-array (Bush) sampling; squares of primes, at least 4",
+        ),
+    ];
+}
+display_from_table!(MitsubaSampler);
+
+impl MitsubaSampler {
+    /// The count Mitsuba 3.9 renders when asked for `spp` (its `set_sample_count`).
+    pub fn sample_count(self, spp: u32) -> u32 {
+        let spp = spp.max(1);
+        let root_up = |spp: u32| (1..).find(|k: &u32| k * k >= spp).unwrap_or(1);
+        match self {
+            Self::Independent => spp,
+            Self::Stratified => root_up(spp).pow(2),
+            Self::Multijitter => {
+                let b = (spp as f32).sqrt() as u32;
+                spp.div_ceil(b) * b
+            }
+            Self::Ldsampler => root_up(spp).max(2).next_power_of_two().pow(2),
+            Self::Orthogonal => {
+                let prime = |x: u32| (2..=x / 2).all(|d| !x.is_multiple_of(d));
+                (root_up(spp).max(2)..)
+                    .find(|&k| prime(k))
+                    .unwrap_or(2)
+                    .pow(2)
+            }
+        }
+    }
 }
 
 impl MitsubaSettings {
     /// The settings that make Mitsuba render what ember renders with `-s spp -m max_depth`
-    /// and roulette policy `roulette`.
+    /// and roulette policy `roulette`, with the default sampler.
     pub fn for_ember(spp: u32, max_depth: u32, roulette: &Roulette) -> Self {
         MitsubaSettings {
             spp,
             max_depth,
             roulette_start: roulette.start(),
+            sampler: MitsubaSampler::default(),
         }
     }
 }
@@ -85,7 +159,14 @@ pub fn write_mitsuba(
         env!("CARGO_PKG_VERSION")
     );
     xml += &integrator_xml(settings);
-    xml += &sensor_xml(camera, settings.spp, scene);
+    let spp = settings.sampler.sample_count(settings.spp);
+    if spp != settings.spp {
+        summary.warnings.push(format!(
+            "Mitsuba's {} sampler takes no {} spp; exported {spp}",
+            settings.sampler, settings.spp
+        ));
+    }
+    xml += &sensor_xml(camera, settings.sampler.name(), spp, scene);
     let mut texture_files = BTreeMap::new();
     for (g, group) in triangle_groups(scene).into_iter().enumerate() {
         let name = format!("{stem}_mesh{g}.ply");
@@ -143,8 +224,10 @@ pub fn write_mitsuba(
 
 fn integrator_xml(s: &MitsubaSettings) -> String {
     let max_depth = s.max_depth + 1;
-    // Mitsuba's depth of a path vertex is ember's bounce count plus one.
-    let rr_depth = s.roulette_start.map_or(max_depth + 1, |b| b + 1);
+    // ember plays roulette after sampling the BSDF at its `start`-th scattering vertex.
+    // Mitsuba 3.9's path.cpp counts that vertex into `depth` after sampling its BSDF and
+    // then plays when `depth >= rr_depth`: the same vertex when `rr_depth = start`.
+    let rr_depth = s.roulette_start.map_or(max_depth + 1, |b| b);
     format!(
         "  <integrator type=\"path\">\n    <integer name=\"max_depth\" value=\"{max_depth}\"/>\n    \
          <integer name=\"rr_depth\" value=\"{rr_depth}\"/>\n    \
@@ -152,7 +235,7 @@ fn integrator_xml(s: &MitsubaSettings) -> String {
     )
 }
 
-fn sensor_xml(camera: &Camera, spp: u32, scene: &Scene) -> String {
+fn sensor_xml(camera: &Camera, sampler: &str, spp: u32, scene: &Scene) -> String {
     let (hfov, _) = camera.fov_degrees();
     let target = camera.eye + camera.forward;
     // No clipping (spec §4): the near plane far below any scene feature, the far one past it.
@@ -163,7 +246,7 @@ fn sensor_xml(camera: &Camera, spp: u32, scene: &Scene) -> String {
          <string name=\"fov_axis\" value=\"x\"/>\n    \
          <float name=\"near_clip\" value=\"{}\"/>\n    <float name=\"far_clip\" value=\"{}\"/>\n    \
          <transform name=\"to_world\">\n      <lookat origin=\"{}\" target=\"{}\" up=\"{}\"/>\n    </transform>\n    \
-         <sampler type=\"independent\">\n      <integer name=\"sample_count\" value=\"{spp}\"/>\n    </sampler>\n    \
+         <sampler type=\"{sampler}\">\n      <integer name=\"sample_count\" value=\"{spp}\"/>\n    </sampler>\n    \
          <film type=\"hdrfilm\">\n      <integer name=\"width\" value=\"{}\"/>\n      \
          <integer name=\"height\" value=\"{}\"/>\n      <string name=\"pixel_format\" value=\"rgb\"/>\n      \
          <string name=\"component_format\" value=\"float32\"/>\n      <rfilter type=\"box\"/>\n    </film>\n  </sensor>\n",
@@ -539,4 +622,26 @@ fn csv(v: Vec3) -> String {
 
 fn rgb(c: Color) -> String {
     format!("{} {} {}", c.x, c.y, c.z)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::MitsubaSampler as S;
+
+    /// The counts Mitsuba 3.9's `set_sample_count` gives for the converge bench's
+    /// doubling sequence (worked by hand from its sources; tests/export_mitsuba.rs
+    /// asks Mitsuba itself when it is installed).
+    #[test]
+    fn sample_counts_round_as_mitsuba_does() {
+        let asked = [1, 2, 4, 8, 16, 32, 64, 128, 256, 512];
+        let expect = |s: S, want: [u32; 10]| {
+            let got: Vec<u32> = asked.iter().map(|&n| s.sample_count(n)).collect();
+            assert_eq!(got, want, "{s}");
+        };
+        expect(S::Independent, asked);
+        expect(S::Stratified, [1, 4, 4, 9, 16, 36, 64, 144, 256, 529]);
+        expect(S::Multijitter, [1, 2, 4, 8, 16, 35, 64, 132, 256, 528]);
+        expect(S::Ldsampler, [4, 4, 4, 16, 16, 64, 64, 256, 256, 1024]);
+        expect(S::Orthogonal, [4, 4, 4, 9, 25, 49, 121, 169, 289, 529]);
+    }
 }

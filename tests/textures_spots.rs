@@ -8,7 +8,7 @@ mod common;
 use common::render_scene;
 use ember::accel::{AccelKind, BvhBuilder};
 use ember::camera::Camera;
-use ember::export::{write_mitsuba, MitsubaSettings};
+use ember::export::{write_mitsuba, MitsubaSampler, MitsubaSettings};
 use ember::integrators::{DirectStrategy, Estimator, Roulette};
 use ember::render::{Engine, RenderJob, RenderSettings};
 use ember::scene::collada::load;
@@ -224,6 +224,7 @@ fn textures_and_spots_export_to_mitsuba() {
             spp: 4,
             max_depth: 1,
             roulette_start: None,
+            sampler: MitsubaSampler::Independent,
         };
         let summary = write_mitsuba(&scene, &cam, &settings, dir.path(), stem).unwrap();
         let xml = std::fs::read_to_string(&summary.files[0]).unwrap();

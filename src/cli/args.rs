@@ -3,6 +3,7 @@
 use clap::builder::{PossibleValue, PossibleValuesParser, TypedValueParser};
 use clap::{Args, Parser, Subcommand, ValueEnum};
 use ember::accel::{Backend, BvhBuilder, EmbreeQuality};
+use ember::export::MitsubaSampler;
 use ember::integrators::{DirectStrategy, Estimator};
 use ember::names::Named;
 use ember::render::{Engine, Shading};
@@ -169,6 +170,10 @@ pub struct ExportArgs {
     /// Environment map replacing the scene's ambient light, as the renderer's -e (exported in Mitsuba's orientation).
     #[arg(short = 'e', value_name = "FILE.exr")]
     pub env_map: Option<PathBuf>,
+    /// Mitsuba's sampler. Default multijitter: the lowest error of Mitsuba's samplers in ember's measurements, and it
+    /// takes nearly any count. A count the sampler does not take is rounded up as Mitsuba would, with a warning.
+    #[arg(long, value_parser = named::<MitsubaSampler>(), default_value_t = MitsubaSampler::default())]
+    pub sampler: MitsubaSampler,
 }
 
 #[derive(Clone, Copy, Debug, ValueEnum)]
@@ -196,8 +201,9 @@ pub enum BenchCommand {
     /// Error against render time for each method, charted.
     ///
     /// Methods: direct lighting by hemisphere, light or MIS sampling; for global illumination, roulette, -l, adaptive
-    /// sampling and the backends. Writes <out>/<scene>_m<M>.csv and error-vs-time charts (PNG and SVG), prints the time
-    /// each method needs to reach an error.
+    /// sampling and the backends; peers: Mitsuba 3 with each sampler, Blender Cycles. Writes <out>/<scene>_m<M>.csv and
+    /// error-vs-time charts (PNG and SVG); prints each method's RMSE at the render times and spp of ember's default at
+    /// 16, 64 and 256 spp.
     #[command(allow_negative_numbers = true)]
     Converge(BenchConvergeArgs),
     /// Where methods fail: a row per hard case with what each method does there.
@@ -298,11 +304,8 @@ pub struct BenchConvergeArgs {
     /// spp of ember's own reference.
     #[arg(long, default_value_t = 8192)]
     pub reference_spp: u32,
-    /// RMSE whose time-to-reach is tabulated (default: the median of the methods' final RMSEs).
-    #[arg(long)]
-    pub target_rmse: Option<f64>,
     /// Output folder.
-    #[arg(long, default_value = "bench-out")]
+    #[arg(long, default_value = "bench-out/converge")]
     pub out: PathBuf,
     /// Random seed.
     #[arg(long, default_value_t = 0)]
@@ -313,6 +316,16 @@ pub struct BenchConvergeArgs {
     /// Mitsuba variants to run with --mitsuba, comma-separated.
     #[arg(long, value_delimiter = ',', default_value = "llvm_ad_rgb")]
     pub mitsuba_variants: Vec<String>,
+    /// Mitsuba samplers to run with --mitsuba, comma-separated: each variant with each sampler is one method.
+    /// Each renders the doubling sequence rounded up to the counts it takes (ldsampler: 4, 16, 64, ...).
+    #[arg(long, value_delimiter = ',', value_parser = named::<MitsubaSampler>(),
+          default_value = "independent,stratified,multijitter,ldsampler,orthogonal")]
+    pub mitsuba_samplers: Vec<MitsubaSampler>,
+    /// Also run Blender Cycles as a method, through this Python (one that imports `bpy`; scripts/cycles-env
+    /// creates one and prints its path). Scenes of Lambertian surfaces and rectangular area lights only; its
+    /// image mean is checked against --reference's manifest.
+    #[arg(long, value_name = "PYTHON")]
+    pub cycles: Option<PathBuf>,
     /// Worker threads (default: all cores).
     #[arg(short = 't', value_name = "THREADS", value_parser = at_least_one::<usize>)]
     pub threads: Option<usize>,

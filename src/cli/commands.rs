@@ -695,11 +695,14 @@ pub(super) fn export(a: ExportArgs) -> Result<()> {
         .file_stem()
         .map_or("scene".into(), |s| s.to_string_lossy().into_owned());
     let ExportFormat::Mitsuba = a.format;
-    let settings = ember::export::MitsubaSettings::for_ember(
-        a.spp,
-        a.max_depth,
-        &ember::integrators::Roulette::default(),
-    );
+    let settings = ember::export::MitsubaSettings {
+        sampler: a.sampler,
+        ..ember::export::MitsubaSettings::for_ember(
+            a.spp,
+            a.max_depth,
+            &ember::integrators::Roulette::default(),
+        )
+    };
     let summary = ember::export::write_mitsuba(&scene, &camera, &settings, &a.out, &stem)?;
     for w in &summary.warnings {
         ember::errln!("ember: warning: {w}");

@@ -384,13 +384,14 @@ pub(super) fn bench_converge_options(
         max_seconds_per_point: a.max_seconds,
         reference_spp: a.reference_spp,
         out_dir: a.out,
-        target_rmse: a.target_rmse,
         seed: a.seed,
         compare_backends: true,
         mitsuba: a.mitsuba.map(|python| bench::converge::MitsubaPeer {
             python,
             variants: a.mitsuba_variants,
+            samplers: a.mitsuba_samplers,
         }),
+        cycles: a.cycles,
     })
 }
 

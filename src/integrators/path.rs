@@ -50,6 +50,8 @@ pub struct PathIntegrator<'a> {
     unsampled_emitters: bool,
     /// The triangles of area lights' surfaces, and their light.
     light_prims: Vec<(u32, u32)>,
+    /// Per material: whether it scatters light at all.
+    scatters: Vec<bool>,
 }
 
 /// Which dimension pair each number of a path comes from: the pixel position, the
@@ -97,6 +99,7 @@ impl<'a> PathIntegrator<'a> {
                 per_bounce: LIGHT_PAIRS + direct_pairs,
             },
             unsampled_emitters: scene.has_unsampled_emitters(),
+            scatters: scene.materials.iter().map(|m| m.scatters()).collect(),
             light_prims: (0..scene.triangles.len() as u32)
                 .map(|i| (i, scene.triangles[i as usize].light))
                 .filter(|&(_, light)| light != NO_LIGHT)
@@ -182,8 +185,10 @@ impl SimdTask for BlocksTask<'_, '_> {
 
 /// Where blocks' finished samples wait until a block is complete.
 struct Slots {
-    /// Block of each slot (`usize::MAX`: free), how many samples are done, its values.
+    /// Block of each slot (`usize::MAX`: free), its pixel's key, how many samples are
+    /// done, its values.
     block: [usize; SLOTS],
+    key: [u32; SLOTS],
     done: [u32; SLOTS],
     values: Vec<SampleValue>,
     stride: usize,
@@ -262,6 +267,7 @@ impl<'k, 'a, L: Lanes> Kernel<'k, 'a, L> {
             met_surface: 0,
             slots: Slots {
                 block: [usize::MAX; SLOTS],
+                key: [0; SLOTS],
                 done: [0; SLOTS],
                 values: vec![SampleValue::default(); SLOTS * stride],
                 stride,
@@ -338,12 +344,9 @@ impl<'k, 'a, L: Lanes> Kernel<'k, 'a, L> {
     #[inline(always)]
     fn refill(&mut self) {
         let l = self.l;
-        let (fresh, mut key, index, xy) = self.assign_samples();
+        let (fresh, key, index, xy) = self.assign_samples();
         if fresh == 0 {
             return;
-        }
-        if let Some((_, _, k)) = self.first_ray {
-            key = [k; LANES];
         }
         let m = self.mask(fresh);
         let stream = SampleStream {
@@ -396,10 +399,14 @@ impl<'k, 'a, L: Lanes> Kernel<'k, 'a, L> {
                     break;
                 }
                 self.slots.block[slot] = b;
+                self.slots.key[slot] = match self.first_ray {
+                    Some((_, _, k)) => k,
+                    None => pixel_key(self.it.seed, block.y as u64 * width + block.x as u64),
+                };
                 self.slots.done[slot] = 0;
             }
             let i = (!(self.live | fresh)).trailing_zeros() as usize;
-            key[i] = pixel_key(self.it.seed, block.y as u64 * width + block.x as u64);
+            key[i] = self.slots.key[slot];
             index[i] = block.first + sample;
             (xy[0][i], xy[1][i]) = (block.x as f32, block.y as f32);
             self.slot[i] = slot as u32;
@@ -488,17 +495,20 @@ impl<'k, 'a, L: Lanes> Kernel<'k, 'a, L> {
         if seen != 0 {
             self.emitted(seen, &hit, w);
         }
-        let uv = (hit.uv.0.to_array(), hit.uv.1.to_array());
-        let bsdf = BsdfLanes::gather(l, lanes, |i| {
-            scene.bsdf_at(hit.material[i], Vec2::new(uv.0[i], uv.1[i]))
-        });
         // Paths end at the depth cap and on surfaces that scatter nothing.
-        let stop = (self.at_depth_cap(lanes) | !bsdf.scattering) & lanes;
+        let dark = each_lane(lanes)
+            .filter(|&i| !self.it.scatters[hit.material[i] as usize])
+            .fold(0, |m, i| m | 1 << i);
+        let stop = self.at_depth_cap(lanes) | dark;
         ended |= stop;
         let lanes = lanes & !stop;
         if lanes == 0 {
             return ended;
         }
+        let uv = (hit.uv.0.to_array(), hit.uv.1.to_array());
+        let bsdf = BsdfLanes::gather(l, lanes, |i| {
+            scene.bsdf_at(hit.material[i], Vec2::new(uv.0[i], uv.1[i]))
+        });
         let m = self.mask(lanes);
         self.bounces = L::F::select(m, self.bounces + self.f(1.0), self.bounces);
         let next_base = self.pair_base.wrapping_add(l.u(self.it.layout.per_bounce));

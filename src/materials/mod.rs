@@ -232,14 +232,13 @@ macro_rules! bsdfs {
                     }
                     Some(b)
                 });
-                let bsdf = |i: usize| all[i].expect("a lane with a BSDF");
                 let (mut delta, mut scattering, mut glossy) = (0, 0, 0);
                 $(#[allow(non_snake_case)] let $kind = {
                     let k = Kind::$kind as usize;
                     (of_kind[k] != 0).then(|| {
-                        let Bsdf::$kind(fill) = bsdf(first[k]) else { unreachable!() };
-                        let each = <L::F as Real>::array(|i| match bsdf(i) {
-                            Bsdf::$kind(b) if of_kind[k] >> i & 1 != 0 => b,
+                        let Some(Bsdf::$kind(fill)) = all[first[k]] else { unreachable!() };
+                        let each = <L::F as Real>::array(|i| match all[i] {
+                            Some(Bsdf::$kind(b)) => b,
                             _ => fill,
                         });
                         let flags = <$ty as Scatter<f32>>::FLAGS;

@@ -52,6 +52,18 @@ pub struct PixelStats {
 }
 
 impl PixelStats {
+    /// Adds one sample's value to the sum alone (`mean`, `n` and `nonfinite`), for
+    /// renders that do not decide when to stop.
+    #[inline]
+    pub fn add_to_sum(&mut self, v: &SampleValue) {
+        if is_finite(v.radiance) {
+            self.sum += v.radiance;
+        } else {
+            self.nonfinite += 1;
+        }
+        self.n += 1;
+    }
+
     /// Adds one sample's value.
     pub fn add_sample(&mut self, v: &SampleValue) {
         self.add(v.radiance);

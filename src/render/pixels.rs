@@ -27,7 +27,15 @@ pub(super) fn render(
 ) -> RenderOutput {
     let spp = settings.spp.max(1);
     let stats = match adaptive {
-        None => fixed(integrator, spp, settings.spp_offset, rect, progress, stop),
+        None => fixed(
+            integrator,
+            spp,
+            settings.spp_offset,
+            false,
+            rect,
+            progress,
+            stop,
+        ),
         Some(a) => adaptively(integrator, spp, a, frame, rect, progress, stop),
     };
     let mut image = Image::new(rect.width(), rect.height());
@@ -41,12 +49,13 @@ pub(super) fn render(
     }
 }
 
-/// Every pixel of `rect`, `spp` samples from `first`: each pixel's statistics, in
-/// the rectangle's row-major order.
+/// Every pixel of `rect`, `spp` samples from `first`: each pixel's statistics (all
+/// of them when `stats`, else only the sum), in the rectangle's row-major order.
 fn fixed(
     integrator: &dyn SampleIntegrator,
     spp: u32,
     first: u32,
+    stats: bool,
     rect: PixelRect,
     progress: &(dyn Fn(u64) + Sync),
     stop: &StopToken,
@@ -57,7 +66,7 @@ fn fixed(
     by_tile
         .par_chunks_mut((TILE * TILE) as usize)
         .zip(tiles.par_iter())
-        .for_each(|(stats, &tile)| {
+        .for_each(|(pixels, &tile)| {
             let blocks: Vec<PixelSamples> = tile_pixels(rect, tile)
                 .map(|(x, y)| PixelSamples {
                     x,
@@ -68,7 +77,11 @@ fn fixed(
                 .collect();
             let mut n = 0;
             integrator.render_blocks(&blocks, &|| stop.should_stop(), &mut |i, values| {
-                values.iter().for_each(|v| stats[i].add_sample(v));
+                let p = &mut pixels[i];
+                match stats {
+                    true => values.iter().for_each(|v| p.add_sample(v)),
+                    false => values.iter().for_each(|v| p.add_to_sum(v)),
+                }
                 n += 1;
             });
             progress(n);
@@ -101,7 +114,7 @@ fn adaptively(
         y1: (rect.y1 + r).min(height),
     };
     let batch = a.batch.min(spp);
-    let pilot = fixed(integrator, batch, 0, halo, &|_| {}, stop);
+    let pilot = fixed(integrator, batch, 0, true, halo, &|_| {}, stop);
     let min_if_zero: Vec<u32> = neighbour_hit_rates(&pilot, halo.width(), halo.height(), r)
         .into_iter()
         .map(min_samples_if_zero)

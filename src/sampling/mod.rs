@@ -73,24 +73,28 @@ impl<L: Lanes> SampleStream<L> {
     /// The point of dimension pair `pair` (per lane).
     #[inline(always)]
     pub fn get_2d(&self, pair: L::U) -> (L::F, L::F) {
-        let pair_seed = hash32(
-            self.key.xor(hash32(
-                pair.wrapping_mul(pair.splat_as(0x9e37_79b9))
-                    .wrapping_add(pair.splat_as(1)),
-            )),
-        );
-        match self.kind {
-            SamplerKind::Sobol => sobol_2d(self.index, pair_seed),
-            SamplerKind::Independent => independent_2d(hash32(
-                pair_seed.xor(self.index.wrapping_mul(pair.splat_as(0x85eb_ca6b))),
-            )),
-        }
+        self.get_2d_hashed(hash32(
+            pair.wrapping_mul(pair.splat_as(0x9e37_79b9))
+                .wrapping_add(pair.splat_as(1)),
+        ))
     }
 
     /// `get_2d` of the same pair in every lane.
     #[inline(always)]
     pub fn get_2d_at(&self, l: L, pair: u32) -> (L::F, L::F) {
-        self.get_2d(l.u(pair))
+        self.get_2d_hashed(l.u(hash32(pair.wrapping_mul(0x9e37_79b9).wrapping_add(1))))
+    }
+
+    /// `get_2d` of the pair whose hash is `pair_hash`.
+    #[inline(always)]
+    fn get_2d_hashed(&self, pair_hash: L::U) -> (L::F, L::F) {
+        let pair_seed = hash32(self.key.xor(pair_hash));
+        match self.kind {
+            SamplerKind::Sobol => sobol_2d(self.index, pair_seed),
+            SamplerKind::Independent => independent_2d(hash32(
+                pair_seed.xor(self.index.wrapping_mul(pair_seed.splat_as(0x85eb_ca6b))),
+            )),
+        }
     }
 
     /// Lane `i` of `other` where `m`, else of `self`.
