@@ -11,6 +11,12 @@ use std::path::PathBuf;
 /// What `--help` adds after the options: stopping a render, and where ember differs
 /// from the course's binary on purpose (the README says the same).
 const AFTER_HELP: &str = "\
+Examples:
+  ember -s 64 -l 4 -m 5 -r 480 360 -f bunny.png scenes/cs184/sky/CBbunny.dae
+  ember info scenes/cs184/sky/CBbunny.dae       what a scene holds, and the backends
+  ember report --out write-up                   the CS184 write-up's figures as a page
+  ember bench render | accel | converge SCENE | stability    (see ember bench --help)
+
 Stopping a render:
   Ctrl-C (or SIGTERM) stops within one pixel's time, writes the pixels finished so far
   (the rest black; samples per pixel and `stopped: interrupted` in the file's metadata,

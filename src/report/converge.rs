@@ -62,15 +62,15 @@ pub(super) fn blocks(
     })?;
     progress.advance(share - reported);
     let files = report.write(&out_dir)?;
+    let reference_note = report.reference_note.trim_end_matches('.');
     blocks.push(Block::Text(format!(
-        "{}: `-m {}`, {}×{}, each point a fresh render at twice the samples of the last, until {} spp or {} s. {} {note}",
+        "{}: `-m {}`, {}×{}, each point a fresh render at twice the samples of the last, until {} spp or {} s. Against the {reference_note}. {note}",
         stem(&case.scene),
         case.max_depth,
         SIZE.0,
         SIZE.1,
         b.converge_max_spp,
         b.converge_max_seconds,
-        report.reference_note
     )));
     let command = command(&copts);
     let charts = files

@@ -59,6 +59,10 @@ pub struct TableBlock {
 
 /// Narrower figures are given this width (in CSS pixels) for their caption's sake.
 const MIN_FIGURE_WIDTH: u32 = 240;
+/// The width four figures share (CSS pixels: a little under the style sheet's
+/// `max-width`, for a scroll bar), and `.row`'s gap between figures.
+const PAGE_WIDTH: u32 = 1200;
+const ROW_GAP: u32 = 14;
 
 /// Figures per row in the Markdown (GitHub scrolls wider tables sideways).
 const MARKDOWN_COLUMNS: usize = 4;
@@ -153,12 +157,15 @@ fn block_html(h: &mut String, b: &Block) {
                 let _ = writeln!(h, "<p class=\"caption\">{}</p>", inline_html(&row.caption));
             }
             h.push_str("<div class=\"row\">\n");
+            // Up to four figures side by side in the page's width.
+            let k = row.figures.len().clamp(1, 4) as u32;
+            let slot = (PAGE_WIDTH - ROW_GAP * (k - 1)) / k;
             for f in &row.figures {
                 let _ = write!(
                     h,
                     "<figure style=\"width:{}px\"><img src=\"{}\" alt=\"{}\" width=\"{}\" height=\"{}\">\
                      <figcaption><b>{}</b>",
-                    f.width.max(MIN_FIGURE_WIDTH),
+                    f.width.min(slot).max(MIN_FIGURE_WIDTH),
                     escape(&f.image),
                     escape(&f.label),
                     f.width,

@@ -46,7 +46,7 @@ impl Budget {
             normals_spp: 4,
             direct: (480, 360),
             light_rays: vec![1, 4, 16, 64],
-            global: (320, 240),
+            global: (480, 360),
             global_spp: 128,
             global_light_rays: 4,
             spp_series: vec![1, 2, 4, 8, 16, 64, 1024],
@@ -76,7 +76,7 @@ impl Budget {
             adaptive_batch: 32,
             timing: (64, 48),
             timing_repeats: 1,
-            converge_max_spp: 4,
+            converge_max_spp: 16,
             converge_max_seconds: 0.5,
         }
     }
