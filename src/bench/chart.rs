@@ -247,7 +247,7 @@ where
             .map(|&(x, y)| (SegmentValue::CenterOf(x as i32), y))
             .collect();
         // Shapes differ so that equal values of two series stay visible.
-        let size = 9 - 2 * (k as i32 % 4);
+        let size = [9, 8, 6, 5][k % 4];
         let (solid, line) = (color.filled(), color.stroke_width(3));
         macro_rules! markers {
             ($at:expr, $legend:expr) => {
