@@ -447,3 +447,30 @@ fn the_page_loads_in_headless_chromium() {
     colours.dedup();
     assert!(colours.len() > 100, "{} colours", colours.len());
 }
+
+#[test]
+fn bad_report_input_is_a_one_line_error() {
+    use common::cli::ember;
+    let dir = tempfile::tempdir().unwrap();
+    let file = dir.path().join("a-file");
+    std::fs::write(&file, "x").unwrap();
+    let out = dir.path().join("out");
+    let (out, file) = (out.to_str().unwrap(), file.to_str().unwrap());
+    ember(["report", "--quick", "--out", file]).fails_with("is a file, not a folder");
+    ember(["report", "--quick", "--out", out, "model.obj"]).fails_with("not .obj files");
+    let (a, b) = (
+        repo().join("scenes/cs184/sky/CBbunny.dae"),
+        repo().join("scenes/cmu462/sky/CBbunny.dae"),
+    );
+    let (a, b) = (a.to_str().unwrap(), b.to_str().unwrap());
+    ember(["report", "--quick", "--out", out, a, b]).fails_with("two scenes of the same name");
+    ember([
+        "report",
+        "--quick",
+        "--out",
+        out,
+        "--mitsuba",
+        "/nonexistent/python",
+    ])
+    .fails_with("--mitsuba /nonexistent/python: no such file");
+}

@@ -111,8 +111,8 @@ pub enum Command {
     /// BVH, Embree and no acceleration; hemisphere against light sampling at -l 1, 4, 16,
     /// 64; direct and indirect light, -m 0 to 5, 1 to 1024 spp; adaptive sampling with its
     /// rate maps) and the speed-against-accuracy charts of `ember bench converge`. Under
-    /// every figure: the ember command that renders it bit for bit. About 10 minutes on
-    /// two cores; --quick, a minute or two.
+    /// every figure: the ember command that renders it bit for bit. About 6 minutes on
+    /// two busy cores (4 minutes of CPU time); --quick, seconds.
     #[cfg(feature = "bench")]
     Report(ReportArgs),
 }

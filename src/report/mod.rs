@@ -219,8 +219,14 @@ impl<'a> Maker<'a> {
                 Planned::Text(_) => {}
             }
         }
-        recipes.dedup();
-        let renders: u64 = recipes.iter().map(|r| work(r)).sum();
+        // A recipe renders once however many figures use it.
+        let mut unique: Vec<&Recipe> = Vec::new();
+        for r in recipes {
+            if !unique.contains(&r) {
+                unique.push(r);
+            }
+        }
+        let renders: u64 = unique.iter().map(|r| work(r)).sum();
         renders + other
     }
 

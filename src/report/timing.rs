@@ -97,7 +97,7 @@ fn column(k: Backend) -> String {
 fn caption(b: &Budget) -> String {
     let threads = rayon::current_num_threads();
     let embree = match Backend::Embree.available() {
-        true => "",
+        true => " Embree's build includes creating its device, as a render's does.",
         false => " This build has no Embree (build ember with `--features embree` for its column).",
     };
     let runs = match b.timing_repeats {
