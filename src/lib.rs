@@ -28,6 +28,8 @@ pub mod materials;
 pub mod names;
 pub mod output;
 pub mod render;
+#[cfg(feature = "bench")]
+pub mod report;
 pub mod sampling;
 pub mod scene;
 pub mod shard;

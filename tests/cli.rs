@@ -421,3 +421,76 @@ fn help_lists_every_subcommand_in_one_line_each() {
         }
     }
 }
+
+/// The pixels of a PNG, as written.
+fn png_pixels(path: &std::path::Path) -> Vec<u8> {
+    image::open(path).unwrap().to_rgb8().into_raw()
+}
+
+#[test]
+fn accel_none_renders_what_the_bvh_renders() {
+    let dir = tempfile::tempdir().unwrap();
+    let scene = repo("scenes/cs184/sky/CBbunny.dae");
+    let render = |accel: &str| {
+        let out = dir.path().join(format!("{accel}.png"));
+        run(command()
+            .args([
+                "-s", "2", "-m", "2", "-r", "24", "18", "--accel", accel, "-f",
+            ])
+            .arg(&out)
+            .arg(&scene))
+        .success();
+        png_pixels(&out)
+    };
+    assert!(
+        render("none") == render("native"),
+        "brute force and the BVH differ"
+    );
+    let bvh = ember(["--accel", "none", "--bvh", "sah", "x.dae"]);
+    bvh.fails_with("it does nothing with --accel none");
+}
+
+#[test]
+fn accel_none_warns_when_it_would_take_long() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("slow.png");
+    // Hours of brute force over 50801 triangles; --time stops it at once.
+    let run = run(command()
+        .args([
+            "--accel", "none", "-s", "64", "-m", "5", "--time", "0.2", "-f",
+        ])
+        .arg(&out)
+        .arg(repo("scenes/cs184/meshedit/maxplanck.dae")))
+    .success();
+    let err = run.stderr();
+    assert!(
+        err.contains("warning:") && err.contains("hours") && err.contains("--accel native"),
+        "{err}"
+    );
+}
+
+#[test]
+fn the_png_rate_map_has_a_legend_below_the_map() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("a.png");
+    run(command()
+        .args(["-s", "64", "-a", "8", "0.1", "-r", "160", "120", "-f"])
+        .arg(&out)
+        .arg(repo("scenes/cs184/sky/CBspheres_lambertian.dae")))
+    .success();
+    let rate = image::open(dir.path().join("a_rate.png")).unwrap();
+    assert_eq!(rate.width(), 160);
+    assert!(rate.height() > 120 + 20, "{}", rate.height());
+    let exr = dir.path().join("a.exr");
+    run(command()
+        .args(["-s", "64", "-a", "8", "0.1", "-r", "160", "120", "-f"])
+        .arg(&exr)
+        .arg(repo("scenes/cs184/sky/CBspheres_lambertian.dae")))
+    .success();
+    let counts = ember::image_io::read_image(&dir.path().join("a_rate.exr")).unwrap();
+    assert_eq!(
+        (counts.width, counts.height),
+        (160, 120),
+        "the EXR holds the counts only"
+    );
+}

@@ -234,6 +234,123 @@ where
     Ok(())
 }
 
+/// A chart of values per category (cases of a table, not points of a scale): each
+/// category is a slot of the x axis labelled with its name, each series a marker of
+/// its own shape and colour in every slot it has a value for; y is logarithmic
+/// (`spec.log_y` must be set). `series` points are `(category index, value)`.
+pub fn write_category_chart(
+    stem: &Path,
+    spec: &ChartSpec,
+    categories: &[String],
+    series: &[Series],
+) -> anyhow::Result<()> {
+    register_font();
+    let (width, height) = (1100, 600);
+    let mut rgb = vec![0u8; (width * height * 3) as usize];
+    {
+        let root = BitMapBackend::with_buffer(&mut rgb, (width, height)).into_drawing_area();
+        draw_categories(root, spec, categories, series)?;
+    }
+    write_png(&stem.with_extension("png"), &rgb, width, height)?;
+    let svg = stem.with_extension("svg");
+    let root = SVGBackend::new(&svg, (width, height)).into_drawing_area();
+    draw_categories(root, spec, categories, series)
+}
+
+fn draw_categories<DB: DrawingBackend>(
+    root: DrawingArea<DB, plotters::coord::Shift>,
+    spec: &ChartSpec,
+    categories: &[String],
+    series: &[Series],
+) -> anyhow::Result<()>
+where
+    DB::ErrorType: 'static,
+{
+    let err = |e: DrawingAreaErrorKind<DB::ErrorType>| anyhow::anyhow!("chart: {e}");
+    root.fill(&WHITE).map_err(err)?;
+    let (y0, y1) = bounds(series, |p| p.1, spec.log_y);
+    // Headroom above the highest marker for the legend.
+    let y1 = if spec.log_y {
+        y1 * 10.0
+    } else {
+        y1 + (y1 - y0) * 0.3
+    };
+    let n = categories.len().max(1) as i32;
+    let label = |v: &SegmentValue<i32>| match v {
+        SegmentValue::CenterOf(i) => categories.get(*i as usize).cloned().unwrap_or_default(),
+        _ => String::new(),
+    };
+    let mut chart = ChartBuilder::on(&root)
+        .caption(spec.title, ("sans-serif", 22))
+        .margin(15)
+        .x_label_area_size(60)
+        .y_label_area_size(80)
+        .build_cartesian_2d((0..n).into_segmented(), (y0..y1).log_scale())
+        .map_err(err)?;
+    debug_assert!(spec.log_y, "category charts have a logarithmic y axis");
+    chart
+        .configure_mesh()
+        .x_desc(spec.x_label)
+        .y_desc(spec.y_label)
+        .x_labels(categories.len() + 1)
+        .label_style(("sans-serif", 13))
+        .x_label_formatter(&label)
+        .y_label_formatter(&|v| tick(*v))
+        .disable_x_mesh()
+        .draw()
+        .map_err(err)?;
+    for (k, s) in series.iter().enumerate() {
+        let color = Palette99::pick(k).to_rgba();
+        let pts: Vec<(SegmentValue<i32>, f64)> = s
+            .points
+            .iter()
+            .filter(|p| p.1.is_finite() && (!spec.log_y || p.1 > 0.0))
+            .map(|&(x, y)| (SegmentValue::CenterOf(x as i32), y))
+            .collect();
+        // Shapes differ so that equal values of two series stay visible.
+        let size = [9, 8, 6, 5][k % 4];
+        let (solid, line) = (color.filled(), color.stroke_width(3));
+        macro_rules! markers {
+            ($at:expr, $legend:expr) => {
+                chart
+                    .draw_series(pts.iter().cloned().map($at))
+                    .map_err(err)?
+                    .label(s.name.clone())
+                    .legend($legend)
+            };
+        }
+        match k % 4 {
+            0 => markers!(|p| Circle::new(p, size, solid), move |(x, y)| Circle::new(
+                (x + 8, y),
+                5,
+                solid
+            )),
+            1 => markers!(|p| Cross::new(p, size, line), move |(x, y)| Cross::new(
+                (x + 8, y),
+                5,
+                line
+            )),
+            2 => markers!(
+                |p| EmptyElement::at(p) + Rectangle::new([(-size, -size), (size, size)], line),
+                move |(x, y)| Rectangle::new([(x + 3, y - 5), (x + 13, y + 5)], line)
+            ),
+            _ => markers!(|p| TriangleMarker::new(p, size, solid), move |(x, y)| {
+                TriangleMarker::new((x + 8, y), 6, solid)
+            }),
+        };
+    }
+    chart
+        .configure_series_labels()
+        .position(SeriesLabelPosition::UpperRight)
+        .background_style(WHITE.mix(0.85))
+        .border_style(BLACK)
+        .label_font(("sans-serif", 14))
+        .draw()
+        .map_err(err)?;
+    root.present().map_err(err)?;
+    Ok(())
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -13,6 +13,12 @@ use std::path::PathBuf;
 /// What `--help` adds after the options: stopping a render, and where ember differs
 /// from the course's binary on purpose (the README says the same).
 const AFTER_HELP: &str = "\
+Examples:
+  ember -s 64 -l 4 -m 5 -r 480 360 -f bunny.png scenes/cs184/sky/CBbunny.dae
+  ember info scenes/cs184/sky/CBbunny.dae       what a scene holds, and the backends
+  ember report --out write-up                   the CS184 write-up's figures as a page
+  ember bench render | accel | converge SCENE | stability    (see ember bench --help)
+
 Stopping a render:
   Ctrl-C (or SIGTERM) stops within one pixel's time, writes the pixels finished so far
   (the rest black; samples per pixel and `stopped: interrupted` in the file's metadata,
@@ -28,7 +34,8 @@ Where ember differs from the CS184 binary on purpose:
   - -a does not stop a pixel after one batch of identical samples (a pixel of zeros
     beside a small light), it takes more batches first;
   - -t defaults to all cores, and the image does not depend on it;
-  - <out>_rate.png is written only with -a.
+  - <out>_rate.png is written only with -a, with a legend below the map: blue = 0, red = -s
+    samples per pixel (an <out>_rate.exr holds the raw counts).
   The full list is in docs/scene-semantics.md, section 9.";
 
 /// What `ember -h` and `--help` say first.
@@ -100,6 +107,42 @@ pub enum Command {
         #[command(subcommand)]
         which: BenchCommand,
     },
+    /// Render the CS184 write-up's figures and write them as a page (index.html, README.md).
+    ///
+    /// The course's five parts (normal shading; large meshes and render times with ember's
+    /// BVH, Embree and no acceleration; hemisphere against light sampling at -l 1, 4, 16,
+    /// 64; direct and indirect light, -m 0 to 5, 1 to 1024 spp; adaptive sampling with its
+    /// rate maps) and the speed-against-accuracy charts of `ember bench converge`. Under
+    /// every figure: the ember command that renders it bit for bit. About 6 minutes on
+    /// two busy cores (4 minutes of CPU time); --quick, seconds.
+    #[cfg(feature = "bench")]
+    Report(ReportArgs),
+}
+
+/// `ember report`'s flags.
+#[cfg(feature = "bench")]
+#[derive(Args, Debug)]
+pub struct ReportArgs {
+    /// Scenes to use in every part instead of the course's (part 4's rows and the
+    /// charts use the first).
+    pub scenes: Vec<PathBuf>,
+    /// Folder of the page: index.html, README.md, figures/ and converge/ (created if missing).
+    #[arg(long, default_value = "report")]
+    pub out: PathBuf,
+    /// Small sizes and sample counts (every part still present), for a first look or a test.
+    #[arg(long)]
+    pub quick: bool,
+    /// Random seed of every render (each figure's command repeats it).
+    #[arg(long, default_value_t = 0)]
+    pub seed: u64,
+    /// Python that imports Mitsuba 3, to chart it beside ember [default: the one
+    /// scripts/mitsuba-env installed in the data folder's .cache/mitsuba, if any, except
+    /// with --quick].
+    #[arg(long, value_name = "PYTHON")]
+    pub mitsuba: Option<PathBuf>,
+    /// Worker threads (default: all cores). The figures do not depend on it.
+    #[arg(short = 't', value_name = "THREADS", value_parser = at_least_one::<usize>)]
+    pub threads: Option<usize>,
 }
 
 #[derive(Args, Debug)]

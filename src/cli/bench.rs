@@ -45,8 +45,11 @@ fn bench_scaling(a: BenchAccelArgs) -> Result<()> {
     finish(&report, &out)
 }
 
+/// `ember bench accel`: the rows so far are written after every scene and thread
+/// count, so a run that is stopped (Ctrl-C: after the measurement under way) or killed
+/// leaves the rows it finished.
 fn bench_accel(a: BenchAccelArgs) -> Result<()> {
-    use bench::accel::AccelBenchReport;
+    use bench::accel::{AccelBenchReport, Progress};
     let out: PathBuf = a.out.clone().unwrap_or_else(|| "bench-out/accel".into());
     let append = a.append;
     let opts = bench_accel_options(a)?;
@@ -55,12 +58,51 @@ fn bench_accel(a: BenchAccelArgs) -> Result<()> {
         true => Some(AccelBenchReport::read(&out).context("--append")?),
         false => None,
     };
-    let report = bench::accel::run(&opts, |line| ember::errln!("ember: {line}"))?;
-    let report = match earlier {
-        Some(e) => e.merge(report),
-        None => report,
+    let with_earlier = |r: AccelBenchReport| match &earlier {
+        Some(e) => e.clone().merge(r),
+        None => r,
     };
-    finish(&report, &out)
+    let interrupt = super::interrupt::install()?;
+    say_when_stopping(interrupt.clone());
+    let mut written = Ok(());
+    let report = bench::accel::run(
+        &opts,
+        |p| match p {
+            Progress::Line(line) => ember::errln!("ember: {line}"),
+            Progress::Rows(rows) => {
+                if written.is_ok() {
+                    written = with_earlier(rows.clone()).write(&out).map(drop);
+                }
+            }
+        },
+        &|| interrupt.load(std::sync::atomic::Ordering::Relaxed),
+    )?;
+    written?;
+    let stopped = report.stopped.clone();
+    finish(&with_earlier(report), &out)?;
+    match stopped {
+        Some(s) => Err(super::Interrupted(format!(
+            "interrupted: {s}; wrote the rows measured to {}",
+            out.display()
+        ))
+        .into()),
+        None => Ok(()),
+    }
+}
+
+/// Tells the user, once Ctrl-C is pressed, that the run ends after the measurement
+/// under way (which may take a minute on a large mesh).
+fn say_when_stopping(flag: std::sync::Arc<std::sync::atomic::AtomicBool>) {
+    std::thread::spawn(move || loop {
+        if flag.load(std::sync::atomic::Ordering::Relaxed) {
+            ember::errln!(
+                "ember: stopping after the measurement under way; the rows measured are written \
+                 (Ctrl-C again quits at once, keeping the rows already written)"
+            );
+            return;
+        }
+        std::thread::sleep(std::time::Duration::from_millis(100));
+    });
 }
 
 /// The end of every benchmark: write its report into `out`, print its summary and the files.

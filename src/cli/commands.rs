@@ -47,7 +47,7 @@ pub(super) fn render(mut args: RenderArgs) -> Result<()> {
     if interrupt.load(Ordering::Relaxed) {
         return Err(Interrupted("interrupted before rendering; nothing written".into()).into());
     }
-    req.warn_before_rendering(&args, &job);
+    req.warn_before_rendering(&args, &job, pool.current_num_threads());
     let t2 = Instant::now();
     let mut stop = StopToken::never().with_flag(interrupt);
     if let Some(t) = req.plan.time {
@@ -144,6 +144,26 @@ impl RenderRequest {
         })
     }
 
+    /// At most how many rays the render traces: per sample, the camera ray and, at each
+    /// of up to -m bounces, one continuation and -l shadow rays per light (for
+    /// `--accel none`'s time estimate; roulette and escaping paths only make it fewer).
+    fn most_rays(&self, job: &RenderJob) -> f64 {
+        let pixels = match self.cell {
+            Some(r) => r.area(),
+            None => self.width as u64 * self.height as u64,
+        };
+        let s = &self.settings;
+        let per_sample = match s.shading {
+            Shading::Radiance => {
+                let shadow = s.light_samples as f64 * job.scene.lights.len() as f64;
+                1.0 + s.max_depth as f64 * (1.0 + shadow)
+            }
+            _ => 1.0,
+        };
+        let spp = if s.spp == u32::MAX { 1 } else { s.spp };
+        pixels as f64 * spp as f64 * per_sample
+    }
+
     /// The buffers are the cell's, unless the cell is written in a full frame.
     fn check_memory(&self) -> Result<()> {
         let (w, h) = match (self.cell, self.full_frame) {
@@ -205,9 +225,15 @@ impl RenderRequest {
         Ok((job, t_load, t1.elapsed()))
     }
 
-    fn warn_before_rendering(&self, args: &RenderArgs, job: &RenderJob) {
+    fn warn_before_rendering(&self, args: &RenderArgs, job: &RenderJob, threads: usize) {
         for w in job.warnings(&self.settings) {
             ember::errln!("ember: warning: {}: {w}", self.scene_path.display());
+        }
+        if args.accel == accel::Backend::None {
+            let rays = self.most_rays(job);
+            if let Some(w) = accel::brute::slow_warning(job.scene.num_prims(), rays, threads) {
+                ember::errln!("ember: warning: {}: {w}", self.scene_path.display());
+            }
         }
         if self.cell.is_some()
             && self.settings.shading == Shading::BvhCost
@@ -343,10 +369,14 @@ impl RenderRun<'_> {
         };
         if let Some(pending_rate) = pending_rate {
             let rate = pending_rate.path().to_path_buf();
-            // The rate map: raw samples per pixel in an EXR, the course's colours in a PNG.
+            // The rate map: raw samples per pixel in an EXR, the course's colours (and
+            // a legend below) in a PNG.
             let image = match pending_rate.format() {
                 OutputFormat::Exr => done.output.sample_count_image(),
-                OutputFormat::Png => done.output.rate_image(self.settings.spp),
+                OutputFormat::Png => {
+                    let (w, h) = (done.output.image.width, done.output.image.height);
+                    ember::film::sample_rate_map(w, h, &done.output.samples, self.settings.spp)
+                }
             };
             pending_rate.write_with_metadata(&image, &meta)?;
             if !self.args.quiet {

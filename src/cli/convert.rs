@@ -1,7 +1,9 @@
 //! Flags into library settings: every check and translation of a flag's value lives here.
 
 #[cfg(feature = "bench")]
-use super::args::{BenchAccelArgs, BenchConvergeArgs, BenchRenderArgs, BenchStabilityArgs};
+use super::args::{
+    BenchAccelArgs, BenchConvergeArgs, BenchRenderArgs, BenchStabilityArgs, ReportArgs,
+};
 use super::args::{CameraPlacement, LensArgs, RenderArgs};
 use anyhow::{bail, Context, Result};
 use ember::accel::Backend;
@@ -64,15 +66,18 @@ pub(super) fn check_resolution(w: u32, h: u32) -> Result<()> {
 /// Flags that would do nothing, or something meaningless, in the chosen configuration.
 pub(super) fn check_flags(args: &RenderArgs) -> Result<()> {
     let embree = args.accel == Backend::Embree;
-    if embree && args.bvh.is_some() {
-        bail!("--bvh chooses the native BVH's builder; it does nothing with --accel embree");
+    if (embree || args.accel == Backend::None) && args.bvh.is_some() {
+        bail!(
+            "--bvh chooses the native BVH's builder; it does nothing with --accel {}",
+            args.accel
+        );
     }
     if args.embree_quality.is_some() && !Backend::Embree.available() {
         bail!(
             "--embree-quality: this build has no Embree backend (rebuild with --features embree)"
         );
     }
-    if args.embree_quality.is_some() && args.accel == Backend::Native {
+    if args.embree_quality.is_some() && matches!(args.accel, Backend::Native | Backend::None) {
         bail!("--embree-quality applies only with --accel embree or auto");
     }
     if embree && args.shading == Shading::BvhCost {
@@ -406,6 +411,38 @@ pub(super) fn bench_stability_options(
     Ok(bench::stability::StabilityOptions {
         spp_scale: a.spp_scale,
         seed: a.seed,
+    })
+}
+
+/// `ember report`'s flags as the report's options: the scenes are checked to be COLLADA
+/// files, and without --mitsuba a full report charts the Mitsuba that
+/// scripts/mitsuba-env installed, if any.
+#[cfg(feature = "bench")]
+pub(super) fn report_options(a: &ReportArgs) -> Result<ember::report::ReportOptions> {
+    for scene in &a.scenes {
+        check_scene_file(scene)?;
+        if !scene.is_file() {
+            bail!("{}: no such scene file", scene.display());
+        }
+    }
+    if a.out.is_file() {
+        bail!("--out {}: is a file, not a folder", a.out.display());
+    }
+    if let Some(python) = &a.mitsuba {
+        if !python.is_file() {
+            bail!(
+                "--mitsuba {}: no such file (scripts/mitsuba-env prints the Python to give)",
+                python.display()
+            );
+        }
+    }
+    let installed = || (!a.quick).then(ember::report::installed_mitsuba).flatten();
+    Ok(ember::report::ReportOptions {
+        out: a.out.clone(),
+        quick: a.quick,
+        scenes: a.scenes.clone(),
+        seed: a.seed,
+        mitsuba: a.mitsuba.clone().or_else(installed),
     })
 }
 

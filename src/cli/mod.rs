@@ -8,6 +8,8 @@ mod bench;
 mod commands;
 mod convert;
 mod interrupt;
+#[cfg(feature = "bench")]
+mod report;
 
 pub use args::Cli;
 use args::Command;
@@ -118,6 +120,8 @@ pub fn run(cli: Cli) -> anyhow::Result<()> {
         Some(Command::Camera(args)) => commands::camera(args),
         #[cfg(feature = "bench")]
         Some(Command::Bench { which }) => bench::run(which),
+        #[cfg(feature = "bench")]
+        Some(Command::Report(args)) => report::run(args),
         None => commands::render(cli.render),
     }
 }
