@@ -217,7 +217,7 @@ fn mitsuba_renders_the_exported_scene_to_embers_mean() {
 fn export_sampler_option_rounds_the_count_it_does_not_take() {
     let dir = tempfile::tempdir().unwrap();
     let scene = repo("scenes/cs184/sky/CBspheres_lambertian.dae");
-    let out = ember(&[
+    let out = ember([
         "export",
         scene.to_str().unwrap(),
         "-s",

@@ -39,25 +39,25 @@ const CASES: &[Case] = &[
         scene: "scenes/cs184/sky/CBspheres_lambertian.dae",
         max_depth: 1,
         strategy: DirectStrategy::Light,
-        expected: 0xaf43_0d24_f33c_2f9a,
+        expected: 0x46e5_9c04_6ad1_ff18,
     },
     Case {
         scene: "scenes/cs184/sky/CBspheres_lambertian.dae",
         max_depth: 5,
         strategy: DirectStrategy::Mis,
-        expected: 0x0a6b_78a8_b4dc_03a2,
+        expected: 0xc71b_d16b_5152_92a0,
     },
     Case {
         scene: "scenes/cs184/sky/CBspheres.dae",
         max_depth: 5,
         strategy: DirectStrategy::Light,
-        expected: 0x50f3_8a99_8b6f_0408,
+        expected: 0xec78_2f78_f7b2_2afc,
     },
     Case {
         scene: "scenes/cs184/sky/CBbunny_microfacet_cu.dae",
         max_depth: 5,
         strategy: DirectStrategy::Mis,
-        expected: 0xe6da_8631_0e3f_bea1,
+        expected: 0x693f_dc7b_8e2c_8df5,
     },
 ];
 

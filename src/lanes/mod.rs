@@ -130,19 +130,15 @@ pub fn per_lane<F: Real>(like: F, mut f: impl FnMut(usize) -> f32) -> F {
     for (i, v) in a.iter_mut().enumerate().take(F::WIDTH) {
         *v = f(i);
     }
-    like.from_array_as(a)
+    like.array_like(a)
 }
 
 /// [`per_lane`] for vectors.
 #[inline(always)]
 pub fn per_lane_v3<F: Real>(like: F, mut f: impl FnMut(usize) -> glam::Vec3) -> V3<F> {
-    let mut a = [[0.0f32; LANES]; 3];
+    let (mut x, mut y, mut z) = ([0.0f32; LANES], [0.0f32; LANES], [0.0f32; LANES]);
     for i in 0..F::WIDTH {
-        (a[0][i], a[1][i], a[2][i]) = f(i).into();
+        (x[i], y[i], z[i]) = f(i).into();
     }
-    V3::new(
-        like.from_array_as(a[0]),
-        like.from_array_as(a[1]),
-        like.from_array_as(a[2]),
-    )
+    V3::new(like.array_like(x), like.array_like(y), like.array_like(z))
 }

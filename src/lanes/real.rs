@@ -14,7 +14,7 @@ pub trait LaneMask:
     /// Bit `i` set where lane `i` is.
     fn bits(self) -> LaneBits;
     /// The lanes of `bits`, as a mask of `self`'s kind.
-    fn from_bits_as(self, bits: LaneBits) -> Self;
+    fn mask_like(self, bits: LaneBits) -> Self;
     #[inline(always)]
     fn any(self) -> bool {
         self.bits() != 0
@@ -66,7 +66,7 @@ pub trait Real:
     /// The lanes as an array (one lane: element 0).
     fn to_array(self) -> [f32; LANES];
     /// Lanes of `self`'s kind from an array (elements past `WIDTH` ignored).
-    fn from_array_as(self, a: [f32; LANES]) -> Self;
+    fn array_like(self, a: [f32; LANES]) -> Self;
     fn lane(self, i: usize) -> f32;
 }
 
@@ -87,7 +87,7 @@ pub trait UInt: Copy + BitAnd<Output = Self> + BitOr<Output = Self> {
     fn as_f32_bits(self) -> Self::F;
     fn splat_as(self, x: u32) -> Self;
     fn to_array(self) -> [u32; LANES];
-    fn from_array_as(self, a: [u32; LANES]) -> Self;
+    fn array_like(self, a: [u32; LANES]) -> Self;
     fn lane(self, i: usize) -> u32;
 }
 
@@ -97,7 +97,7 @@ impl LaneMask for bool {
         self as LaneBits
     }
     #[inline(always)]
-    fn from_bits_as(self, bits: LaneBits) -> Self {
+    fn mask_like(self, bits: LaneBits) -> Self {
         bits & 1 != 0
     }
 }
@@ -178,7 +178,7 @@ impl Real for f32 {
         a
     }
     #[inline(always)]
-    fn from_array_as(self, a: [f32; LANES]) -> Self {
+    fn array_like(self, a: [f32; LANES]) -> Self {
         a[0]
     }
     #[inline(always)]
@@ -245,7 +245,7 @@ impl UInt for u32 {
         a
     }
     #[inline(always)]
-    fn from_array_as(self, a: [u32; LANES]) -> Self {
+    fn array_like(self, a: [u32; LANES]) -> Self {
         a[0]
     }
     #[inline(always)]
@@ -260,7 +260,7 @@ impl<S: Simd> LaneMask for Mask<S> {
         Mask::bits(self)
     }
     #[inline(always)]
-    fn from_bits_as(self, bits: LaneBits) -> Self {
+    fn mask_like(self, bits: LaneBits) -> Self {
         Mask::from_bits_like(self, bits)
     }
 }
@@ -327,7 +327,7 @@ impl<S: Simd> Real for F32s<S> {
         F32s::to_array(self)
     }
     #[inline(always)]
-    fn from_array_as(self, a: [f32; LANES]) -> Self {
+    fn array_like(self, a: [f32; LANES]) -> Self {
         F32s::from_array_like(self, a)
     }
     #[inline(always)]
@@ -388,7 +388,7 @@ impl<S: Simd> UInt for U32s<S> {
         U32s::to_array(self)
     }
     #[inline(always)]
-    fn from_array_as(self, a: [u32; LANES]) -> Self {
+    fn array_like(self, a: [u32; LANES]) -> Self {
         U32s::from_array_like(self, a)
     }
     #[inline(always)]

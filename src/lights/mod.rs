@@ -79,7 +79,7 @@ impl<F: Real> Incident<F> {
         let valid_bits = (0..F::WIDTH)
             .filter(|&i| a[i].is_some())
             .fold(0, |m, i| m | 1 << i);
-        let valid = like.eq(like).from_bits_as(valid_bits);
+        let valid = like.eq(like).mask_like(valid_bits);
         Incident {
             wi: get(|s| s.wi),
             dist: per_lane(like, |i| a[i].map_or(0.0, |s| s.dist)),

@@ -21,16 +21,18 @@ pub fn hash32<U: UInt>(x: U) -> U {
     x.xor(x.shr::<16>())
 }
 
-/// The Laine–Karras permutation with pbrt-v4's constants (`FastOwenScrambler`): bit
-/// `k` of `x` is flipped by a hash of `seed` and the bits below `k`. Applied to a
-/// value's bits reversed, it is an Owen scramble of the value.
+/// The Laine–Karras permutation with Burley's constants (2020, as Cycles uses them):
+/// bit `k` of `x` is flipped by a hash of `seed` and the bits below `k`. Applied to a
+/// value's bits reversed, it is an Owen scramble of the value. pbrt-v4's
+/// `FastOwenScrambler` constants scrambled worse here: CBbunny -m 5, 64 spp, no
+/// roulette, RMSE 0.00677 against 0.00628 with these (3 seeds, 160x120).
 #[inline(always)]
 fn laine_karras<U: UInt>(x: U, seed: U) -> U {
-    let v = x.xor(x.wrapping_mul(x.splat_as(0x3d20_adea)));
-    let v = v.wrapping_add(seed);
-    let v = v.wrapping_mul(seed.shr::<16>() | x.splat_as(1));
-    let v = v.xor(v.wrapping_mul(x.splat_as(0x0552_6c56)));
-    v.xor(v.wrapping_mul(x.splat_as(0x53a2_2864)))
+    let v = x.wrapping_add(seed);
+    let v = v.xor(v.wrapping_mul(x.splat_as(0x6c50_b47c)));
+    let v = v.xor(v.wrapping_mul(x.splat_as(0xb82f_1e52)));
+    let v = v.xor(v.wrapping_mul(x.splat_as(0xc7af_e638)));
+    v.xor(v.wrapping_mul(x.splat_as(0x8d22_f6e6)))
 }
 
 /// The Owen scramble of the value whose bits reversed are `reversed`.

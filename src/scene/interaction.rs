@@ -146,6 +146,9 @@ impl Scene {
     }
 }
 
+/// Point, error bound and geometric normal per lane.
+type HitPoints<F> = (V3<F>, V3<F>, V3<F>);
+
 /// Point, error bound and geometric normal of triangle hits at barycentrics
 /// `(b1, b2)`. Relative to corner 0: `p0 + b1·e1 + b2·e2` lies on the triangle's plane
 /// for any barycentrics, so its error is the rounding of the edge terms (small, like
@@ -162,7 +165,7 @@ fn triangle_points<L: Lanes>(
     [p0, p1, p2]: [V3<L::F>; 3],
     b1: L::F,
     b2: L::F,
-) -> (V3<L::F>, V3<L::F>, V3<L::F>) {
+) -> HitPoints<L::F> {
     let (e1, e2) = (p1 - p0, p2 - p0);
     let (t1, t2) = (e1 * b1, e2 * b2);
     let local = t1 + t2;
@@ -207,7 +210,7 @@ fn sphere_points<L: Lanes>(
     t: L::F,
     c: V3<L::F>,
     r: L::F,
-) -> (V3<L::F>, V3<L::F>, V3<L::F>) {
+) -> HitPoints<L::F> {
     let n = ((o - c) + d * t).normalize_or_zero();
     let n = V3::select(n.is_zero(), V3::splat(l, Vec3::Y), n);
     let p = c + n * r;
