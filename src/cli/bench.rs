@@ -3,7 +3,6 @@
 use super::args::BenchCommand;
 use super::convert::{check_resolution, threads_invalid};
 use anyhow::{bail, Context, Result};
-use ember::accel::{AccelKind, BvhBuilder, EmbreeQuality};
 use ember::bench::{self, Report};
 use std::path::{Path, PathBuf};
 
@@ -110,6 +109,7 @@ fn run_on_pool(which: BenchCommand) -> Result<()> {
             max_depth,
             repeats,
             accel: a,
+            embree_steps,
             engines,
             out,
             ..
@@ -123,7 +123,7 @@ fn run_on_pool(which: BenchCommand) -> Result<()> {
                 spp,
                 max_depth,
                 repeat: repeats.max(1),
-                accel: AccelKind::new(a, BvhBuilder::default(), EmbreeQuality::default()),
+                accels: bench::render::RenderBenchOptions::accels_for(a, embree_steps),
                 engines,
             },
             out,
