@@ -8,7 +8,7 @@ use criterion::{black_box, criterion_group, criterion_main, Criterion, Throughpu
 use ember::accel::{Accel, Bvh, BvhBuilder};
 use ember::camera::Camera;
 use ember::geometry::{Aabb, Ray};
-use ember::sampling::{uniform_sphere, Sampler};
+use ember::sampling::{uniform_sphere, Rng};
 use ember::scene::{collada, Scene, Triangle, NO_LIGHT};
 use glam::{Vec2, Vec3};
 use std::path::Path;
@@ -70,7 +70,7 @@ struct Workload {
 
 fn workload(scene: &Scene, bvh: &Bvh) -> Workload {
     let cam = Camera::new(&scene.camera, &scene.bounds, IMAGE, IMAGE);
-    let mut rng = Sampler::from_seed(1);
+    let mut rng = Rng::from_seed(1);
     let camera: Vec<Ray> = (0..IMAGE * IMAGE)
         .map(|k| cam.generate_ray(k % IMAGE, k / IMAGE, Vec2::splat(0.5)))
         .collect();

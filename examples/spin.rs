@@ -1,4 +1,6 @@
-use ember::accel::{AccelBuilder, EmbreeMode, EmbreeQuality, EmbreeQueries, EmbreeSelfHits, EmbreeSpheres, Accel};
+use ember::accel::{
+    Accel, AccelBuilder, EmbreeMode, EmbreeQuality, EmbreeQueries, EmbreeSelfHits, EmbreeSpheres,
+};
 fn threads() -> String {
     let mut out = String::new();
     for e in std::fs::read_dir("/proc/self/task").unwrap() {
@@ -14,9 +16,28 @@ fn main() {
     let base = EmbreeMode::robust(EmbreeQuality::Medium);
     let modes = [
         ("default", base),
-        ("embree spheres", EmbreeMode { spheres: EmbreeSpheres::Embree, ..base }),
-        ("single", EmbreeMode { queries: EmbreeQueries::Single, ..base }),
-        ("packet16 filter", EmbreeMode { queries: EmbreeQueries::Packet16, self_hits: EmbreeSelfHits::Filter, ..base }),
+        (
+            "embree spheres",
+            EmbreeMode {
+                spheres: EmbreeSpheres::Embree,
+                ..base
+            },
+        ),
+        (
+            "single",
+            EmbreeMode {
+                queries: EmbreeQueries::Single,
+                ..base
+            },
+        ),
+        (
+            "packet16 filter",
+            EmbreeMode {
+                queries: EmbreeQueries::Packet16,
+                self_hits: EmbreeSelfHits::Filter,
+                ..base
+            },
+        ),
         ("before", EmbreeMode::before(EmbreeQuality::Medium)),
     ];
     let pool = ember::accel::tracing_pool(Some(1)).unwrap();
@@ -25,7 +46,9 @@ fn main() {
             let b = AccelBuilder::new(1);
             let a = b.build_embree(&scene, mode).unwrap();
             let r = ember::geometry::Ray::new(scene.bounds.centre(), glam::Vec3::X);
-            for _ in 0..1000 { std::hint::black_box(a.intersect(&r)); }
+            for _ in 0..1000 {
+                std::hint::black_box(a.intersect(&r));
+            }
         });
         std::thread::sleep(std::time::Duration::from_millis(1500));
         println!("{name}: {}", threads());

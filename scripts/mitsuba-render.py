@@ -1,7 +1,8 @@
 #!/usr/bin/env python3
 """Renders a Mitsuba 3 scene exported by `ember export --format mitsuba` and
 prints one JSON line per render: the render-only seconds, samples/s and the
-image mean per channel. The first render of a process pays for JIT compilation
+image mean per channel, and the sample count the scene's sampler used (some
+samplers round the requested count up). The first render of a process pays for JIT compilation
 (llvm variants), so `--renders 2` times a second, warm call. Used by
 scripts/bench-mitsuba and by the export tests; Mitsuba is never a dependency of
 ember itself."""
@@ -41,6 +42,8 @@ def main():
         dr.sync_thread()
         arr = np.asarray(img)  # forces the kernels to finish before the clock stops
         dt = time.perf_counter() - t0
+        # The count the sampler took: some round the requested one up.
+        spp = sensor.sampler().sample_count()
         mean = [float(arr[..., c].mean()) for c in range(3)]
         print(json.dumps({"render": i, "seconds": dt, "samples_per_second": w * h * spp / dt,
                           "width": int(w), "height": int(h), "spp": spp, "mean_rgb": mean,

@@ -7,7 +7,13 @@ pub type Color = glam::Vec3;
 /// Illuminance of a linear RGB value (Rec. 709 weights, as the spec's adaptive rule uses).
 #[inline]
 pub fn luminance(c: Color) -> f32 {
-    0.2126 * c.x + 0.7152 * c.y + 0.0722 * c.z
+    luminance_l(c.into())
+}
+
+/// [`luminance`] per lane.
+#[inline(always)]
+pub fn luminance_l<F: crate::lanes::Real>(c: crate::lanes::V3<F>) -> F {
+    c.x.splat_as(0.2126) * c.x + c.y.splat_as(0.7152) * c.y + c.z.splat_as(0.0722) * c.z
 }
 
 /// True when every channel is finite.

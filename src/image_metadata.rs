@@ -2,8 +2,8 @@
 //! headers as string attributes and into PNG files as text chunks, read back by
 //! `ember info IMAGE`. Shard headers and merges reuse the same list.
 
-use crate::integrators::Estimator;
-use crate::render::{RenderJob, RenderSettings, StopReason};
+use crate::integrators::{Estimator, Roulette};
+use crate::render::{Adaptive, RenderJob, RenderSettings, Shading, StopReason, StopRule};
 use crate::scene::Scene;
 use std::path::Path;
 
@@ -44,12 +44,15 @@ impl ImageMetadata {
             u32::MAX => m.push("ember.spp", "no cap"),
             spp => m.push("ember.spp", spp),
         }
-        m.push("ember.light_samples", s.light_samples);
-        m.push("ember.max_depth", s.max_depth);
-        m.push("ember.accumulate", s.accumulate);
-        m.push("ember.estimator", estimator_label(s, &job.scene));
-        m.push("ember.roulette", format!("{:?}", s.roulette));
-        m.push("ember.adaptive", format!("{:?}", s.adaptive));
+        // Light transport settings mean nothing to a normals or BVH-cost image.
+        if s.shading == Shading::Radiance {
+            m.push("ember.light_samples", s.light_samples);
+            m.push("ember.max_depth", s.max_depth);
+            m.push("ember.accumulate", s.accumulate);
+            m.push("ember.estimator", estimator_label(s, &job.scene));
+            m.push("ember.roulette", roulette_text(&s.roulette));
+        }
+        m.push("ember.adaptive", adaptive_text(s.adaptive.as_ref()));
         m.push("ember.shading", s.shading);
         m.push("ember.seed", s.seed);
         m.push("ember.spp_offset", s.spp_offset);
@@ -126,6 +129,36 @@ impl ImageMetadata {
     }
 }
 
+/// `--rr` as a user reads it: `off`, `throughput from bounce 3, min 0.05`,
+/// `probability 0.5 from bounce 3`.
+pub fn roulette_text(r: &Roulette) -> String {
+    match *r {
+        Roulette::Off => "off".into(),
+        Roulette::Throughput { start, min_prob } => {
+            format!("throughput from bounce {start}, min {min_prob}")
+        }
+        Roulette::Fixed { start, prob } => format!("probability {prob} from bounce {start}"),
+    }
+}
+
+/// `-a` as a user reads it: `off`, or `batch 32, tolerance 0.05, ...` with the rule for
+/// pixels whose samples are all equal.
+pub fn adaptive_text(a: Option<&Adaptive>) -> String {
+    let Some(a) = a else {
+        return "off".into();
+    };
+    let constant = match a.rule {
+        StopRule::Neighbourhood => {
+            "pixels of zeros as their neighbourhood says, other constant pixels"
+        }
+        StopRule::PerPixel => "constant pixels",
+    };
+    format!(
+        "batch {}, tolerance {}, {constant} after {} samples",
+        a.batch, a.tol, a.min_samples_if_constant
+    )
+}
+
 /// What `--integrator` (perhaps auto) chose for `scene`: light tracing, or path
 /// tracing with its direct-lighting strategy.
 pub fn estimator_label(s: &RenderSettings, scene: &Scene) -> String {
@@ -158,6 +191,24 @@ pub fn cpu_model() -> String {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn settings_read_as_words_not_rust_syntax() {
+        let default = roulette_text(&Roulette::default());
+        assert_eq!(default, "throughput from bounce 3, min 0.05");
+        let fixed = Roulette::Fixed {
+            start: 2,
+            prob: 0.5,
+        };
+        assert_eq!(roulette_text(&fixed), "probability 0.5 from bounce 2");
+        assert_eq!(roulette_text(&Roulette::Off), "off");
+        assert_eq!(adaptive_text(None), "off");
+        let a = adaptive_text(Some(&Adaptive::new(32, 0.05)));
+        assert!(a.starts_with("batch 32, tolerance 0.05, "), "{a}");
+        for text in [default, a] {
+            assert!(!text.contains(['{', '}', '(', ')', ':']), "{text}");
+        }
+    }
 
     #[test]
     fn fnv1a64_known_values() {

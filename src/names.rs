@@ -102,7 +102,12 @@ mod tests {
     #[test]
     fn tables_are_complete() {
         use DirectStrategy as D;
-        check(&[Backend::Auto, Backend::Native, Backend::Embree]);
+        check(&[
+            Backend::Auto,
+            Backend::Native,
+            Backend::Embree,
+            Backend::None,
+        ]);
         check(&[BvhBuilder::Sah, BvhBuilder::Midpoint]);
         check(&[
             EmbreeQuality::Low,

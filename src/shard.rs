@@ -4,7 +4,7 @@
 //! a range of sample indices (`--spp-offset S -s M`: samples `S..S+M`). Both split the
 //! work exactly: a pixel's value depends only on (seed, pixel, sample indices,
 //! settings), since every sample draws from its own random stream
-//! ([`crate::sampling::Sampler::for_sample`]). [`merge`] checks that the parts belong
+//! ([`crate::sampling::Rng::for_sample`]). [`merge`] checks that the parts belong
 //! to one render and cover it exactly once, then assembles them:
 //!
 //! - bands are copied pixel for pixel, so merged bands are bit-identical to the render

@@ -6,7 +6,7 @@ mod bvh_common;
 use bvh_common::*;
 use ember::accel::{Accel, BruteForce, Bvh, BvhBuilder};
 use ember::geometry::Ray;
-use ember::sampling::{uniform_sphere, Sampler};
+use ember::sampling::{uniform_sphere, Rng};
 use ember::scene::Scene;
 use glam::Vec3;
 use proptest::prelude::*;
@@ -49,7 +49,7 @@ fn soup_spec() -> impl Strategy<Value = SoupSpec> {
 }
 
 struct SoupBuilder {
-    rng: Sampler,
+    rng: Rng,
     positions: Vec<Vec3>,
     tris: Vec<[u32; 3]>,
     spheres: Vec<(Vec3, f32)>,
@@ -139,7 +139,7 @@ impl SoupBuilder {
 
 fn make_soup(spec: &SoupSpec) -> Scene {
     let mut b = SoupBuilder {
-        rng: Sampler::from_seed(spec.seed),
+        rng: Rng::from_seed(spec.seed),
         positions: Vec::new(),
         tris: Vec::new(),
         spheres: Vec::new(),
@@ -187,7 +187,7 @@ proptest! {
     #[test]
     fn bvh_agrees_with_brute_force_on_soups(spec in soup_spec()) {
         let scene = make_soup(&spec);
-        let mut rng = Sampler::from_seed(spec.seed ^ 0x5EED);
+        let mut rng = Rng::from_seed(spec.seed ^ 0x5EED);
         let aims = targets(&scene);
         let rays: Vec<Ray> = (0..400).map(|_| random_ray(&mut rng, &scene.bounds, &aims)).collect();
         check_against_brute(&scene, &rays);
@@ -286,10 +286,10 @@ fn sah_tree_is_cheaper_than_midpoint_tree() {
 /// A closed mesh (a cube's faces subdivided, vertices shared, projected onto a
 /// bumpy sphere), seen from inside: every ray must hit, including rays aimed
 /// exactly at vertices and at edge midpoints.
-fn closed_mesh(n: usize, rng: &mut Sampler) -> Scene {
+fn closed_mesh(n: usize, rng: &mut Rng) -> Scene {
     let mut index: HashMap<[i32; 3], u32> = HashMap::new();
     let mut positions = Vec::new();
-    let mut vertex = |l: [i32; 3], rng: &mut Sampler| -> u32 {
+    let mut vertex = |l: [i32; 3], rng: &mut Rng| -> u32 {
         *index.entry(l).or_insert_with(|| {
             let p = Vec3::new(l[0] as f32, l[1] as f32, l[2] as f32) / n as f32 - Vec3::splat(0.5);
             positions.push(p.normalize() * (1.0 + 0.2 * rng.next_f32()));
@@ -322,7 +322,7 @@ fn closed_mesh(n: usize, rng: &mut Sampler) -> Scene {
 
 #[test]
 fn closed_mesh_is_watertight_from_inside() {
-    let mut rng = Sampler::from_seed(3);
+    let mut rng = Rng::from_seed(3);
     let scene = closed_mesh(24, &mut rng);
     let mut aims = targets(&scene);
     aims.extend((0..2000).map(|_| 3.0 * uniform_sphere(rng.next_2d())));
@@ -424,7 +424,7 @@ fn spawned_rays_do_not_self_intersect() {
         }
         scene.bounds = scene_from(scene.positions.clone(), vec![], vec![]).bounds;
         let bvh = Bvh::build(&scene, BvhBuilder::Sah);
-        let mut rng = Sampler::from_seed(17);
+        let mut rng = Rng::from_seed(17);
         let (mut spawned, mut failures, mut all) = (0, Vec::new(), Vec::new());
         let aims = targets(&scene);
         let bounds = bvh_bounds(&scene);

@@ -14,7 +14,7 @@ mod bvh_common;
 
 use bvh_common::*;
 use ember::geometry::Ray;
-use ember::sampling::Sampler;
+use ember::sampling::Rng;
 use ember::scene::{collada, Scene};
 use std::collections::HashSet;
 use std::hash::{DefaultHasher, Hash, Hasher};
@@ -71,7 +71,7 @@ fn bvh_agrees_with_oracle_on_course_scenes() {
         if !seen.insert(geometry_key(&scene)) {
             continue;
         }
-        let mut rng = Sampler::from_seed(geometry_key(&scene));
+        let mut rng = Rng::from_seed(geometry_key(&scene));
         let aims = sample_targets(&scene, &mut rng);
         let bounds = scene_bounds(&scene);
         let rays: Vec<Ray> = (0..RAYS_PER_SCENE)

@@ -3,41 +3,28 @@
 
 mod common;
 
-use common::{ember, repo};
+use common::{command, repo, run, Run};
 use ember::film::Image;
 use std::path::Path;
-use std::process::Output;
 
 const SPHERES: &str = "scenes/cs184/sky/CBspheres_lambertian.dae";
 const BUNNY: &str = "scenes/cs184/sky/CBbunny.dae";
 
-fn run(args: &[&str], out: &Path, scene: &str) -> Output {
-    ember()
-        .args(args)
-        .arg("-f")
-        .arg(out)
-        .arg(repo(scene))
-        .output()
-        .unwrap()
+/// `ember ARGS -f OUT SCENE`.
+fn render_run(args: &[&str], out: &Path, scene: &str) -> Run {
+    run(command().args(args).arg("-f").arg(out).arg(repo(scene)))
 }
 
-/// Renders and reads the image back; panics with ember's stderr on failure.
+/// Renders and reads the image back.
 fn render(args: &[&str], out: &Path, scene: &str) -> Image {
-    let o = run(args, out, scene);
-    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    render_run(args, out, scene).success();
     ember::image_io::read_image(out).unwrap()
 }
 
-/// Expects a failure with a one-line error containing every needle, and no image.
+/// Expects a one-line error containing every needle, and no image.
 fn expect_error(args: &[&str], out: &Path, scene: &str, needles: &[&str]) {
-    let o = run(args, out, scene);
-    let err = String::from_utf8_lossy(&o.stderr);
-    assert!(!o.status.success(), "expected failure: {args:?}");
-    assert_eq!(err.trim_end().lines().count(), 1, "not one line: {err}");
-    for n in needles {
-        assert!(err.contains(n), "{err:?} does not contain {n:?}");
-    }
-    assert!(!err.contains("panicked"), "{err}");
+    let failed = render_run(args, out, scene);
+    needles.iter().fold(failed, |r, n| r.fails_with(n));
     assert!(!out.exists(), "an image was written");
 }
 
@@ -52,17 +39,11 @@ fn saved_camera_renders_the_same_image() {
     let dir = tempfile::tempdir().unwrap();
     for scene in [SPHERES, BUNNY] {
         let cam = dir.path().join("view.cam");
-        let st = ember()
+        run(command()
             .args(["camera", "-r", "40", "30", "--save"])
             .arg(&cam)
-            .arg(repo(scene))
-            .output()
-            .unwrap();
-        assert!(
-            st.status.success(),
-            "{}",
-            String::from_utf8_lossy(&st.stderr)
-        );
+            .arg(repo(scene)))
+        .success();
         let text = std::fs::read_to_string(&cam).unwrap();
         // The course's six lines: 5, 6, 5, 9, 3, 2 numbers.
         let counts: Vec<usize> = text.lines().map(|l| l.split_whitespace().count()).collect();
@@ -80,13 +61,11 @@ fn saved_camera_renders_the_same_image() {
 fn saved_lens_is_used_and_flags_replace_it() {
     let dir = tempfile::tempdir().unwrap();
     let cam = dir.path().join("lens.cam");
-    let st = ember()
+    run(command()
         .args(["camera", "-r", "40", "30", "-b", "0.1", "-d", "3", "--save"])
         .arg(&cam)
-        .arg(repo(BUNNY))
-        .output()
-        .unwrap();
-    assert!(st.status.success());
+        .arg(repo(BUNNY)))
+    .success();
     let cam_arg = cam.to_str().unwrap();
     let flags = render(
         &with(&["-b", "0.1", "-d", "3"]),
@@ -106,13 +85,11 @@ fn saved_lens_is_used_and_flags_replace_it() {
 
 #[test]
 fn camera_without_save_prints_the_file() {
-    let o = ember()
+    let text = run(command()
         .args(["camera", "-b", "0.05", "-d", "3.5"])
-        .arg(repo(SPHERES))
-        .output()
-        .unwrap();
-    assert!(o.status.success());
-    let text = String::from_utf8_lossy(&o.stdout);
+        .arg(repo(SPHERES)))
+    .success()
+    .stdout();
     assert_eq!(text.lines().count(), 6);
     assert_eq!(text.lines().last(), Some("3.5 0.05"));
 }
@@ -121,12 +98,11 @@ fn camera_without_save_prints_the_file() {
 fn camera_file_moves_the_view() {
     // The scene's camera moved 0.3 to its right: a different image, not an error.
     let dir = tempfile::tempdir().unwrap();
-    let o = ember()
+    let text = run(command()
         .args(["camera", "-r", "40", "30"])
-        .arg(repo(SPHERES))
-        .output()
-        .unwrap();
-    let text = String::from_utf8_lossy(&o.stdout).into_owned();
+        .arg(repo(SPHERES)))
+    .success()
+    .stdout();
     let mut lines: Vec<String> = text.lines().map(String::from).collect();
     let mut pos: Vec<f32> = lines[1]
         .split_whitespace()
@@ -301,8 +277,7 @@ fn bad_lens_values_are_rejected() {
 
 #[test]
 fn help_lists_the_course_flags() {
-    let o = ember().arg("--help").output().unwrap();
-    let help = String::from_utf8_lossy(&o.stdout);
+    let help = common::ember(["--help"]).success().stdout();
     for flag in [
         "-c <FILE>",
         "-p <X> <Y> <DX> <DY>",
@@ -312,9 +287,8 @@ fn help_lists_the_course_flags() {
         assert!(help.contains(flag), "--help lacks {flag}");
     }
     // A missing value is a plain error, not clap's "use '-- -c'" tip for unknown flags.
-    let o = ember().args(["-c"]).output().unwrap();
-    let err = String::from_utf8_lossy(&o.stderr);
-    assert!(!o.status.success());
+    let failed = common::ember(["-c"]).fails_with("-c");
+    let err = failed.stderr();
     assert!(
         !err.contains("-- -c") && !err.contains("unexpected argument"),
         "{err}"

@@ -2,25 +2,19 @@
 
 mod common;
 
-use common::{ember, repo};
+use common::{command, ember, repo, run};
 
 #[test]
 fn cs184_command_line_is_accepted_verbatim() {
     let dir = tempfile::tempdir().unwrap();
     let out = dir.path().join("out.png");
-    let st = ember()
+    run(command()
         .args([
             "-t", "2", "-s", "2", "-l", "2", "-m", "2", "-r", "32", "24", "-f",
         ])
         .arg(&out)
-        .arg(repo("scenes/cs184/sky/CBspheres_lambertian.dae"))
-        .output()
-        .unwrap();
-    assert!(
-        st.status.success(),
-        "{}",
-        String::from_utf8_lossy(&st.stderr)
-    );
+        .arg(repo("scenes/cs184/sky/CBspheres_lambertian.dae")))
+    .success();
     let img = image::open(&out).unwrap();
     assert_eq!((img.width(), img.height()), (32, 24));
 }
@@ -29,19 +23,13 @@ fn cs184_command_line_is_accepted_verbatim() {
 fn exr_output_and_adaptive_rate_map() {
     let dir = tempfile::tempdir().unwrap();
     let out = dir.path().join("x.exr");
-    let st = ember()
+    run(command()
         .args([
             "-s", "64", "-a", "8", "0.1", "-m", "1", "-r", "64", "48", "-f",
         ])
         .arg(&out)
-        .arg(repo("scenes/cs184/sky/CBspheres_lambertian.dae"))
-        .output()
-        .unwrap();
-    assert!(
-        st.status.success(),
-        "{}",
-        String::from_utf8_lossy(&st.stderr)
-    );
+        .arg(repo("scenes/cs184/sky/CBspheres_lambertian.dae")))
+    .success();
     let img = ember::image_io::read_image(&out).unwrap();
     assert_eq!((img.width, img.height), (64, 48));
     // The light is seen directly at radiance 10: EXR keeps linear values above 1.
@@ -49,54 +37,37 @@ fn exr_output_and_adaptive_rate_map() {
     assert!(dir.path().join("x_rate.exr").exists());
 }
 
-fn fails_with(args: &[&str], needle: &str) {
-    let st = ember().args(args).output().unwrap();
-    let err = String::from_utf8_lossy(&st.stderr);
-    assert!(!st.status.success(), "{args:?} succeeded");
-    assert!(
-        err.contains(needle),
-        "{args:?}: stderr {err:?} lacks {needle:?}"
-    );
-    assert!(!err.contains("panicked"), "{args:?} panicked: {err}");
-}
-
 #[test]
 fn bad_flags_and_paths_fail_cleanly() {
     let scene = repo("scenes/cs184/sky/CBempty.dae");
     let scene = scene.to_str().unwrap();
-    fails_with(&["--frobnicate", scene], "--frobnicate");
-    fails_with(&["-s", "zero", scene], "-s");
-    fails_with(&["-o", "2", scene], "-o");
-    fails_with(&["-r", "0", "10", scene], "resolution");
-    fails_with(&["-f", "out.jpg", scene], "out.jpg");
-    fails_with(&["/nonexistent/scene.dae"], "/nonexistent/scene.dae");
-    fails_with(&["--accel", "bogus", scene], "bogus");
-    fails_with(&["-a", "0", "0.05", scene], "BATCH");
+    ember(["--frobnicate", scene]).fails_with("--frobnicate");
+    ember(["-s", "zero", scene]).fails_with("-s");
+    ember(["-o", "2", scene]).fails_with("-o");
+    ember(["-r", "0", "10", scene]).fails_with("resolution");
+    ember(["-f", "out.jpg", scene]).fails_with("out.jpg");
+    ember(["/nonexistent/scene.dae"]).fails_with("/nonexistent/scene.dae");
+    ember(["--accel", "bogus", scene]).fails_with("bogus");
+    ember(["-a", "0", "0.05", scene]).fails_with("BATCH");
 }
 
 #[test]
 fn unwritable_output_leaves_no_file() {
     let dir = tempfile::tempdir().unwrap();
     let target = dir.path().join("no/such/dir/out.png");
-    let st = ember()
-        .args(["-s", "1", "-r", "8", "6", "-f"])
-        .arg(&target)
-        .arg(repo("scenes/cs184/sky/CBempty.dae"))
-        .output()
-        .unwrap();
-    assert!(!st.status.success());
-    assert!(String::from_utf8_lossy(&st.stderr).contains("out.png"));
+    let scene = repo("scenes/cs184/sky/CBempty.dae");
+    let render = |out: &std::path::Path| {
+        run(command()
+            .args(["-s", "1", "-r", "8", "6", "-f"])
+            .arg(out)
+            .arg(&scene))
+    };
+    render(&target).fails_with("out.png");
     assert!(!target.exists());
     // A directory in place of the file: the write fails and the temporary is cleaned up.
     let as_dir = dir.path().join("taken.png");
     std::fs::create_dir(&as_dir).unwrap();
-    let st = ember()
-        .args(["-s", "1", "-r", "8", "6", "-f"])
-        .arg(&as_dir)
-        .arg(repo("scenes/cs184/sky/CBempty.dae"))
-        .output()
-        .unwrap();
-    assert!(!st.status.success());
+    render(&as_dir).fails_with("taken.png");
     let leftovers: Vec<_> = std::fs::read_dir(dir.path())
         .unwrap()
         .map(|e| e.unwrap().file_name())
@@ -118,35 +89,32 @@ fn malformed_scene_is_an_error_naming_the_file() {
     )
     .unwrap();
     let out = dir.path().join("o.png");
-    let st = ember().arg("-f").arg(&out).arg(&bad).output().unwrap();
-    assert!(!st.status.success());
-    assert!(String::from_utf8_lossy(&st.stderr).contains("broken.dae"));
+    run(command().arg("-f").arg(&out).arg(&bad)).fails_with("broken.dae");
     assert!(!out.exists());
 }
 
+/// Without Embree, `--accel embree` says how to get it; with it, it renders.
 #[test]
-fn embree_request_without_feature_says_how_to_get_it() {
+fn accel_embree_renders_or_says_how_to_get_it() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("e.png");
+    let r = run(command()
+        .args(["--accel", "embree", "-r", "8", "6", "-f"])
+        .arg(&out)
+        .arg(repo("scenes/cs184/sky/CBempty.dae")));
     if cfg!(any(feature = "embree", feature = "embree4")) {
-        return;
+        r.success();
+        assert_eq!(image::open(&out).unwrap().width(), 8);
+    } else {
+        r.fails_with("rebuild with --features embree");
+        assert!(!out.exists());
     }
-    let st = ember()
-        .args(["--accel", "embree", "-r", "8", "6"])
-        .arg(repo("scenes/cs184/sky/CBempty.dae"))
-        .output()
-        .unwrap();
-    assert!(!st.status.success());
-    assert!(String::from_utf8_lossy(&st.stderr).contains("rebuild with --features embree"));
 }
 
 #[test]
 fn info_says_what_accel_auto_picks_and_why() {
-    let st = ember()
-        .arg("info")
-        .arg(repo("scenes/cs184/sky/CBspheres_lambertian.dae"))
-        .output()
-        .unwrap();
-    assert!(st.status.success());
-    let text = String::from_utf8_lossy(&st.stdout);
+    let scene = repo("scenes/cs184/sky/CBspheres_lambertian.dae");
+    let text = run(command().arg("info").arg(scene)).success().stdout();
     let line = text
         .lines()
         .find(|l| l.starts_with("--accel auto"))
@@ -165,8 +133,8 @@ fn info_says_what_accel_auto_picks_and_why() {
 #[test]
 fn bench_accel_takes_several_thread_counts_and_appends() {
     let dir = tempfile::tempdir().unwrap();
-    let run = |append: bool| {
-        let mut c = ember();
+    let bench = |append: bool| {
+        let mut c = command();
         c.args([
             "bench",
             "accel",
@@ -182,36 +150,28 @@ fn bench_accel_takes_several_thread_counts_and_appends() {
         if append {
             c.arg("--append");
         }
-        let st = c.output().unwrap();
-        assert!(
-            st.status.success(),
-            "{}",
-            String::from_utf8_lossy(&st.stderr)
-        );
+        run(&mut c).success();
         std::fs::read_to_string(dir.path().join("accel.csv")).unwrap()
     };
     // Nothing to append to yet: an error naming the file, before any measuring.
-    let st = ember()
+    let failed = run(command()
         .args(["bench", "accel", "mesh:2000", "--append", "--out"])
-        .arg(dir.path())
-        .output()
-        .unwrap();
-    assert!(!st.status.success());
-    let err = String::from_utf8_lossy(&st.stderr);
-    assert!(err.contains("accel.csv: cannot read"), "{err}");
+        .arg(dir.path()))
+    .fails_with("accel.csv: cannot read");
+    let err = failed.stderr();
     assert!(!err.contains("Mrays/s"), "measured before failing: {err}");
     let backends = if cfg!(any(feature = "embree", feature = "embree4")) {
         4
     } else {
         2
     };
-    let first = run(false);
+    let first = bench(false);
     assert_eq!(first.lines().count(), 1 + 2 * backends, "{first}");
     assert!(first
         .lines()
         .skip(1)
         .all(|l| l.starts_with("displaced sphere (2k tris),")));
-    let both = run(true);
+    let both = bench(true);
     assert_eq!(both.lines().count(), 1 + 4 * backends, "{both}");
     let md = std::fs::read_to_string(dir.path().join("accel.md")).unwrap();
     assert_eq!(md.lines().count(), 2 + 4 * backends, "{md}");
@@ -221,8 +181,8 @@ fn bench_accel_takes_several_thread_counts_and_appends() {
 fn light_tracing_from_the_command_line_and_its_warning_on_glass() {
     let dir = tempfile::tempdir().unwrap();
     let out = dir.path().join("lt.exr");
-    let run = |scene: &str| {
-        ember()
+    let render = |scene: &str| {
+        run(command()
             .args([
                 "--integrator",
                 "light-tracing",
@@ -237,21 +197,300 @@ fn light_tracing_from_the_command_line_and_its_warning_on_glass() {
                 "-f",
             ])
             .arg(&out)
-            .arg(repo(scene))
-            .output()
-            .unwrap()
+            .arg(repo(scene)))
     };
-    let st = run("scenes/cs184/sky/CBempty.dae");
-    assert!(
-        st.status.success(),
-        "{}",
-        String::from_utf8_lossy(&st.stderr)
-    );
-    assert!(String::from_utf8_lossy(&st.stderr).is_empty());
+    let r = render("scenes/cs184/sky/CBempty.dae").success();
+    assert!(r.stderr().is_empty(), "{}", r.stderr());
     let img = ember::image_io::read_image(&out).unwrap();
     assert!(img.all_finite() && img.mean_luminance() > 0.0);
     // Mirrors and glass cannot be connected to a pinhole: ember says so.
-    let st = run("scenes/cs184/sky/CBspheres.dae");
-    assert!(st.status.success());
-    assert!(String::from_utf8_lossy(&st.stderr).contains("mirror or glass"));
+    let r = render("scenes/cs184/sky/CBspheres.dae").success();
+    assert!(r.stderr().contains("mirror or glass"), "{}", r.stderr());
+}
+
+/// The course's `*_unlit.dae` scenes have one ambient light of radiance 0: the render
+/// is black, and ember says so and how to light them; with `-e` it says nothing.
+#[test]
+fn unlit_scenes_warn_and_hint_at_an_environment_map() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("u.png");
+    for scene in ["bunny_unlit.dae", "bunny_microfacet_cu_unlit.dae"] {
+        let scene = repo("scenes/cs184/sky").join(scene);
+        let render = |extra: &[&str]| {
+            run(command()
+                .args(["-s", "1", "-r", "8", "6", "-f"])
+                .arg(&out)
+                .args(extra)
+                .arg(&scene))
+            .success()
+            .stderr()
+        };
+        let err = render(&[]);
+        let warning: Vec<&str> = err.lines().filter(|l| l.contains("warning")).collect();
+        assert_eq!(warning.len(), 1, "{err}");
+        assert!(
+            warning[0].contains("no light in the scene emits anything")
+                && warning[0].contains("-e FILE.exr"),
+            "{err}"
+        );
+        let env = repo("scenes/env_sun.exr");
+        let err = render(&["-e", env.to_str().unwrap()]);
+        assert!(!err.contains("warning"), "{err}");
+    }
+    // A lit scene gets no such warning.
+    let lit = repo("scenes/cs184/sky/CBspheres_lambertian.dae");
+    let err = run(command().args(["-r", "8", "6", "-f"]).arg(&out).arg(lit))
+        .success()
+        .stderr();
+    assert!(!err.contains("warning"), "{err}");
+}
+
+#[test]
+fn adaptive_flag_values_and_cap_are_explained() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("a.png");
+    let scene = repo("scenes/cs184/sky/CBspheres_lambertian.dae");
+    let render = |args: &[&str]| {
+        run(command()
+            .args(["-r", "8", "6", "-f"])
+            .arg(&out)
+            .args(args)
+            .arg(&scene))
+    };
+    // One value too many is named as such, not taken for a subcommand.
+    render(&["-a", "64", "0.05", "0.1"])
+        .fails_with("-a takes at most two values, BATCH and TOL, but was given 64 0.05 0.1");
+    // -s is the most samples a pixel takes: without it (1), or below the batch, -a does nothing.
+    for (args, needle) in [
+        (&["-a", "64", "0.05"][..], "without -s that is 1"),
+        (&["-a"][..], "without -s that is 1"),
+        (&["-s", "16", "-a", "64"][..], "reaches -s 16"),
+    ] {
+        let err = render(args).success().stderr();
+        assert!(
+            err.contains("warning: -a") && err.contains(needle),
+            "{args:?}: {err}"
+        );
+    }
+    let err = render(&["-s", "256", "-a", "16", "0.05"])
+        .success()
+        .stderr();
+    assert!(!err.contains("warning"), "{err}");
+}
+
+#[test]
+fn counts_of_zero_or_less_say_at_least_one() {
+    let scene = repo("scenes/cs184/sky/CBempty.dae");
+    let scene = scene.to_str().unwrap();
+    for args in [["-s", "0"], ["-s", "-1"], ["-t", "0"], ["-t", "-2"]] {
+        let o = ember([args[0], args[1], scene]).fails_with("must be at least 1");
+        assert!(!o.stderr().contains("4294967295"), "{}", o.stderr());
+    }
+    ember(["export", scene, "-s", "0"]).fails_with("must be at least 1");
+}
+
+/// The summary line states the resolution and what the pixels show; a cell's samples
+/// are the cell's own, even when it is written in the full frame.
+#[test]
+fn summary_states_resolution_shading_and_the_cells_samples() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("s.exr");
+    let scene = repo("scenes/cs184/sky/CBspheres_lambertian.dae");
+    let summary = |args: &[&str]| {
+        let err = run(command()
+            .args(["-r", "16", "12", "-f"])
+            .arg(&out)
+            .args(args)
+            .arg(&scene))
+        .success()
+        .stderr();
+        let line = err.lines().find(|l| l.contains("samples in"));
+        line.unwrap_or_else(|| panic!("no summary in {err}"))
+            .to_string()
+    };
+    let radiance = summary(&["-s", "2", "-m", "3"]);
+    assert!(radiance.contains("; 16x12, path ("), "{radiance}");
+    assert!(
+        radiance.contains("-m 3") && radiance.contains(", 2 spp,"),
+        "{radiance}"
+    );
+    let normals = summary(&["--shading", "normals"]);
+    assert!(
+        normals.contains("; 16x12, --shading normals, 1 spp,"),
+        "{normals}"
+    );
+    assert!(
+        !normals.contains("estimator") && !normals.contains("-m "),
+        "{normals}"
+    );
+    let cell = summary(&["-s", "4", "-p", "2", "3", "4", "5", "--full-frame"]);
+    assert!(cell.contains("; cell 4x5 at (2, 3) of 16x12, "), "{cell}");
+    assert!(
+        cell.contains(", 4 spp,") && cell.contains(" 80 samples in"),
+        "{cell}"
+    );
+}
+
+#[test]
+fn info_describes_any_image_and_says_it_takes_one() {
+    let dir = tempfile::tempdir().unwrap();
+    // An EXR ember did not write: size, channels and per-channel means.
+    let foreign = dir.path().join("foreign.exr");
+    let pixels: Vec<f32> = (0..12).flat_map(|i| [i as f32, 0.5, 2.0]).collect();
+    image::Rgb32FImage::from_raw(4, 3, pixels)
+        .unwrap()
+        .save(&foreign)
+        .unwrap();
+    let text = run(command().arg("info").arg(&foreign)).success().stdout();
+    for line in [
+        "size: 4x3",
+        "  R: mean 5.5, min 0, max 11",
+        "  G: mean 0.5, min 0.5, max 0.5",
+        "not written by ember (no ember.* metadata)",
+    ] {
+        assert!(text.lines().any(|l| l == line), "no {line:?} in\n{text}");
+    }
+    assert!(
+        text.contains("channels: ") && text.contains("32-bit float"),
+        "{text}"
+    );
+    // A PNG: its stored values.
+    let png = dir.path().join("grey.png");
+    image::GrayImage::from_pixel(2, 2, image::Luma([51]))
+        .save(&png)
+        .unwrap();
+    let text = run(command().arg("info").arg(&png)).success().stdout();
+    assert!(text.contains("channels: Y (8-bit"), "{text}");
+    assert!(text.contains("  Y: mean 0.2, min 0.2, max 0.2"), "{text}");
+    let help = ember(["info", "--help"]).success().stdout();
+    assert!(help.contains("<SCENE_OR_IMAGE>"), "{help}");
+}
+
+#[test]
+fn standard_output_is_not_an_image_destination() {
+    let scene = repo("scenes/cs184/sky/CBempty.dae");
+    let scene = scene.to_str().unwrap();
+    ember(["-f", "-", scene]).fails_with("standard output is not an image destination");
+    ember(["merge", "-", "part.exr"]).fails_with("standard output is not an image destination");
+}
+
+#[test]
+fn other_scene_formats_are_named_as_not_collada() {
+    let dir = tempfile::tempdir().unwrap();
+    let obj = dir.path().join("model.obj");
+    std::fs::write(&obj, "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n").unwrap();
+    let ply = dir.path().join("model.ply");
+    std::fs::write(&ply, "ply\nformat ascii 1.0\nend_header\n").unwrap();
+    let renamed = dir.path().join("model.dae");
+    std::fs::copy(&obj, &renamed).unwrap();
+    let out = dir.path().join("o.png");
+    for (scene, needle) in [
+        (&obj, "ember reads COLLADA (.dae) scenes, not .obj files"),
+        (&ply, "ember reads COLLADA (.dae) scenes, not .ply files"),
+        (&renamed, "not a COLLADA (.dae) scene: the file is not XML"),
+    ] {
+        run(command().arg("-f").arg(&out).arg(scene)).fails_with(needle);
+        run(command().arg("info").arg(scene)).fails_with(needle);
+        assert!(!out.exists());
+    }
+}
+
+/// `ember --help` lists every subcommand, each with its purpose on one line.
+#[test]
+fn help_lists_every_subcommand_in_one_line_each() {
+    let help = ember(["--help"]).success().stdout();
+    let mut names = vec!["info", "merge", "camera", "export"];
+    if cfg!(feature = "bench") {
+        names.push("bench");
+    }
+    for name in names {
+        let line = help
+            .lines()
+            .find(|l| l.trim_start().starts_with(&format!("{name} ")))
+            .unwrap_or_else(|| panic!("--help does not list {name}:\n{help}"));
+        let purpose = line.trim_start()[name.len()..].trim();
+        assert!(purpose.len() > 20 && purpose.len() < 100, "{line}");
+    }
+    if cfg!(feature = "bench") {
+        let bench = help
+            .lines()
+            .find(|l| l.trim_start().starts_with("bench "))
+            .unwrap();
+        for which in ["render", "accel", "converge", "stability"] {
+            assert!(bench.contains(which), "{bench}");
+        }
+    }
+}
+
+/// The pixels of a PNG, as written.
+fn png_pixels(path: &std::path::Path) -> Vec<u8> {
+    image::open(path).unwrap().to_rgb8().into_raw()
+}
+
+#[test]
+fn accel_none_renders_what_the_bvh_renders() {
+    let dir = tempfile::tempdir().unwrap();
+    let scene = repo("scenes/cs184/sky/CBbunny.dae");
+    let render = |accel: &str| {
+        let out = dir.path().join(format!("{accel}.png"));
+        run(command()
+            .args([
+                "-s", "2", "-m", "2", "-r", "24", "18", "--accel", accel, "-f",
+            ])
+            .arg(&out)
+            .arg(&scene))
+        .success();
+        png_pixels(&out)
+    };
+    assert!(
+        render("none") == render("native"),
+        "brute force and the BVH differ"
+    );
+    let bvh = ember(["--accel", "none", "--bvh", "sah", "x.dae"]);
+    bvh.fails_with("it does nothing with --accel none");
+}
+
+#[test]
+fn accel_none_warns_when_it_would_take_long() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("slow.png");
+    // Hours of brute force over 50801 triangles; --time stops it at once.
+    let run = run(command()
+        .args([
+            "--accel", "none", "-s", "64", "-m", "5", "--time", "0.2", "-f",
+        ])
+        .arg(&out)
+        .arg(repo("scenes/cs184/meshedit/maxplanck.dae")))
+    .success();
+    let err = run.stderr();
+    assert!(
+        err.contains("warning:") && err.contains("hours") && err.contains("--accel native"),
+        "{err}"
+    );
+}
+
+#[test]
+fn the_png_rate_map_has_a_legend_below_the_map() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("a.png");
+    run(command()
+        .args(["-s", "64", "-a", "8", "0.1", "-r", "160", "120", "-f"])
+        .arg(&out)
+        .arg(repo("scenes/cs184/sky/CBspheres_lambertian.dae")))
+    .success();
+    let rate = image::open(dir.path().join("a_rate.png")).unwrap();
+    assert_eq!(rate.width(), 160);
+    assert!(rate.height() > 120 + 20, "{}", rate.height());
+    let exr = dir.path().join("a.exr");
+    run(command()
+        .args(["-s", "64", "-a", "8", "0.1", "-r", "160", "120", "-f"])
+        .arg(&exr)
+        .arg(repo("scenes/cs184/sky/CBspheres_lambertian.dae")))
+    .success();
+    let counts = ember::image_io::read_image(&dir.path().join("a_rate.exr")).unwrap();
+    assert_eq!(
+        (counts.width, counts.height),
+        (160, 120),
+        "the EXR holds the counts only"
+    );
 }

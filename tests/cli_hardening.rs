@@ -3,9 +3,9 @@
 
 mod common;
 
-use common::{ember, repo, stderr};
+use common::{command, ember, repo, run, wait, Run};
 use std::path::PathBuf;
-use std::process::{Command, Output, Stdio};
+use std::process::{Command, Stdio};
 use std::time::{Duration, Instant};
 
 fn scene() -> PathBuf {
@@ -21,66 +21,41 @@ fn dev_full() -> Stdio {
     )
 }
 
-/// Not a panic: exit code 101 is Rust's panic exit, and the panic message names itself.
-fn assert_no_panic(o: &Output) {
-    assert_ne!(o.status.code(), Some(101), "panicked: {}", stderr(o));
-    assert!(
-        o.status.code().is_some(),
-        "killed by a signal: {:?}",
-        o.status
-    );
-    assert!(!stderr(o).contains("panicked"), "{}", stderr(o));
-}
-
 /// Runs `cmd` with its stdout a pipe whose read end is closed at once (`| head -0`).
-fn with_closed_stdout(cmd: &mut Command) -> Output {
+fn with_closed_stdout(cmd: &mut Command) -> Run {
     let mut child = cmd
         .stdout(Stdio::piped())
         .stderr(Stdio::piped())
         .spawn()
         .unwrap();
     drop(child.stdout.take());
-    child.wait_with_output().unwrap()
+    wait(cmd, child)
 }
 
 #[test]
 fn closed_stdout_exits_quietly() {
-    let info = with_closed_stdout(ember().arg("info").arg(scene()));
-    assert_no_panic(&info);
-    assert!(info.status.success(), "{}", stderr(&info));
-    assert!(stderr(&info).is_empty(), "{}", stderr(&info));
-    let help = with_closed_stdout(ember().arg("--help"));
-    assert_no_panic(&help);
+    let info = with_closed_stdout(command().arg("info").arg(scene())).success();
+    assert!(info.stderr().is_empty(), "{}", info.stderr());
+    with_closed_stdout(command().arg("--help")).no_panic();
 }
 
 #[test]
 fn full_stdout_is_an_ordinary_error() {
-    let o = ember()
-        .arg("info")
-        .arg(scene())
-        .stdout(dev_full())
-        .output()
-        .unwrap();
-    assert_no_panic(&o);
-    assert_eq!(o.status.code(), Some(1));
-    let err = stderr(&o);
-    assert_eq!(err.lines().count(), 1, "{err}");
-    assert!(err.starts_with("ember: error: "), "{err}");
+    let o =
+        run(command().arg("info").arg(scene()).stdout(dev_full())).fails_with("standard output");
+    assert_eq!(o.code(), Some(1));
 }
 
 #[test]
 fn full_stderr_does_not_stop_a_render() {
     let dir = tempfile::tempdir().unwrap();
     let out = dir.path().join("x.png");
-    let o = ember()
+    run(command()
         .args(["-s", "1", "-r", "8", "6", "-f"])
         .arg(&out)
         .arg(scene())
-        .stderr(dev_full())
-        .output()
-        .unwrap();
-    assert_no_panic(&o);
-    assert!(o.status.success());
+        .stderr(dev_full()))
+    .success();
     assert_eq!(image::open(&out).unwrap().width(), 8);
 }
 
@@ -94,30 +69,28 @@ fn bad_output_path_fails_before_rendering() {
     ];
     for target in bad {
         let t0 = Instant::now();
-        let o = ember()
+        let name = target.file_name().unwrap().to_str().unwrap();
+        let o = run(command()
             .args(["-s", "4096", "-m", "5", "-r", "480", "360", "-f"])
             .arg(&target)
-            .arg(repo("scenes/cs184/sky/CBspheres_lambertian.dae"))
-            .output()
-            .unwrap();
+            .arg(repo("scenes/cs184/sky/CBspheres_lambertian.dae")))
+        .fails_with(name);
         // A render of this size takes minutes; a preflight failure takes milliseconds
         // (the bound is loose so that a loaded machine does not fail the test).
         assert!(
             t0.elapsed() < Duration::from_secs(10),
             "{target:?}: too slow"
         );
-        assert_no_panic(&o);
-        assert_eq!(o.status.code(), Some(1), "{}", stderr(&o));
-        assert!(!stderr(&o).contains("samples in"), "{}", stderr(&o));
+        assert_eq!(o.code(), Some(1), "{}", o.stderr());
+        assert!(!o.stderr().contains("samples in"), "{}", o.stderr());
         // Checked before the scene is even read: a missing scene is not what is reported.
-        let o = ember()
+        let o = run(command()
             .arg("-f")
             .arg(&target)
-            .arg(dir.path().join("missing.dae"))
-            .output()
-            .unwrap();
-        assert_eq!(o.status.code(), Some(1));
-        let err = stderr(&o);
+            .arg(dir.path().join("missing.dae")))
+        .fails_with(name);
+        assert_eq!(o.code(), Some(1));
+        let err = o.stderr();
         assert!(!err.contains("missing.dae"), "{target:?}: {err}");
     }
     assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 0);
@@ -129,36 +102,29 @@ fn output_equal_to_input_is_refused() {
     let same = dir.path().join("same.png");
     std::fs::copy(scene(), &same).unwrap();
     let before = std::fs::read(&same).unwrap();
-    let o = ember()
+    run(command()
         .args(["-s", "1", "-r", "8", "6", "-f"])
         .arg(&same)
-        .arg(&same)
-        .output()
-        .unwrap();
-    assert_no_panic(&o);
-    assert!(!o.status.success());
-    assert!(stderr(&o).contains("input"), "{}", stderr(&o));
+        .arg(&same))
+    .fails_with("input");
     assert_eq!(
         std::fs::read(&same).unwrap(),
         before,
         "the scene was changed"
     );
     // Another spelling of the same file is caught through canonical paths.
-    let o = ember()
+    run(command()
         .args(["-s", "1", "-r", "8", "6", "-f"])
         .arg(dir.path().join(".").join("same.png"))
-        .arg(&same)
-        .output()
-        .unwrap();
-    assert!(!o.status.success());
+        .arg(&same))
+    .fails_with("input");
     assert_eq!(std::fs::read(&same).unwrap(), before);
     assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 1);
 }
 
-/// Every ": "-separated part of the message appears once.
-fn assert_said_once(o: &Output) {
-    let err = stderr(o);
-    assert!(!o.status.success());
+/// A one-line error in which every ": "-separated part of the message appears once.
+fn assert_said_once(o: Run) {
+    let err = o.fails_with("").stderr();
     let line = err.lines().next().unwrap_or_default();
     let parts: Vec<&str> = line.split(": ").collect();
     for (i, p) in parts.iter().enumerate() {
@@ -173,24 +139,22 @@ fn assert_said_once(o: &Output) {
 fn errors_say_each_cause_once() {
     let dir = tempfile::tempdir().unwrap();
     let render = |out: PathBuf, scene: PathBuf| {
-        ember()
+        run(command()
             .args(["-s", "1", "-r", "8", "6", "-f"])
             .arg(out)
-            .arg(scene)
-            .output()
-            .unwrap()
+            .arg(scene))
     };
-    assert_said_once(&render(dir.path().join("nodir/out.png"), scene()));
+    assert_said_once(render(dir.path().join("nodir/out.png"), scene()));
     let out = dir.path().join("out.png");
-    assert_said_once(&render(out.clone(), dir.path().join("missing.dae")));
-    assert_said_once(&render(out, dir.path().to_path_buf()));
-    let info = |p: PathBuf| ember().arg("info").arg(p).output().unwrap();
-    assert_said_once(&info(dir.path().join("missing.dae")));
-    assert_said_once(&info(dir.path().join("missing.exr")));
+    assert_said_once(render(out.clone(), dir.path().join("missing.dae")));
+    assert_said_once(render(out, dir.path().to_path_buf()));
+    let info = |p: PathBuf| run(command().arg("info").arg(p));
+    assert_said_once(info(dir.path().join("missing.dae")));
+    assert_said_once(info(dir.path().join("missing.exr")));
     let garbage = dir.path().join("garbage.exr");
     std::fs::write(&garbage, b"not an exr").unwrap();
-    assert_said_once(&info(garbage));
-    assert_said_once(&render(
+    assert_said_once(info(garbage));
+    assert_said_once(render(
         dir.path().join("out.exr"),
         dir.path().join("garbage.exr"),
     ));
@@ -201,16 +165,12 @@ fn metadata_round_trips_through_info() {
     let dir = tempfile::tempdir().unwrap();
     for name in ["m.exr", "m.png"] {
         let out = dir.path().join(name);
-        let o = ember()
+        run(command()
             .args(["-s", "3", "-l", "2", "-m", "4", "-r", "8", "6", "-f"])
             .arg(&out)
-            .arg(scene())
-            .output()
-            .unwrap();
-        assert!(o.status.success(), "{}", stderr(&o));
-        let info = ember().arg("info").arg(&out).output().unwrap();
-        assert!(info.status.success(), "{}", stderr(&info));
-        let text = String::from_utf8(info.stdout).unwrap();
+            .arg(scene()))
+        .success();
+        let text = run(command().arg("info").arg(&out)).success().stdout();
         let bytes = std::fs::read(scene()).unwrap();
         let hash = ember::image_metadata::fnv1a64(&bytes);
         for line in [
@@ -225,6 +185,9 @@ fn metadata_round_trips_through_info() {
             "ember.stopped: complete".into(),
             "ember.samples_per_pixel: mean 3.000, min 3, max 3".into(),
             "ember.pixels_rendered: 48 of 48".into(),
+            "ember.roulette: throughput from bounce 3, min 0.05".into(),
+            "ember.adaptive: off".into(),
+            "size: 8x6".into(),
         ] {
             assert!(
                 text.lines().any(|l| l == line),
@@ -294,21 +257,25 @@ fn send_sigint(child: &std::process::Child) {
 }
 
 /// A render that would take many minutes, started in the background.
-fn long_render(out: &std::path::Path, extra: &[&str]) -> std::process::Child {
+fn long_render(out: &std::path::Path, extra: &[&str]) -> (Command, std::process::Child) {
     long_render_of("CBspheres_lambertian.dae", out, extra)
 }
 
-fn long_render_of(scene: &str, out: &std::path::Path, extra: &[&str]) -> std::process::Child {
-    ember()
-        .args(["-t", "1", "-s", "100000", "-m", "5", "-r", "64", "48"])
+fn long_render_of(
+    scene: &str,
+    out: &std::path::Path,
+    extra: &[&str],
+) -> (Command, std::process::Child) {
+    let mut cmd = command();
+    cmd.args(["-t", "1", "-s", "100000", "-m", "5", "-r", "64", "48"])
         .args(extra)
         .arg("-f")
         .arg(out)
         .arg(repo("scenes/cs184/sky").join(scene))
         .stdout(Stdio::null())
-        .stderr(Stdio::piped())
-        .spawn()
-        .unwrap()
+        .stderr(Stdio::piped());
+    let child = cmd.spawn().unwrap();
+    (cmd, child)
 }
 
 #[test]
@@ -328,16 +295,16 @@ fn sigint_writes_what_was_rendered_and_no_partial_file() {
     ] {
         let dir = tempfile::tempdir().unwrap();
         let out = dir.path().join(name);
-        let child = long_render_of(scene, &out, extra);
+        let (cmd, child) = long_render_of(scene, &out, extra);
         // The output's temporary is claimed just before the handler is installed;
         // give the render a moment to start after that.
         wait_for(|| !leftovers(dir.path(), &[]).is_empty());
         std::thread::sleep(Duration::from_millis(1500));
         send_sigint(&child);
-        let o = child.wait_with_output().unwrap();
-        assert_no_panic(&o);
-        assert_eq!(o.status.code(), Some(130), "{}", stderr(&o));
-        let err = stderr(&o);
+        let o = wait(&cmd, child);
+        o.no_panic();
+        assert_eq!(o.code(), Some(130), "{}", o.stderr());
+        let err = o.stderr();
         assert!(
             err.contains("interrupted: wrote what was rendered so far"),
             "{err}"
@@ -362,15 +329,14 @@ fn sigint_writes_what_was_rendered_and_no_partial_file() {
 fn second_sigint_exits_at_once_and_leaves_no_temporary() {
     let dir = tempfile::tempdir().unwrap();
     let out = dir.path().join("big.png");
-    let child = ember()
-        .args(["-t", "1", "-s", "100000", "-m", "5", "-r", "1600", "1200"])
+    let mut cmd = command();
+    cmd.args(["-t", "1", "-s", "100000", "-m", "5", "-r", "1600", "1200"])
         .arg("-f")
         .arg(&out)
         .arg(repo("scenes/cs184/sky/CBspheres_lambertian.dae"))
         .stdout(Stdio::null())
-        .stderr(Stdio::piped())
-        .spawn()
-        .unwrap();
+        .stderr(Stdio::piped());
+    let child = cmd.spawn().unwrap();
     wait_for(|| !leftovers(dir.path(), &[]).is_empty());
     std::thread::sleep(Duration::from_millis(1500));
     send_sigint(&child);
@@ -378,9 +344,9 @@ fn second_sigint_exits_at_once_and_leaves_no_temporary() {
     // PNG of the first is still being encoded.
     std::thread::sleep(Duration::from_millis(30));
     send_sigint(&child);
-    let o = child.wait_with_output().unwrap();
-    assert_no_panic(&o);
-    assert_eq!(o.status.code(), Some(130), "{}", stderr(&o));
+    let o = wait(&cmd, child);
+    o.no_panic();
+    assert_eq!(o.code(), Some(130), "{}", o.stderr());
     assert_eq!(leftovers(dir.path(), &["big.png"]), Vec::<String>::new());
     if out.exists() {
         assert_eq!(ember::image_io::read_image(&out).unwrap().width, 1600);
@@ -391,7 +357,7 @@ fn second_sigint_exits_at_once_and_leaves_no_temporary() {
 fn checkpoints_hold_whole_images_while_rendering() {
     let dir = tempfile::tempdir().unwrap();
     let out = dir.path().join("c.exr");
-    let child = long_render(&out, &["--checkpoint", "0.2"]);
+    let (cmd, child) = long_render(&out, &["--checkpoint", "0.2"]);
     wait_for(|| out.exists());
     // The checkpoint is complete the moment it appears (renamed into place).
     let meta = ember::image_io::read_metadata(&out).unwrap();
@@ -399,8 +365,8 @@ fn checkpoints_hold_whole_images_while_rendering() {
     assert_eq!(meta.get("ember.stopped"), Some("complete"));
     assert_eq!(ember::image_io::read_image(&out).unwrap().width, 64);
     send_sigint(&child);
-    let o = child.wait_with_output().unwrap();
-    assert_eq!(o.status.code(), Some(130), "{}", stderr(&o));
+    let o = wait(&cmd, child);
+    assert_eq!(o.code(), Some(130), "{}", o.stderr());
     let meta = ember::image_io::read_metadata(&out).unwrap();
     assert_eq!(meta.get("ember.stopped"), Some("interrupted"));
     assert_eq!(leftovers(dir.path(), &["c.exr"]), Vec::<String>::new());
@@ -410,14 +376,11 @@ fn checkpoints_hold_whole_images_while_rendering() {
 fn time_budget_stops_and_writes() {
     let dir = tempfile::tempdir().unwrap();
     let out = dir.path().join("t.exr");
-    let o = ember()
+    run(command()
         .args(["-t", "1", "-m", "5", "-r", "64", "48", "--time", "1", "-f"])
         .arg(&out)
-        .arg(repo("scenes/cs184/sky/CBspheres_lambertian.dae"))
-        .output()
-        .unwrap();
-    assert_no_panic(&o);
-    assert!(o.status.success(), "{}", stderr(&o));
+        .arg(repo("scenes/cs184/sky/CBspheres_lambertian.dae")))
+    .success();
     let meta = ember::image_io::read_metadata(&out).unwrap();
     assert_eq!(meta.get("ember.stopped"), Some("time budget spent"));
     // ember's own clock: the render stopped within a second of the budget.
@@ -456,28 +419,18 @@ fn time_and_checkpoint_refuse_what_cannot_run_in_passes() {
         &["--time", "0"],
         &["--time", "-1"],
     ] {
-        let o = ember()
+        let o = run(command()
             .args(["-r", "8", "6", "--checkpoint", "5"])
             .args(extra)
-            .arg(scene())
-            .output()
-            .unwrap();
-        assert_no_panic(&o);
-        assert_eq!(o.status.code(), Some(1), "{extra:?}: {}", stderr(&o));
+            .arg(scene()))
+        .fails_with(extra[0]);
+        assert_eq!(o.code(), Some(1), "{extra:?}: {}", o.stderr());
     }
 }
 
-fn render_ok(args: &[&str], out: &std::path::Path, scene: &std::path::Path) -> Output {
-    let o = ember()
-        .args(args)
-        .arg("-f")
-        .arg(out)
-        .arg(scene)
-        .output()
-        .unwrap();
-    assert_no_panic(&o);
-    assert!(o.status.success(), "{args:?}: {}", stderr(&o));
-    o
+/// `ember ARGS -f OUT SCENE`, which must succeed.
+fn render_ok(args: &[&str], out: &std::path::Path, scene: &std::path::Path) -> Run {
+    run(command().args(args).arg("-f").arg(out).arg(scene)).success()
 }
 
 #[test]
@@ -516,7 +469,7 @@ fn bvh_cost_exr_holds_raw_counts_and_a_fixed_scale_colours_the_png() {
         &a,
         &bunny,
     );
-    assert!(stderr(&o).contains("per camera ray"), "{}", stderr(&o));
+    assert!(o.stderr().contains("per camera ray"), "{}", o.stderr());
     render_ok(
         &[
             "--shading",
@@ -565,10 +518,8 @@ fn options_that_do_nothing_are_refused() {
         &["--cost-scale", "10"],
         &["--shading", "bvh-cost", "--cost-scale", "0"],
     ] {
-        let o = ember().args(args).arg(scene()).output().unwrap();
-        assert_no_panic(&o);
-        assert_eq!(o.status.code(), Some(1), "{args:?}: {}", stderr(&o));
-        assert!(stderr(&o).starts_with("ember: error: --"), "{}", stderr(&o));
+        let o = run(command().args(args).arg(scene())).fails_with("ember: error: --");
+        assert_eq!(o.code(), Some(1), "{args:?}: {}", o.stderr());
     }
     let dir = tempfile::tempdir().unwrap();
     let o = render_ok(
@@ -576,18 +527,16 @@ fn options_that_do_nothing_are_refused() {
         &dir.path().join("l.png"),
         &scene(),
     );
-    assert!(stderr(&o).contains("warning: -l 0"), "{}", stderr(&o));
+    assert!(o.stderr().contains("warning: -l 0"), "{}", o.stderr());
 }
 
 #[test]
 fn info_lists_meshes_with_names_and_the_bvh() {
-    let o = ember()
+    let text = run(command()
         .arg("info")
-        .arg(repo("scenes/cs184/sky/CBbunny.dae"))
-        .output()
-        .unwrap();
-    assert!(o.status.success());
-    let text = String::from_utf8(o.stdout).unwrap();
+        .arg(repo("scenes/cs184/sky/CBbunny.dae")))
+    .success()
+    .stdout();
     assert!(text.contains("meshes: 6"), "{text}");
     assert!(text.contains(": 28576 triangles, material [0] "), "{text}");
     assert!(
@@ -601,19 +550,16 @@ fn info_lists_meshes_with_names_and_the_bvh() {
 }
 
 /// Runs `args` with stdout read up to its first line and then closed (`| head -1`).
-fn piped_into_head(args: &[String]) -> (Output, String) {
+fn piped_into_head(args: &[String]) -> (Run, String) {
     use std::io::BufRead;
-    let mut child = ember()
-        .args(args)
-        .stdout(Stdio::piped())
-        .stderr(Stdio::piped())
-        .spawn()
-        .unwrap();
+    let mut cmd = command();
+    cmd.args(args).stdout(Stdio::piped()).stderr(Stdio::piped());
+    let mut child = cmd.spawn().unwrap();
     let mut first = String::new();
     std::io::BufReader::new(child.stdout.take().unwrap())
         .read_line(&mut first)
         .unwrap();
-    (child.wait_with_output().unwrap(), first)
+    (wait(&cmd, child), first)
 }
 
 /// Every subcommand, small enough to run in a test; each prints to stdout.
@@ -622,13 +568,11 @@ fn every_subcommand(dir: &std::path::Path) -> Vec<Vec<String>> {
     let scene = s(&scene());
     let out = |n: &str| s(&dir.join(n));
     let image = dir.join("img.exr");
-    let o = ember()
+    run(command()
         .args(["-s", "1", "-r", "8", "6", "-f"])
         .arg(&image)
-        .arg(scene.clone())
-        .output()
-        .unwrap();
-    assert!(o.status.success());
+        .arg(scene.clone()))
+    .success();
     let mut cmds: Vec<Vec<&str>> = vec![
         vec!["--help"],
         vec!["--version"],
@@ -708,25 +652,12 @@ fn every_subcommand_survives_head_closed_stdout_and_a_full_disk() {
     let dir = tempfile::tempdir().unwrap();
     for args in every_subcommand(dir.path()) {
         let (o, first) = piped_into_head(&args);
-        assert_no_panic(&o);
-        assert!(o.status.success(), "{args:?} | head -1: {}", stderr(&o));
+        let o = o.success();
         assert!(!first.is_empty(), "{args:?} printed nothing");
-        assert!(!stderr(&o).contains("error"), "{args:?}: {}", stderr(&o));
-        let closed = with_closed_stdout(ember().args(&args));
-        assert_no_panic(&closed);
-        assert!(closed.status.success(), "{args:?} >&-: {}", stderr(&closed));
-        let full = ember().args(&args).stdout(dev_full()).output().unwrap();
-        assert_no_panic(&full);
-        assert_eq!(
-            full.status.code(),
-            Some(1),
-            "{args:?} > /dev/full: {}",
-            stderr(&full)
-        );
-        let err = stderr(&full);
-        let last = err.lines().last().unwrap_or_default();
-        assert!(last.starts_with("ember: error: "), "{args:?}: {err}");
-        assert!(last.contains("No space left"), "{args:?}: {err}");
+        assert!(!o.stderr().contains("error"), "{args:?}: {}", o.stderr());
+        with_closed_stdout(command().args(&args)).success();
+        let full = run(command().args(&args).stdout(dev_full())).fails_with("No space left");
+        assert_eq!(full.code(), Some(1), "{args:?} > /dev/full");
     }
 }
 
@@ -734,14 +665,13 @@ fn every_subcommand_survives_head_closed_stdout_and_a_full_disk() {
 fn a_render_into_a_closed_pipe_still_writes_its_image() {
     let dir = tempfile::tempdir().unwrap();
     let out = dir.path().join("p.png");
-    let o = with_closed_stdout(
-        ember()
+    with_closed_stdout(
+        command()
             .args(["-s", "1", "-r", "8", "6", "-f"])
             .arg(&out)
             .arg(scene()),
-    );
-    assert_no_panic(&o);
-    assert!(o.status.success(), "{}", stderr(&o));
+    )
+    .success();
     assert_eq!(image::open(&out).unwrap().width(), 8);
 }
 
@@ -749,14 +679,14 @@ fn a_render_into_a_closed_pipe_still_writes_its_image() {
 fn course_flags_ember_lacks_are_named_and_negative_numbers_get_a_value_message() {
     // -c, -p, -b, -d, -e are the course's; whichever ember lacks is named as such.
     for flag in ["-c", "-p", "-b", "-d", "-e"] {
-        let o = ember().args([flag, "1"]).arg(scene()).output().unwrap();
-        let err = stderr(&o);
+        let o = run(command().args([flag, "1"]).arg(scene()));
+        let err = o.stderr();
         if err.contains("unexpected argument") || err.contains("not supported") {
             assert_eq!(
                 err.trim(),
                 format!("ember: error: course flag {flag} is not supported")
             );
-            assert_eq!(o.status.code(), Some(2));
+            assert_eq!(o.code(), Some(2));
         }
     }
     for args in [
@@ -765,21 +695,15 @@ fn course_flags_ember_lacks_are_named_and_negative_numbers_get_a_value_message()
         &["-m", "-1"],
         &["--time", "-2"],
     ] {
-        let o = ember().args(args).arg(scene()).output().unwrap();
-        assert_no_panic(&o);
-        assert!(!o.status.success());
-        let err = stderr(&o);
+        let o = run(command().args(args).arg(scene())).fails_with(args[1]);
+        let err = o.stderr();
         assert!(
             !err.contains("-- -"),
             "{args:?}: clap's tip instead of the value: {err}"
         );
-        assert!(err.contains(args[1]), "{args:?}: {err}");
     }
-    let o = ember()
-        .args(["bench", "render", "-s", "-3"])
-        .output()
-        .unwrap();
-    assert!(!stderr(&o).contains("-- -"), "{}", stderr(&o));
+    let o = ember(["bench", "render", "-s", "-3"]).fails_with("-3");
+    assert!(!o.stderr().contains("-- -"), "{}", o.stderr());
 }
 
 #[test]
@@ -814,17 +738,8 @@ fn renders_in_passes_are_deterministic_whatever_the_threads() {
 fn bench_accel_threads_take_a_list_not_a_scene() {
     // `--threads 1 0`: both are thread counts (0 is refused), none is a scene path.
     for args in [&["--threads", "1", "0"][..], &["-t", "1,0"]] {
-        let o = ember()
-            .args(["bench", "accel"])
-            .args(args)
-            .output()
-            .unwrap();
-        assert_no_panic(&o);
-        assert_eq!(o.status.code(), Some(1), "{args:?}: {}", stderr(&o));
-        assert!(
-            stderr(&o).contains("--threads: each count"),
-            "{}",
-            stderr(&o)
-        );
+        let o =
+            run(command().args(["bench", "accel"]).args(args)).fails_with("--threads: each count");
+        assert_eq!(o.code(), Some(1), "{args:?}: {}", o.stderr());
     }
 }

@@ -20,7 +20,7 @@ use ember::bench::meshes;
 use ember::camera::Camera;
 use ember::geometry::triangle::intersect_triangle;
 use ember::geometry::Ray;
-use ember::sampling::{uniform_sphere, Sampler};
+use ember::sampling::{uniform_sphere, Rng};
 use ember::scene::{PrimHit, Scene};
 use glam::{DVec3, Vec3};
 use rayon::prelude::*;
@@ -492,7 +492,7 @@ fn compare_ray(scene: &Scene, ray: &Ray, a: &dyn Accel, b: &dyn Accel) -> Tally 
 
 // ---------------------------------------------------------------- rays
 
-fn point_in(scene: &Scene, rng: &mut Sampler) -> Vec3 {
+fn point_in(scene: &Scene, rng: &mut Rng) -> Vec3 {
     let u = Vec3::new(rng.next_f32(), rng.next_f32(), rng.next_f32());
     scene.bounds.min + u * scene.bounds.diagonal()
 }
@@ -502,10 +502,10 @@ fn point_in(scene: &Scene, rng: &mut Sampler) -> Vec3 {
 /// `SurfaceInteraction::spawn_ray`/`spawn_segment` (offset origin, the primitive
 /// left as `skip`) from where `spawn_from` hits a primary ray.
 fn make_ray(scene: &Scene, cam: &Camera, spawn_from: &dyn Accel, seed: u64, i: usize) -> Ray {
-    let mut rng = Sampler::new(seed, i as u64, 0);
+    let mut rng = Rng::new(seed, i as u64, 0);
     let centre = scene.bounds.centre();
     let diag = scene.bounds.diagonal().length().max(1e-3);
-    let primary = |rng: &mut Sampler, kind: usize| match kind {
+    let primary = |rng: &mut Rng, kind: usize| match kind {
         0 => {
             let (px, py) = (rng.next_f32(), rng.next_f32());
             let (x, y) = (

@@ -9,14 +9,14 @@ use common::{load, random_triangle_point};
 use ember::accel::embree::EmbreeAccel;
 use ember::accel::{Accel, EmbreeQuality, HitPacket, RayPacket};
 use ember::geometry::Ray;
-use ember::sampling::{uniform_sphere, Sampler};
-use ember::simd::LANES;
+use ember::lanes::LANES;
+use ember::sampling::{uniform_sphere, Rng};
 use glam::Vec3;
 
 /// Rays leaving triangles (skipping them), segments between surface points, and rays
 /// from outside aimed at corners.
 fn rays(scene: &ember::scene::Scene, n: usize) -> Vec<Ray> {
-    let mut rng = Sampler::from_seed(17);
+    let mut rng = Rng::from_seed(17);
     (0..n)
         .map(|k| {
             let (p, prim) = random_triangle_point(scene, &mut rng);

@@ -20,7 +20,7 @@ use ember::bench::stability::robust;
 use ember::bench::stability::scenes::transformed;
 use ember::bench::stability::Budget;
 use ember::geometry::{Ray, NO_PRIM};
-use ember::sampling::{uniform_sphere, Sampler};
+use ember::sampling::{uniform_sphere, Rng};
 use ember::scene::Scene;
 use glam::Vec3;
 use rayon::prelude::*;
@@ -110,8 +110,8 @@ impl Tally {
 /// and a shadow segment to a random point stopping a relative 1e-4 short of it (a
 /// point in the bounds may lie on a wall), spawned as the integrators spawn them.
 fn spawned(scene: &Scene, native: &Bvh, i: usize) -> Option<(Ray, Ray, bool)> {
-    let mut rng = Sampler::new(77, i as u64, 0);
-    let inside = |rng: &mut Sampler| {
+    let mut rng = Rng::new(77, i as u64, 0);
+    let inside = |rng: &mut Rng| {
         let u = Vec3::new(rng.next_f32(), rng.next_f32(), rng.next_f32());
         scene.bounds.min + u * scene.bounds.diagonal()
     };
@@ -242,7 +242,7 @@ fn offset_origins_alone_keep_rays_off_their_triangles() {
 #[test]
 fn packet_composition_does_not_change_a_lanes_answer() {
     use ember::accel::{HitPacket, RayPacket};
-    use ember::simd::LANES;
+    use ember::lanes::LANES;
     let scene = load("scenes/cs184/sky/CBspheres_lambertian.dae");
     let native = Bvh::build(&scene, BvhBuilder::Sah);
     let embree = build(&scene, DEFAULT);
@@ -279,7 +279,7 @@ fn packet_composition_does_not_change_a_lanes_answer() {
     };
     let order: Vec<usize> = (0..rays.len()).collect();
     let mut shuffled = order.clone();
-    let mut rng = Sampler::from_seed(3);
+    let mut rng = Rng::from_seed(3);
     for i in (1..shuffled.len()).rev() {
         let j = ((rng.next_f32() * (i + 1) as f32) as usize).min(i);
         shuffled.swap(i, j);

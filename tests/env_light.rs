@@ -4,7 +4,7 @@
 
 mod common;
 
-use common::{chi2_p_value, ember, integrate_bins, mean_and_stderr, sidak_significance};
+use common::{chi2_p_value, command, integrate_bins, mean_and_stderr, run, sidak_significance};
 use ember::accel::{AccelKind, BvhBuilder};
 use ember::camera::Camera;
 use ember::film::Image;
@@ -14,7 +14,7 @@ use ember::lights::environment::{EnvMapError, EnvSampling};
 use ember::lights::{EnvironmentMap, Light};
 use ember::materials::Material;
 use ember::render::{RenderJob, RenderSettings};
-use ember::sampling::Sampler;
+use ember::sampling::Rng;
 use ember::scene::{CameraDesc, Scene, Triangle, NO_LIGHT};
 use ember::{Color, Vec3};
 use std::path::{Path, PathBuf};
@@ -75,9 +75,7 @@ fn floor_job(a: f32, light: Light) -> RenderJob {
                 light: NO_LIGHT,
             })
             .to_vec(),
-        materials: vec![Material::Lambertian {
-            albedo: Color::splat(a),
-        }],
+        materials: vec![Material::lambertian(Color::splat(a))],
         bounds: Aabb::new(Vec3::new(-l, 0.0, -l), Vec3::new(l, 0.0, l)),
         ..Default::default()
     };
@@ -87,6 +85,7 @@ fn floor_job(a: f32, light: Light) -> RenderJob {
         up: Vec3::Z,
         tan_half_x: Some(0.8),
         tan_half_y: None,
+        ..CameraDesc::default()
     };
     let mut cam = Camera::new(&desc, &scene.bounds, 16, 16);
     cam.eye = Vec3::new(0.3, 1.0, -0.2);
@@ -182,7 +181,7 @@ fn chi2_env(env: &EnvironmentMap, seed: u64) -> Result<f64, String> {
     chi2_p_value(
         1_000_000,
         seed,
-        |s: &mut Sampler| env.sample_li(s.next_2d()).map(|ls| ls.wi),
+        |s: &mut Rng| env.sample_li(s.next_2d()).map(|ls| ls.wi),
         &|wi| env.pdf_li(wi) as f64,
     )
 }
@@ -214,7 +213,7 @@ fn chi2_rejects_a_pdf_without_sin_theta() {
     let p = chi2_p_value(
         1_000_000,
         3,
-        |s: &mut Sampler| env.sample_li(s.next_2d()).map(|ls| ls.wi),
+        |s: &mut Rng| env.sample_li(s.next_2d()).map(|ls| ls.wi),
         &|wi| {
             let sin = (1.0 - wi.y as f64 * wi.y as f64).max(0.0).sqrt();
             env.pdf_li(wi) as f64 * sin / std::f64::consts::FRAC_PI_4
@@ -227,7 +226,7 @@ fn chi2_rejects_a_pdf_without_sin_theta() {
 #[test]
 fn samples_carry_the_texel_and_pdf_li() {
     let env = sun_map();
-    let mut s = Sampler::from_seed(5);
+    let mut s = Rng::from_seed(5);
     let mut sun = 0;
     for _ in 0..20_000 {
         let ls = env.sample_li(s.next_2d()).expect("sample");
@@ -354,19 +353,13 @@ fn cli_renders_with_e_and_refuses_bad_maps() {
     let dir = tempfile::tempdir().unwrap();
     let scene = common::repo("scenes/cs184/sky/CBspheres_lambertian.dae");
     let out = dir.path().join("env.exr");
-    let st = ember()
+    run(command()
         .args(["-s", "2", "-m", "2", "-r", "24", "18", "-q", "-e"])
         .arg(sun_map_path())
         .arg("-f")
         .arg(&out)
-        .arg(&scene)
-        .output()
-        .unwrap();
-    assert!(
-        st.status.success(),
-        "{}",
-        String::from_utf8_lossy(&st.stderr)
-    );
+        .arg(&scene))
+    .success();
     let img = ember::image_io::read_image(&out).unwrap();
     assert!(img.pixels.iter().all(|p| p.is_finite()));
     let meta = ember::image_io::read_metadata(&out).unwrap();
@@ -376,18 +369,13 @@ fn cli_renders_with_e_and_refuses_bad_maps() {
     assert!(meta.get("ember.env_map.fnv1a64").is_some());
 
     let bad = dir.path().join("bad.png");
-    let st = ember()
+    run(command()
         .args(["-s", "1", "-r", "8", "6", "-e", "no/such/map.exr", "-f"])
         .arg(&bad)
-        .arg(&scene)
-        .output()
-        .unwrap();
-    let err = String::from_utf8_lossy(&st.stderr);
-    assert!(!st.status.success());
-    assert_eq!(err.trim_end().lines().count(), 1, "{err}");
-    assert!(err.contains("no/such/map.exr"), "{err}");
+        .arg(&scene))
+    .fails_with("no/such/map.exr");
     assert!(!bad.exists(), "a failed render left {}", bad.display());
-    let st = ember()
+    run(command()
         .args([
             "-s",
             "1",
@@ -401,13 +389,9 @@ fn cli_renders_with_e_and_refuses_bad_maps() {
         .arg(sun_map_path())
         .arg("-f")
         .arg(&bad)
-        .arg(&scene)
-        .output()
-        .unwrap();
-    let err = String::from_utf8_lossy(&st.stderr);
-    assert!(!st.status.success());
-    assert_eq!(err.trim_end().lines().count(), 1, "{err}");
-    assert!(err.contains("light tracing") && err.contains("-e"), "{err}");
+        .arg(&scene))
+    .fails_with("light tracing")
+    .fails_with("-e");
     assert!(!bad.exists());
 }
 
@@ -464,20 +448,14 @@ fn mis_with_map_importance_beats_uniform_on_a_sun() {
 #[test]
 fn export_writes_the_map_in_mitsubas_orientation() {
     let dir = tempfile::tempdir().unwrap();
-    let st = ember()
+    run(command()
         .arg("export")
         .arg(common::repo("scenes/cs184/sky/CBspheres_lambertian.dae"))
         .arg("-e")
         .arg(sun_map_path())
         .arg("--out")
-        .arg(dir.path())
-        .output()
-        .unwrap();
-    assert!(
-        st.status.success(),
-        "{}",
-        String::from_utf8_lossy(&st.stderr)
-    );
+        .arg(dir.path()))
+    .success();
     let xml = std::fs::read_to_string(dir.path().join("CBspheres_lambertian.xml")).unwrap();
     assert!(xml.contains("CBspheres_lambertian_env.exr"), "{xml}");
     let img =

@@ -10,6 +10,8 @@
 //! with `--ignored`. Every wait has a time limit; every process started here is
 //! stopped by its process group id, whatever happens.
 
+mod common;
+
 use std::fs;
 use std::path::{Path, PathBuf};
 use std::process::{Child, Command, Stdio};
@@ -204,16 +206,16 @@ fn dask_farm_survives_a_killed_worker_and_merges_bit_identically() {
 
     // The single-machine render.
     let single = d.join("single.exr");
-    let st = Command::new(ember)
-        .current_dir(d)
-        .args(RENDER)
-        .args(env)
-        .arg("-f")
-        .arg(&single)
-        .arg(&scene)
-        .status()
-        .unwrap();
-    assert!(st.success());
+    common::run(
+        common::command()
+            .current_dir(d)
+            .args(RENDER)
+            .args(env)
+            .arg("-f")
+            .arg(&single)
+            .arg(&scene),
+    )
+    .success();
 
     let merged = d.join("merged.exr");
     let farm_log = d.join("farm.log");

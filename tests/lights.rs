@@ -3,10 +3,10 @@
 
 mod common;
 
-use common::mean_and_stderr;
+use common::{mean_and_stderr, polygon_irradiance};
 use ember::geometry::Frame;
 use ember::lights::{AreaLight, Light};
-use ember::sampling::{uniform_hemisphere, uniform_hemisphere_pdf, uniform_sphere, Sampler};
+use ember::sampling::{uniform_hemisphere, uniform_hemisphere_pdf, uniform_sphere, Rng};
 use ember::{Color, Vec3};
 use std::f64::consts::PI;
 
@@ -47,26 +47,9 @@ fn corners(light: &Light) -> [Vec3; 4] {
     ]
 }
 
-/// Lambert's closed form for a uniformly emitting polygon fully above the
-/// receiver's horizon: `E = L/2 · Σ Θi · (n · normalize(vi × vi+1))`.
-fn polygon_irradiance(p: Vec3, n: Vec3, vertices: &[Vec3], radiance: f64) -> f64 {
-    let v: Vec<_> = vertices
-        .iter()
-        .map(|q| (*q - p).as_dvec3().normalize())
-        .collect();
-    let n = n.as_dvec3();
-    let sum: f64 = (0..v.len())
-        .map(|i| {
-            let (a, b) = (v[i], v[(i + 1) % v.len()]);
-            a.angle_between(b) * n.dot(a.cross(b).normalize())
-        })
-        .sum();
-    0.5 * radiance * sum.abs()
-}
-
 /// Monte Carlo irradiance from `sample_li`, with its standard error.
 fn sampled_irradiance(light: &Light, p: Vec3, n: Vec3, count: usize, seed: u64) -> (f64, f64) {
-    let mut s = Sampler::from_seed(seed);
+    let mut s = Rng::from_seed(seed);
     let values: Vec<f64> = (0..count)
         .map(|_| {
             light
@@ -116,7 +99,7 @@ fn light_radiance_x(light: &Light) -> f64 {
 
 #[test]
 fn area_light_pdf_li_is_the_sampling_density() {
-    let mut s = Sampler::from_seed(8);
+    let mut s = Rng::from_seed(8);
     for light in [cornell_light(), sheared_light()] {
         for p in [
             Vec3::ZERO,
@@ -145,7 +128,7 @@ fn area_light_pdf_li_integrates_to_one() {
     let p = Vec3::new(0.2, 0.5, 0.1);
     let light = cornell_light();
     let frame = Frame::from_normal(Vec3::Y);
-    let mut s = Sampler::from_seed(12);
+    let mut s = Rng::from_seed(12);
     let values: Vec<f64> = (0..400_000)
         .map(|_| {
             let w = frame.to_world(uniform_hemisphere(s.next_2d()));
@@ -160,7 +143,7 @@ fn area_light_pdf_li_integrates_to_one() {
 fn nothing_arrives_from_behind_an_area_light() {
     let light = cornell_light();
     let above = Vec3::new(0.0, 2.0, 0.0);
-    let mut s = Sampler::from_seed(2);
+    let mut s = Rng::from_seed(2);
     for _ in 0..1000 {
         assert!(light.sample_li(above, s.next_2d()).is_none());
     }
@@ -215,7 +198,7 @@ fn directional_light_comes_from_minus_direction() {
 fn ambient_light_gives_pi_c_on_an_upward_surface() {
     let c = Color::new(0.5, 1.0, 2.0);
     let light = Light::Ambient { radiance: c };
-    let mut s = Sampler::from_seed(4);
+    let mut s = Rng::from_seed(4);
     let mut values = Vec::new();
     for _ in 0..50_000 {
         let ls = light.sample_li(Vec3::ZERO, s.next_2d()).unwrap();
@@ -242,7 +225,7 @@ fn ambient_light_on_tilted_surface_and_pdf_mass() {
     };
     let beta = 1.0f32;
     let n = Vec3::new(beta.sin(), beta.cos(), 0.0);
-    let mut s = Sampler::from_seed(6);
+    let mut s = Rng::from_seed(6);
     let (mut irradiance, mut mass) = (Vec::new(), Vec::new());
     for _ in 0..200_000 {
         let w = uniform_sphere(s.next_2d());

@@ -215,8 +215,14 @@ fn bad_translate_rotate_scale() {
             "expected 3 numbers, found 2",
         ],
     );
-    let doc = edit("<translate>0 0 1</translate>", "<rotate>0 0 0 90</rotate>");
-    parse_err(&doc, &["<node id=\"ball-node\">/rotate", "axis is zero"]);
+    let doc = edit("<translate>0 0 1</translate>", "<rotate>0 0 1</rotate>");
+    parse_err(
+        &doc,
+        &[
+            "<node id=\"ball-node\">/rotate",
+            "expected 4 numbers, found 3",
+        ],
+    );
     let doc = edit("<translate>0 0 1</translate>", "<scale>1 1 1 1</scale>");
     parse_err(
         &doc,
@@ -234,11 +240,6 @@ fn url_that_names_nothing() {
             "<instance_geometry url=\"#quad\">",
             "<instance_geometry url=\"#nothing\">",
             "<node id=\"quad-node\">/instance_geometry",
-        ),
-        (
-            "target=\"#grey\"",
-            "target=\"#nothing\"",
-            "instance_material",
         ),
         (
             "<instance_effect url=\"#grey-fx\"/>",
@@ -406,14 +407,14 @@ fn missing_material_is_a_warning() {
 fn unknown_light_type_is_a_warning() {
     let doc = edit(
         "<point><color>1 2 3</color></point>",
-        "<spot><color>1 2 3</color></spot>",
+        "<photometric><color>1 2 3</color></photometric>",
     );
     let s = parse_ok(&doc);
     assert!(s.lights.is_empty());
     assert!(
         s.warnings
             .iter()
-            .any(|w| w.contains("spot lights are not supported")),
+            .any(|w| w.contains("photometric lights are not supported")),
         "{:?}",
         s.warnings
     );
@@ -424,14 +425,31 @@ fn scene_without_geometry_is_empty_not_an_error() {
     let s = parse_ok(r#"<COLLADA xmlns="http://www.collada.org/2005/11/COLLADASchema"/>"#);
     assert!(s.triangles.is_empty() && s.spheres.is_empty() && s.lights.is_empty());
     assert!(s.bounds.is_empty());
-    // The template with every geometry node removed: camera and light only.
-    let start = TEMPLATE.find("<node id=\"quad-node\">").unwrap();
-    let end = TEMPLATE.find("<node id=\"lamp-node\">").unwrap();
-    let doc = format!("{}{}", &TEMPLATE[..start], &TEMPLATE[end..]);
+    // The template with every geometry node and geometry removed: camera and light only.
+    let cut = |doc: &str, from: &str, to: &str| {
+        let start = doc.find(from).unwrap();
+        let end = doc.find(to).unwrap();
+        format!("{}{}", &doc[..start], &doc[end..])
+    };
+    let no_nodes = cut(
+        TEMPLATE,
+        "<node id=\"quad-node\">",
+        "<node id=\"lamp-node\">",
+    );
+    let doc = cut(&no_nodes, "<geometry id=\"quad\">", "</library_geometries>");
     let s = parse_ok(&doc);
     assert!(s.warnings.is_empty(), "{:?}", s.warnings);
     assert_eq!(s.lights.len(), 1);
     assert!(s.triangles.is_empty());
+    // With its geometry left in the library but instanced nowhere, the mesh is placed
+    // once, untransformed, with a warning (as assimp and other importers do).
+    let s = parse_ok(&no_nodes);
+    assert_eq!(s.triangles.len(), 2);
+    assert!(s.spheres.is_empty(), "only meshes are placed");
+    assert!(s
+        .warnings
+        .iter()
+        .any(|w| w.contains("instances no geometry")));
 }
 
 #[test]

@@ -4,7 +4,7 @@
 use ember::camera::Camera;
 use ember::info::scene_info;
 use ember::lights::{AreaLight, Light};
-use ember::materials::Material;
+use ember::materials::{Bsdf, Material};
 use ember::scene::collada::load;
 use ember::scene::{Scene, NO_LIGHT};
 use ember::Vec3;
@@ -171,7 +171,7 @@ fn check_area_light_quads(name: &str, s: &Scene) {
             assert_eq!(s.triangles[i].n, None);
             assert_eq!(
                 s.materials[s.triangles[i].material as usize],
-                Material::Black,
+                Material::light_surface(),
                 "{name}: the light, not the material, emits"
             );
             let si = s.interaction(
@@ -254,11 +254,11 @@ fn cbspheres_has_two_spheres_one_area_light_and_a_ten_triangle_box() {
     assert!((s.spheres[0].centre - Vec3::new(0.4, 0.3, 0.3)).length() < 1e-6);
     assert!((s.spheres[0].radius - 0.3).abs() < 1e-6);
     assert!(
-        matches!(s.materials[s.spheres[0].material as usize], Material::Glass { ior, .. } if ior == 1.45)
+        matches!(s.materials[s.spheres[0].material as usize].bsdf, Bsdf::Glass(g) if g.ior == 1.45)
     );
     assert!(matches!(
-        s.materials[s.spheres[1].material as usize],
-        Material::Mirror { .. }
+        s.materials[s.spheres[1].material as usize].bsdf,
+        Bsdf::Mirror(_)
     ));
     // The room's ceiling bounds the scene.
     assert!((s.bounds.max.y - 1.5).abs() < 1e-6);
@@ -385,8 +385,8 @@ fn own_cornell_scene() {
     assert!((s.spheres[0].radius - 0.4).abs() < 1e-6);
     assert!((s.spheres[1].radius - 0.35).abs() < 1e-6);
     // Floor, ceiling and back wall are white; left red; right green.
-    let albedo = |i: usize| match s.materials[s.triangles[i].material as usize] {
-        Material::Lambertian { albedo } => albedo,
+    let albedo = |i: usize| match s.materials[s.triangles[i].material as usize].bsdf {
+        Bsdf::Lambertian(b) => b.albedo.vec3(),
         m => panic!("triangle {i}: {m:?}"),
     };
     assert_eq!(albedo(0), Vec3::splat(0.7));

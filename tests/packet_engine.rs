@@ -11,10 +11,10 @@ use common::{load, random_triangle_point};
 use ember::accel::{Accel, AccelKind, Bvh, BvhBuilder, HitPacket, RayPacket};
 use ember::geometry::Ray;
 use ember::integrators::{DirectStrategy, Roulette};
+use ember::lanes::{instruction_set, limit_instruction_set, InstructionSet, LANES};
 use ember::render::{Engine, RenderJob, RenderSettings};
-use ember::sampling::{uniform_sphere, Sampler};
+use ember::sampling::{uniform_sphere, Rng};
 use ember::scene::Scene;
-use ember::simd::{instruction_set, limit_instruction_set, InstructionSet, LANES};
 use glam::Vec3;
 use std::sync::Mutex;
 
@@ -43,13 +43,12 @@ fn for_each_instruction_set(mut f: impl FnMut(InstructionSet)) {
 /// Rays that leave a surface point of each kind of primitive (skipping it), shadow
 /// segments between two surface points, and the random rays of the BVH tests.
 fn rays_for(scene: &Scene, seed: u64, n: usize) -> Vec<Ray> {
-    let mut rng = Sampler::from_seed(seed);
+    let mut rng = Rng::from_seed(seed);
     let targets: Vec<Vec3> = (0..scene.triangles.len())
         .flat_map(|i| scene.triangle_positions(i))
         .collect();
-    let surface_point = |rng: &mut Sampler| {
-        (!scene.triangles.is_empty()).then(|| random_triangle_point(scene, rng))
-    };
+    let surface_point =
+        |rng: &mut Rng| (!scene.triangles.is_empty()).then(|| random_triangle_point(scene, rng));
     (0..n)
         .map(|k| match (k % 3, surface_point(&mut rng)) {
             (0, Some((p, prim))) => Ray {
@@ -75,7 +74,7 @@ fn rays_for(scene: &Scene, seed: u64, n: usize) -> Vec<Ray> {
 
 /// Every lane of every packet against the single-ray answer, for both builders.
 fn check_packets(scene: &Scene, rays: &[Ray], seed: u64) {
-    let mut rng = Sampler::from_seed(seed);
+    let mut rng = Rng::from_seed(seed);
     for builder in builders() {
         let bvh = Bvh::build(scene, builder);
         for chunk in rays.chunks(LANES) {
@@ -130,7 +129,7 @@ fn packet_traversal_finds_what_single_rays_find_in_the_course_scenes() {
 /// duplicates, hit by rays aimed at their corners: ties and edge-on hits.
 #[test]
 fn packet_traversal_matches_single_rays_on_edges_ties_and_spheres() {
-    let mut rng = Sampler::from_seed(11);
+    let mut rng = Rng::from_seed(11);
     let mut positions = Vec::new();
     let mut tris = Vec::new();
     let n = 12;

@@ -4,13 +4,12 @@
 
 mod common;
 
-use common::{ember, job, load, repo};
+use common::{ember_in, job, load, repo};
 use ember::accel::{AccelKind, BvhBuilder};
 use ember::film::Image;
 use ember::image_metadata::ImageMetadata;
 use ember::render::{Adaptive, PixelRect, RenderJob, RenderSettings};
 use ember::shard::{merge, MergeError, Part, Shard};
-use std::path::Path;
 
 const SCENE: &str = "scenes/cs184/sky/CBspheres_lambertian.dae";
 const SIZE: (u32, u32) = (40, 30);
@@ -228,14 +227,6 @@ fn bad_merges_are_refused_naming_the_file() {
     );
 }
 
-fn run(args: &[&str], dir: &Path) -> (bool, String) {
-    let out = ember().current_dir(dir).args(args).output().unwrap();
-    (
-        out.status.success(),
-        String::from_utf8_lossy(&out.stderr).into_owned(),
-    )
-}
-
 #[test]
 fn cli_shards_merge_into_the_whole_render_and_bad_merges_fail() {
     let dir = tempfile::tempdir().unwrap();
@@ -245,21 +236,19 @@ fn cli_shards_merge_into_the_whole_render_and_bad_merges_fail() {
         let mut a = vec!["-q", "-s", "4", "-m", "2", "-r", "40", "30", "-f", out];
         a.extend_from_slice(extra);
         a.push(&scene);
-        let (ok, err) = run(&a, d);
-        assert!(ok, "{out}: {err}");
+        ember_in(d, &a).success();
     };
     render(&["-t", "2"], "full.exr");
     for k in 0..3 {
         let shard = format!("{k}/3");
         render(&["-t", "1", "--shard", &shard], &format!("b{k}.exr"));
     }
-    let (ok, err) = run(&["merge", "merged.exr", "b2.exr", "b0.exr", "b1.exr"], d);
-    assert!(ok, "{err}");
+    ember_in(d, ["merge", "merged.exr", "b2.exr", "b0.exr", "b1.exr"]).success();
     let full = ember::image_io::read_image(&d.join("full.exr")).unwrap();
     let merged = ember::image_io::read_image(&d.join("merged.exr")).unwrap();
     assert!(bits(&merged) == bits(&full));
-    let (ok, err) = run(&["merge", "merged.png", "b0.exr", "b1.exr", "b2.exr"], d);
-    assert!(ok && d.join("merged.png").exists(), "{err}");
+    ember_in(d, ["merge", "merged.png", "b0.exr", "b1.exr", "b2.exr"]).success();
+    assert!(d.join("merged.png").exists());
     let meta = ember::image_io::read_metadata(&d.join("merged.exr")).unwrap();
     assert_eq!(meta.get("ember.merged_parts"), Some("3"));
     assert!(meta.get("ember.scene.fnv1a64").is_some());
@@ -289,9 +278,7 @@ fn cli_shards_merge_into_the_whole_render_and_bad_merges_fail() {
     ] {
         let mut a = vec!["merge", "bad.exr"];
         a.extend(args);
-        let (ok, err) = run(&a, d);
-        assert!(!ok && err.contains(needle), "{a:?}: {err}");
-        assert!(!err.contains("panicked"), "{err}");
+        ember_in(d, &a).fails_with(needle);
         assert!(!d.join("bad.exr").exists());
     }
     for (extra, needle) in [
@@ -319,23 +306,18 @@ fn cli_shards_merge_into_the_whole_render_and_bad_merges_fail() {
         let mut a = vec!["-q", "-r", "40", "30", "-f", "p.exr"];
         a.extend(extra);
         a.push(&scene);
-        let (ok, err) = run(&a, d);
-        assert!(!ok && err.contains(needle), "{a:?}: {err}");
+        ember_in(d, &a).fails_with(needle);
     }
-    let (ok, err) = run(&["-q", "--shard", "0/2", "-f", "p.png", &scene], d);
-    assert!(!ok && err.contains("p.png: a part"), "{err}");
+    ember_in(d, ["-q", "--shard", "0/2", "-f", "p.png", &scene]).fails_with("p.png: a part");
     // Light tracing (auto's choice for CBempty) splats anywhere: no parts.
     let empty = repo("scenes/cs184/sky/CBempty.dae").display().to_string();
     for flag in ["--shard", "--spp-offset"] {
         let value = if flag == "--shard" { "0/2" } else { "4" };
-        let (ok, err) = run(
-            &["-q", "-r", "40", "30", flag, value, "-f", "lt.exr", &empty],
+        ember_in(
             d,
-        );
-        assert!(
-            !ok && err.contains("cannot be used with light tracing"),
-            "{err}"
-        );
+            ["-q", "-r", "40", "30", flag, value, "-f", "lt.exr", &empty],
+        )
+        .fails_with("cannot be used with light tracing");
         assert!(!d.join("lt.exr").exists());
     }
 }

@@ -1,14 +1,17 @@
 //! Analytic checks of the light transport: the furnace and the irradiance of a
 //! rectangular light. Tolerances come from the estimators' own standard errors.
 
+mod common;
+
+use common::polygon_irradiance;
 use ember::accel::{self, AccelKind, BvhBuilder};
 use ember::camera::Camera;
-use ember::geometry::{Aabb, Ray};
+use ember::geometry::Aabb;
 use ember::integrators::{DirectStrategy, Estimator, PathIntegrator, PathSettings, Roulette};
 use ember::lights::{AreaLight, Light};
 use ember::materials::Material;
-use ember::render::{RenderJob, RenderSettings};
-use ember::sampling::Sampler;
+use ember::render::{Engine, RenderJob, RenderSettings};
+use ember::sampling::SamplerKind;
 use ember::scene::{Scene, Sphere, Triangle, NO_LIGHT};
 use ember::{Color, Vec3};
 
@@ -21,10 +24,7 @@ fn furnace(a: f32, le: f32) -> (Scene, Camera) {
             radius: 1.0,
             material: 0,
         }],
-        materials: vec![Material::Lambertian {
-            albedo: Color::splat(a),
-        }],
-        surface_emission: vec![(0, Color::splat(le))],
+        materials: vec![Material::lambertian(Color::splat(a)).with_emission(Color::splat(le), true)],
         bounds: Aabb::new(Vec3::splat(-1.0), Vec3::splat(1.0)),
         ..Default::default()
     };
@@ -144,20 +144,6 @@ fn furnace_converges_to_geometric_series_limit() {
     );
 }
 
-/// Irradiance at `x` (normal `n`) from a uniformly emitting polygon of radiance `le`
-/// (Lambert's closed form): `E = le/2 · Σ Θ_i (n · Γ_i)`.
-fn polygon_irradiance(x: Vec3, n: Vec3, verts: &[Vec3], le: f32) -> f32 {
-    let mut sum = 0.0f64;
-    for i in 0..verts.len() {
-        let a = (verts[i] - x).normalize().as_dvec3();
-        let b = (verts[(i + 1) % verts.len()] - x).normalize().as_dvec3();
-        let theta = a.dot(b).clamp(-1.0, 1.0).acos();
-        let gamma = a.cross(b).normalize();
-        sum += theta * n.as_dvec3().dot(gamma);
-    }
-    (0.5 * le as f64 * sum.abs()) as f32
-}
-
 /// A large Lambertian floor (y = 0) under a 1.0 × 0.8 area light at height 1.2 facing down.
 fn lit_floor(albedo: f32, le: f32) -> (Scene, [Vec3; 4]) {
     let (c, ex, ey) = (
@@ -197,12 +183,8 @@ fn lit_floor(albedo: f32, le: f32) -> (Scene, [Vec3; 4]) {
         positions,
         triangles,
         materials: vec![
-            Material::Lambertian {
-                albedo: Color::splat(albedo),
-            },
-            Material::Emission {
-                radiance: Color::splat(le),
-            },
+            Material::lambertian(Color::splat(albedo)),
+            Material::emitter(Color::splat(le)),
         ],
         lights: vec![Light::Area(AreaLight {
             centre: c,
@@ -243,21 +225,30 @@ fn area_light_irradiance_matches_closed_form() {
             light_samples: 4,
             strategy,
             roulette: Roulette::Off,
+            sampler: SamplerKind::Independent,
         };
-        let integ = PathIntegrator::new(&scene, accel.as_ref(), settings);
+        let camera = Camera::new(&scene.camera, &scene.bounds, 1, 1);
+        let integ = PathIntegrator::new(
+            &scene,
+            accel.as_ref(),
+            &camera,
+            settings,
+            Engine::Scalar,
+            11,
+        );
         for (k, &x) in points.iter().enumerate() {
-            let want = albedo / std::f32::consts::PI * polygon_irradiance(x, Vec3::Y, &quad, le);
+            let want = albedo / std::f32::consts::PI
+                * polygon_irradiance(x, Vec3::Y, &quad, le as f64) as f32;
             let eye = x + Vec3::new(0.05, 0.1, 0.08);
             let n = if matches!(strategy, DirectStrategy::Hemisphere | DirectStrategy::Bsdf) {
                 200_000
             } else {
                 20_000
             };
-            let mut sampler = Sampler::new(11, k as u64, 0);
             let (mut s1, mut s2) = (0f64, 0f64);
-            for _ in 0..n {
+            for i in 0..n {
                 let v = integ
-                    .li(Ray::new(eye, (x - eye).normalize()), &mut sampler)
+                    .radiance_along(eye, (x - eye).normalize(), k as u32, i)
                     .y as f64;
                 s1 += v;
                 s2 += v * v;
@@ -310,12 +301,8 @@ fn tilted_shading_normals_do_not_leak_light() {
             tri([4, 6, 7], None, 1, 0),
         ],
         materials: vec![
-            Material::Lambertian {
-                albedo: Color::splat(0.9),
-            },
-            Material::Emission {
-                radiance: Color::splat(50.0),
-            },
+            Material::lambertian(Color::splat(0.9)),
+            Material::emitter(Color::splat(50.0)),
         ],
         lights: vec![Light::Area(AreaLight {
             centre: c,
@@ -382,7 +369,6 @@ fn tilted_shading_normals_do_not_leak_light() {
 /// radiance is `aᵏ/π` at every wall point.
 fn point_furnace(a: f32) -> (Scene, Camera) {
     let (mut scene, cam) = furnace(a, 0.0);
-    scene.surface_emission.clear();
     scene.lights = vec![Light::Point {
         position: Vec3::ZERO,
         intensity: Color::ONE,
@@ -453,7 +439,7 @@ fn light_tracing_matches_the_area_light_closed_form() {
                 let r = cam.generate_ray(x, y, xi);
                 let hit = accel.intersect(&r).map(|hh| scene.interaction(&r, &hh));
                 if let Some(si) = hit.filter(|si| si.material == 0) {
-                    let e = polygon_irradiance(si.p, Vec3::Y, &quad, le);
+                    let e = polygon_irradiance(si.p, Vec3::Y, &quad, le as f64) as f32;
                     s += (albedo / std::f32::consts::PI * e) as f64;
                 }
             }

@@ -15,8 +15,8 @@ use super::{
     RayPacket,
 };
 use crate::geometry::Ray;
+use crate::lanes::{LaneBits, LANES};
 use crate::scene::{PrimHit, Scene};
-use crate::simd::{LaneBits, LANES};
 
 const _: () = assert!(LANES == ffi::EMBER_LANES as usize);
 use std::ffi::{CStr, CString};
@@ -518,7 +518,7 @@ mod tests {
 
     #[test]
     fn packet_hits_equal_single_ray_hits() {
-        use crate::sampling::{uniform_sphere, Sampler};
+        use crate::sampling::{uniform_sphere, Rng};
         let bumpy = crate::bench::meshes::displaced_sphere(5_000);
         let tris: Vec<[u32; 3]> = bumpy.triangles.iter().map(|t| t.v).collect();
         let balls = [
@@ -527,7 +527,7 @@ mod tests {
         ];
         let mesh = geometry_scene(bumpy.positions.clone(), &tris, &balls);
         let (centre, radius) = (mesh.bounds.centre(), mesh.bounds.diagonal().length());
-        let mut rng = Sampler::from_seed(11);
+        let mut rng = Rng::from_seed(11);
         // From a sphere around the scene towards points near its centre (some miss),
         // 1001 rays so the last packet of every width is partly masked off.
         let rays: Vec<Ray> = (0..1001)

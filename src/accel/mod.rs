@@ -5,13 +5,13 @@ pub mod brute;
 pub mod bvh;
 #[cfg(any(feature = "embree", feature = "embree4"))]
 pub mod embree;
-pub mod packet;
+
 mod prims;
 
-use crate::simd::LaneBits;
+pub use crate::lanes::rays::{HitPacket, RayPacket};
+use crate::lanes::LaneBits;
 pub use brute::BruteForce;
 pub use bvh::{Bvh, BvhStats};
-pub use packet::{HitPacket, RayPacket};
 
 use crate::geometry::Ray;
 use crate::names::{display_from_table, Named};
@@ -35,14 +35,14 @@ pub trait Accel: Send + Sync {
     /// are left as they were). Among hits at the same `t` the lowest primitive id
     /// wins (see [`packet`]). The default traces the lanes one by one.
     fn intersect_packet(&self, rays: &RayPacket, active: LaneBits, hits: &mut HitPacket) {
-        for i in (0..crate::simd::LANES).filter(|&i| active >> i & 1 != 0) {
+        for i in (0..crate::lanes::LANES).filter(|&i| active >> i & 1 != 0) {
             hits.set(i, self.intersect(&rays.ray(i)));
         }
     }
 
     /// The lanes of `active` whose ray is occluded. The default traces them one by one.
     fn occluded_packet(&self, rays: &RayPacket, active: LaneBits) -> LaneBits {
-        (0..crate::simd::LANES)
+        (0..crate::lanes::LANES)
             .filter(|&i| active >> i & 1 != 0 && self.occluded(&rays.ray(i)))
             .fold(0, |m, i| m | 1 << i)
     }
@@ -96,6 +96,8 @@ pub enum Backend {
     Auto,
     Native,
     Embree,
+    /// No acceleration structure: [`BruteForce`].
+    None,
 }
 
 impl Named for Backend {
@@ -113,6 +115,12 @@ impl Named for Backend {
             "embree",
             "Intel Embree, robust mode (builds with --features embree or embree4 only)",
         ),
+        (
+            Backend::None,
+            "none",
+            "No acceleration structure: every ray tests every primitive (brute force), the baseline a BVH's \
+             speed-up is measured against; slow beyond a few thousand primitives (ember warns)",
+        ),
     ];
 }
 display_from_table!(Backend);
@@ -121,7 +129,7 @@ impl Backend {
     /// Whether this build can construct the backend.
     pub fn available(self) -> bool {
         match self {
-            Backend::Auto | Backend::Native => true,
+            Backend::Auto | Backend::Native | Backend::None => true,
             Backend::Embree => cfg!(any(feature = "embree", feature = "embree4")),
         }
     }
@@ -138,6 +146,8 @@ pub enum AccelKind {
         bvh: BvhBuilder,
         embree: EmbreeQuality,
     },
+    /// `--accel none`: [`BruteForce`], every ray against every primitive.
+    None,
 }
 
 impl Default for AccelKind {
@@ -182,6 +192,7 @@ impl std::fmt::Display for AccelKind {
             AccelKind::Native(BvhBuilder::Sah) => write!(f, "native SAH"),
             AccelKind::Embree(m) => write!(f, "Embree {m}"),
             AccelKind::Auto { .. } => write!(f, "auto"),
+            AccelKind::None => write!(f, "none (brute force)"),
         }
     }
 }
@@ -196,6 +207,7 @@ impl AccelKind {
             },
             Backend::Native => AccelKind::Native(builder),
             Backend::Embree => AccelKind::embree(quality),
+            Backend::None => AccelKind::None,
         }
     }
 
@@ -204,6 +216,7 @@ impl AccelKind {
             AccelKind::Native(_) => Backend::Native,
             AccelKind::Embree(_) => Backend::Embree,
             AccelKind::Auto { .. } => Backend::Auto,
+            AccelKind::None => Backend::None,
         }
     }
 }
@@ -491,6 +504,7 @@ impl AccelBuilder {
     pub fn build(&self, scene: &Scene, kind: AccelKind) -> Result<Box<dyn Accel>, AccelError> {
         match kind.resolve(scene).kind {
             AccelKind::Native(b) => Ok(Box::new(bvh::Bvh::build(scene, b))),
+            AccelKind::None => Ok(Box::new(BruteForce::new(scene))),
             #[cfg(any(feature = "embree", feature = "embree4"))]
             AccelKind::Embree(mode) => Ok(Box::new(self.build_embree(scene, mode)?)),
             #[cfg(not(any(feature = "embree", feature = "embree4")))]

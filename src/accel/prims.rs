@@ -2,7 +2,6 @@
 //! hittable primitives of a scene, in an order chosen by the structure, with the
 //! triangle corners copied next to each other so tests never chase scene indices.
 
-use super::packet::{PacketHits, PacketRays};
 use crate::geometry::sphere::{
     intersect_sphere, intersect_sphere_lanes, intersect_sphere_leaving, sphere_is_hittable,
 };
@@ -10,8 +9,9 @@ use crate::geometry::triangle::{
     triangle_is_hittable, Edges, PackedTriangle, Triangle4, TriangleRay,
 };
 use crate::geometry::{Aabb, Ray};
+use crate::lanes::rays::{PacketHits, PacketRays};
+use crate::lanes::{F32s, LaneBits, Simd, U32s};
 use crate::scene::{PrimHit, PrimId, Scene};
-use crate::simd::{F32s, LaneBits, Simd, U32s};
 use glam::Vec3;
 use rayon::prelude::*;
 

@@ -133,6 +133,9 @@ pub struct AccelBenchRow {
     pub build: String,
     /// Whether `--accel auto` picks this backend for this scene in that build.
     pub auto: bool,
+    /// Incoherent (and shadow) rays traced, and how many runs each figure is the median of.
+    pub rays: usize,
+    pub repeats: usize,
     pub measured: Measurement,
     /// The calls of [`RENDER_TILES`] tiles of a render of the scene as `ember bench
     /// render` makes it, replayed: the same four `Accel` calls, packet for packet.
@@ -158,7 +161,23 @@ pub struct AccelBenchReport {
     /// Not read back by [`AccelBenchReport::read`] (`--append` keeps the file's rows
     /// apart: see [`Report::write`]).
     pub variants: Vec<EmbreeVariantRow>,
+    /// Set when the run was stopped before its last scene: what it left out.
+    pub stopped: Option<String>,
 }
+
+/// What [`run`] tells its caller as it goes.
+pub enum Progress<'a> {
+    /// One measurement done (a backend on a scene at a thread count).
+    Line(String),
+    /// Every row measured so far, after each scene and thread count: the caller can
+    /// write them, so a run that is killed still leaves the rows it finished.
+    Rows(&'a AccelBenchReport),
+}
+
+/// Below these, a run's figures are too noisy to say where Embree overtakes the
+/// native BVH ([`AccelBenchReport::crossover_note`]).
+pub const MIN_REPEATS_TO_CONCLUDE: usize = 3;
+pub const MIN_RAYS_TO_CONCLUDE: usize = 200_000;
 
 #[derive(Debug, thiserror::Error)]
 pub enum BenchError {
@@ -189,23 +208,30 @@ fn backends(quality: EmbreeQuality) -> Vec<AccelKind> {
     list
 }
 
-/// Runs the whole benchmark; `progress` hears one line per finished measurement.
+/// Runs the whole benchmark; `progress` hears each finished measurement and the rows
+/// so far after each scene and thread count. Once `stop` says so (Ctrl-C), the run
+/// ends after the measurement under way, with the rows it finished.
 pub fn run(
     opts: &AccelBenchOptions,
-    mut progress: impl FnMut(&str),
+    mut progress: impl FnMut(Progress<'_>),
+    stop: &dyn Fn() -> bool,
 ) -> Result<AccelBenchReport, BenchError> {
     let mut report = AccelBenchReport::default();
     let repeats = Repeats {
         count: opts.repeats.max(1),
         budget_s: f64::INFINITY,
     };
-    for bench_scene in &opts.scenes {
+    for (done, bench_scene) in opts.scenes.iter().enumerate() {
         let scene = bench_scene.load()?;
         let name = bench_scene.name();
         let rays = make_rays(&scene, opts.width, opts.height, opts.rays, opts.seed);
         let calls = render_calls(&scene, opts)?;
         let auto = AccelKind::default().resolve(&scene).kind;
         for &threads in &opts.threads {
+            if stop() {
+                report.stopped = Some(stopped_note(opts, done, threads));
+                return Ok(report);
+            }
             let pool = accel::tracing_pool(Some(threads))?;
             let builder = AccelBuilder::new(threads);
             let build = embree_modes::build_label(&builder)?;
@@ -230,22 +256,15 @@ pub fn run(
                     },
                     build: build.clone(),
                     auto: kind == auto,
+                    rays: opts.rays,
+                    repeats: repeats.count,
                     measured: m,
                     render: Some(render),
                 };
-                progress(&format!(
-                    "{} / {} / {} threads: {:.2} / {:.2} / {:.2} Mrays/s; render calls {:.3} s",
-                    row.scene,
-                    row.backend,
-                    row.threads,
-                    m.camera_mrays,
-                    m.incoherent_mrays,
-                    m.shadow_mrays,
-                    render.seconds
-                ));
+                progress(Progress::Line(progress_line(&row)));
                 report.rows.push(row);
             }
-            if HAS_EMBREE && opts.embree_modes {
+            if HAS_EMBREE && opts.embree_modes && !stop() {
                 let modes = embree_modes::embree_modes(
                     &scene,
                     &name,
@@ -254,7 +273,9 @@ pub fn run(
                     &builder,
                     opts.repeats,
                 )?;
-                progress(&format!("{name} / Embree modes / {threads} threads: done"));
+                progress(Progress::Line(format!(
+                    "{name} / Embree modes / {threads} threads: done"
+                )));
                 report.modes.extend(modes);
                 let variants = embree_modes::embree_variants(
                     &scene,
@@ -264,11 +285,12 @@ pub fn run(
                     &builder,
                     opts.repeats,
                 )?;
-                progress(&format!(
+                progress(Progress::Line(format!(
                     "{name} / Embree variants / {threads} threads: done"
-                ));
+                )));
                 report.variants.extend(variants);
             }
+            progress(Progress::Rows(&report));
         }
     }
     Ok(report)
@@ -296,13 +318,41 @@ fn render_calls(scene: &Scene, opts: &AccelBenchOptions) -> Result<RenderCalls, 
 /// Tiles of the render whose calls `ember bench accel` replays.
 pub const RENDER_TILES: usize = 24;
 
-const HEADER: [&str; 21] = [
+/// "CBbunny / native SAH / 1 thread: camera 29.64, incoherent 11.86, shadow 9.21 Mrays/s, build 4.97 ms".
+fn progress_line(row: &AccelBenchRow) -> String {
+    let m = &row.measured;
+    format!(
+        "{} / {} / {} thread{}: camera {:.2}, incoherent {:.2}, shadow {:.2} Mrays/s, build {} ms",
+        row.scene,
+        row.backend,
+        row.threads,
+        if row.threads == 1 { "" } else { "s" },
+        m.camera_mrays,
+        m.incoherent_mrays,
+        m.shadow_mrays,
+        three_digits(m.build_ms)
+    )
+}
+
+/// What a run stopped at scene `done` of `opts`, before its `threads` measurement, left out.
+fn stopped_note(opts: &AccelBenchOptions, done: usize, threads: usize) -> String {
+    let left: Vec<String> = opts.scenes[done..].iter().map(BenchScene::name).collect();
+    format!(
+        "stopped at {} thread(s) of scene {} of {}; not measured from there: {}",
+        threads,
+        done + 1,
+        opts.scenes.len(),
+        left.join(", ")
+    )
+}
+
+const HEADER: [&str; 23] = [
     "scene",
     "prims",
     "threads",
     "backend",
     "scene flags",
-    "build's Embree",
+    "Embree",
     "build (ms)",
     "memory (MB)",
     "camera (Mrays/s)",
@@ -318,6 +368,8 @@ const HEADER: [&str; 21] = [
     "render calls: intersect (Mrays/s)",
     "render calls: occluded (Mrays/s)",
     "render calls (s)",
+    "rays",
+    "runs",
 ];
 
 impl AccelBenchReport {
@@ -351,7 +403,12 @@ impl AccelBenchReport {
                 r.threads.to_string(),
                 r.backend.clone(),
                 r.scene_flags().into(),
-                r.build.clone(),
+                // The Embree a row ran; a native row's build is that of the Embree rows after it.
+                if r.is_embree() {
+                    r.build.clone()
+                } else {
+                    String::new()
+                },
                 three_digits(m.build_ms),
                 three_digits(m.memory_mb),
                 format!("{:.2}", m.camera_mrays),
@@ -369,6 +426,8 @@ impl AccelBenchReport {
                 r.render
                     .map_or("—".into(), |c| format!("{:.2}", c.occluded_mrays)),
                 r.render.map_or("—".into(), |c| format!("{:.4}", c.seconds)),
+                r.rays.to_string(),
+                r.repeats.to_string(),
             ]);
         }
         t
@@ -412,8 +471,22 @@ impl AccelBenchReport {
         from
     }
 
-    /// One line on [`AccelBenchReport::crossover`] against the crossover `--accel auto` uses.
+    /// One line on [`AccelBenchReport::crossover`] against the crossover `--accel auto`
+    /// uses; none from a run too small to tell (fewer than [`MIN_REPEATS_TO_CONCLUDE`]
+    /// runs or [`MIN_RAYS_TO_CONCLUDE`] rays per figure), or without Embree rows.
     pub fn crossover_note(&self) -> String {
+        let repeats = self.rows.iter().map(|r| r.repeats).min().unwrap_or(0);
+        let rays = self.rows.iter().map(|r| r.rays).min().unwrap_or(0);
+        if repeats < MIN_REPEATS_TO_CONCLUDE || rays < MIN_RAYS_TO_CONCLUDE {
+            return format!(
+                "Too small a run to say where Embree overtakes the native BVH ({repeats} run{} of {rays} rays per figure; \
+                 that needs --repeats {MIN_REPEATS_TO_CONCLUDE} and --rays {MIN_RAYS_TO_CONCLUDE} or more).",
+                if repeats == 1 { "" } else { "s" }
+            );
+        }
+        if !self.rows.iter().any(AccelBenchRow::is_embree) {
+            return "No Embree rows (this build has no Embree), so no crossover to measure.".into();
+        }
         let now = match accel::AUTO_EMBREE_MIN_PRIMS {
             Some(p) => format!("--accel auto switches at {p}"),
             None => "--accel auto never switches to Embree".to_string(),
@@ -444,12 +517,32 @@ impl AccelBenchReport {
     }
 
     /// Reads back the rows of a main table written by [`AccelBenchReport::table`] (its
-    /// CSV); the ratio columns are recomputed, not read.
+    /// CSV); the ratio columns are recomputed, not read. A native row's build is that of
+    /// the first Embree row after it of the same scene and thread count ("none" without).
     pub fn rows_from_table(t: &Table) -> Result<Vec<AccelBenchRow>, String> {
         if t.header != HEADER {
-            return Err(format!("not a bench accel table: header {:?}", t.header));
+            return Err(format!(
+                "not a bench accel table of this version of ember: header {:?}",
+                t.header
+            ));
         }
-        t.rows.iter().map(|c| row_from_cells(c)).collect()
+        let mut rows: Vec<AccelBenchRow> = t
+            .rows
+            .iter()
+            .map(|c| row_from_cells(c))
+            .collect::<Result<_, _>>()?;
+        for i in 0..rows.len() {
+            if !rows[i].is_embree() {
+                let same = |e: &&AccelBenchRow| {
+                    e.is_embree() && e.scene == rows[i].scene && e.threads == rows[i].threads
+                };
+                rows[i].build = rows[i + 1..]
+                    .iter()
+                    .find(same)
+                    .map_or("none".into(), |e| e.build.clone());
+            }
+        }
+        Ok(rows)
     }
 
     /// `other`'s rows after this report's, grouped by scene (in first-seen order) and
@@ -458,6 +551,7 @@ impl AccelBenchReport {
         self.rows.extend(other.rows);
         self.modes.extend(other.modes);
         self.variants.extend(other.variants);
+        self.stopped = self.stopped.or(other.stopped);
         let scenes = first_seen(self.rows.iter().map(|r| r.scene.clone()));
         let rank = |s: &str| scenes.iter().position(|x| x == s);
         self.rows.sort_by_key(|r| (rank(&r.scene), r.threads));
@@ -486,6 +580,7 @@ impl AccelBenchReport {
             rows,
             modes,
             variants,
+            stopped: None,
         })
     }
 }
@@ -563,6 +658,8 @@ fn row_from_cells(c: &[String]) -> Result<AccelBenchRow, String> {
         embree_mode,
         build: c[5].clone(),
         auto: c[15] == "yes",
+        rays: count(21)?,
+        repeats: count(22)?,
         measured: Measurement {
             build_ms: num(6)?,
             memory_mb: num(7)?,
@@ -606,7 +703,11 @@ impl Report for AccelBenchReport {
             out += "\n";
             out += &embree_modes::variants_table(&self.variants).to_markdown();
         }
-        out + "\n" + &self.crossover_note() + "\n"
+        out += "\n";
+        if let Some(s) = &self.stopped {
+            out += &format!("Interrupted: {s}.\n");
+        }
+        out + &self.crossover_note() + "\n"
     }
 }
 
@@ -626,6 +727,8 @@ mod tests {
             },
             build: build.into(),
             auto: false,
+            rays: 500_000,
+            repeats: 5,
             measured: Measurement {
                 build_ms: 1.0,
                 memory_mb: 1.5,
@@ -662,6 +765,7 @@ mod tests {
             ],
             modes: vec![],
             variants: vec![],
+            stopped: None,
         };
         let second = AccelBenchReport {
             rows: vec![
@@ -670,6 +774,7 @@ mod tests {
             ],
             modes: vec![],
             variants: vec![],
+            stopped: None,
         };
         let md = first.merge(second).table().to_markdown();
         assert!(
@@ -683,6 +788,34 @@ mod tests {
         );
         assert!(md.contains("| 3 | 9 | 2 | 4.25 |"), "{md}");
         assert_eq!(md.lines().count(), 2 + 5);
+        // Native rows name no Embree; every row has the header's cells.
+        assert!(md.contains("| native SAH | — |  | 1.00 |"), "{md}");
+        let counts = crate::bench::table::markdown_cell_counts(&md);
+        assert!(counts.iter().all(|&n| n == HEADER.len()), "{counts:?}");
+    }
+
+    #[test]
+    fn a_small_run_draws_no_conclusion() {
+        let small = |repeats, rays| AccelBenchReport {
+            rows: vec![
+                AccelBenchRow {
+                    repeats,
+                    rays,
+                    ..row(SAH, "e", 2.0)
+                },
+                row(AccelKind::embree(EmbreeQuality::Medium), "e", 1.0),
+            ],
+            modes: vec![],
+            variants: vec![],
+            stopped: None,
+        };
+        for (repeats, rays) in [(1, 500_000), (5, 50_000)] {
+            let note = small(repeats, rays).crossover_note();
+            assert!(note.starts_with("Too small a run"), "{note}");
+        }
+        assert!(small(3, 200_000)
+            .crossover_note()
+            .starts_with("Native SAH keeps up"));
     }
 
     #[test]
@@ -703,6 +836,7 @@ mod tests {
                 .collect(),
             modes: vec![],
             variants: vec![],
+            stopped: None,
         };
         // Native ahead at 10, behind at 100 and 1000, ahead again at 50 (noise).
         let r = rows(&[(10, 2.0), (50, 1.5), (100, 0.5), (1000, 0.5)]);
@@ -724,9 +858,19 @@ mod tests {
             rows: vec![row(SAH, "none", 5.0), fast],
             modes: vec![],
             variants: vec![],
+            stopped: None,
         };
         let t = Table::from_csv(&report.table().to_csv()).expect("csv");
-        assert_eq!(AccelBenchReport::rows_from_table(&t), Ok(report.rows));
+        // The native row's build is read from the Embree row after it.
+        let mut want = report.rows.clone();
+        want[0].build = want[1].build.clone();
+        assert_eq!(AccelBenchReport::rows_from_table(&t), Ok(want));
+        let alone = AccelBenchReport {
+            rows: vec![row(SAH, "none", 5.0)],
+            ..report.clone()
+        };
+        let t = Table::from_csv(&alone.table().to_csv()).expect("csv");
+        assert_eq!(AccelBenchReport::rows_from_table(&t), Ok(alone.rows));
         let mut bad = t.clone();
         bad.rows[0][8] = "fast".into();
         assert!(AccelBenchReport::rows_from_table(&bad)
@@ -745,11 +889,13 @@ mod tests {
             rows: vec![at("x", 1, "3"), at("x", 2, "3"), at("y", 1, "3")],
             modes: vec![],
             variants: vec![],
+            stopped: None,
         };
         let b = AccelBenchReport {
             rows: vec![at("x", 1, "4"), at("x", 2, "4"), at("y", 1, "4")],
             modes: vec![],
             variants: vec![],
+            stopped: None,
         };
         let order: Vec<(String, usize, String)> = a
             .merge(b)
@@ -805,7 +951,17 @@ mod tests {
             repeats: 1,
             ..Default::default()
         };
-        let report = run(&opts, |_| {}).expect("runs");
+        let mut lines = 0;
+        let report = run(
+            &opts,
+            |p| lines += matches!(p, Progress::Line(l) if l.contains("camera ")) as usize,
+            &|| false,
+        )
+        .expect("runs");
+        assert!(lines >= 2, "progress lines name the ray types");
+        assert!(report.stopped.is_none());
+        let stopped = run(&opts, |_| {}, &|| true).expect("runs");
+        assert!(stopped.rows.is_empty() && stopped.stopped.is_some());
         let embree_rows = if HAS_EMBREE { 2 } else { 0 };
         assert_eq!(report.rows.len(), 2 + embree_rows);
         assert_eq!(report.modes.len(), if HAS_EMBREE { 24 } else { 0 });

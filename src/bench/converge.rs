@@ -1,18 +1,24 @@
 //! `ember bench converge`: error against time for each method, so speed and
-//! accuracy can be charted against each other.
+//! accuracy can be charted against each other, ember's methods and its peers'
+//! (Mitsuba 3 with each of its samplers, Blender Cycles) on one chart against
+//! one reference.
 //!
 //! Each point is a fresh render (its own seed) at a doubled sample count, timed
 //! render-only with all threads. Errors are measured against a reference: a given
 //! EXR (e.g. the Mitsuba references, whose noise is negligible at their spp and
 //! is subtracted anyway when known) or ember's own high-spp render, rendered as
 //! two halves so that its own noise variance can be subtracted from every MSE.
+//! Methods are compared by reading each curve as measured (log-log interpolation
+//! at common render times and sample counts), never by assuming MSE ∝ 1/time.
 
-use super::chart::{write_chart, ChartSpec, Series};
-use super::mitsuba::MitsubaRunner;
+use super::chart::{write_chart_legend_outside, ChartSpec, Series};
+use super::cycles::CyclesRunner;
+use super::mitsuba::{MitsubaRunner, PeerRender};
 use super::table::Table;
 use super::{create_out_dir, write_text, Report};
 use crate::accel::{AccelKind, BvhBuilder, EmbreeQuality};
 use crate::camera::Camera;
+use crate::export::MitsubaSampler;
 use crate::film::Image;
 use crate::image_io::{read_image, write_image};
 use crate::integrators::{DirectStrategy, Estimator, Roulette};
@@ -39,21 +45,22 @@ pub struct ConvergeOptions {
     /// spp of ember's own reference (split into two halves).
     pub reference_spp: u32,
     pub out_dir: PathBuf,
-    /// RMSE whose time-to-reach is tabulated; None: the median of the methods' final RMSEs.
-    pub target_rmse: Option<f64>,
     pub seed: u64,
     /// Add the Embree backend as a method when this build has it.
     pub compare_backends: bool,
-    /// Mitsuba 3 as a peer method, one curve per variant.
+    /// Mitsuba 3 as peer methods, one curve per variant and sampler.
     pub mitsuba: Option<MitsubaPeer>,
+    /// Blender Cycles as a peer method, through this Python (one that imports `bpy`).
+    pub cycles: Option<PathBuf>,
 }
 
-/// Where Mitsuba 3 is and which of its variants to run.
+/// Where Mitsuba 3 is and which of its variants and samplers to run.
 #[derive(Clone, Debug)]
 pub struct MitsubaPeer {
     /// A Python interpreter that imports `mitsuba` (`scripts/mitsuba-env` prints one).
     pub python: PathBuf,
     pub variants: Vec<String>,
+    pub samplers: Vec<MitsubaSampler>,
 }
 
 /// One way of rendering the image.
@@ -67,6 +74,8 @@ pub struct Method {
 #[derive(Clone, Debug)]
 pub struct Point {
     pub method: String,
+    /// Rendered by a peer (Mitsuba, Cycles), not by ember.
+    pub peer: bool,
     pub spp: u32,
     pub samples: u64,
     pub seconds: f64,
@@ -81,113 +90,92 @@ pub struct ConvergeReport {
     pub width: u32,
     pub height: u32,
     pub points: Vec<Point>,
-    pub target_rmse: f64,
-    /// (method, seconds to reach the target RMSE, if it did).
-    pub time_to_target: Vec<(String, Option<f64>)>,
     pub reference_note: String,
+    /// What the peers said about their own images (Cycles' mean check at its highest spp).
+    pub peer_notes: Vec<String>,
 }
 
-/// The methods compared for depth `m`: the direct-lighting estimators at `m = 1`,
-/// MIS with and without roulette and at several `-l` beyond; adaptive sampling and
-/// (optionally) Embree with the scene's default (`DirectStrategy::auto_for`).
+/// What a method changes in the default settings.
+type Tweak = fn(&mut RenderSettings);
+
+/// ember's methods at `-m 1`: the direct-lighting estimators.
+const DIRECT_METHODS: &[(&str, Tweak)] = &[
+    ("hemisphere", |s| {
+        s.strategy = Some(DirectStrategy::Hemisphere)
+    }),
+    ("light sampling", |s| {
+        s.strategy = Some(DirectStrategy::Light)
+    }),
+    ("MIS", |s| s.strategy = Some(DirectStrategy::Mis)),
+];
+
+/// `--integrator auto`: the estimator and direct-lighting strategy the scene calls
+/// for (`RenderSettings::default()` fixes path tracing with light sampling).
+fn auto(s: &mut RenderSettings) {
+    s.estimator = None;
+    s.strategy = None;
+}
+
+/// The name of ember's default settings, the first method.
+pub const DEFAULT_METHOD: &str = "ember default (auto)";
+
+/// ember's methods beyond `-m 1`. A variant (another sampler, say) is one more row.
+const PATH_METHODS: &[(&str, Tweak)] = &[
+    ("light sampling, RR", |s| {
+        s.strategy = Some(DirectStrategy::Light)
+    }),
+    ("MIS, RR", |s| s.strategy = Some(DirectStrategy::Mis)),
+    ("MIS, no RR", |s| {
+        s.strategy = Some(DirectStrategy::Mis);
+        s.roulette = Roulette::Off;
+    }),
+    ("MIS, RR, -l 4", |s| {
+        s.strategy = Some(DirectStrategy::Mis);
+        s.light_samples = 4;
+    }),
+    ("MIS, RR, -l 16", |s| {
+        s.strategy = Some(DirectStrategy::Mis);
+        s.light_samples = 16;
+    }),
+];
+
+/// The methods compared for depth `m`: ember's default, the rows of [`DIRECT_METHODS`]
+/// or [`PATH_METHODS`] (path tracing unless a row says otherwise), light tracing where
+/// it can converge, adaptive sampling and (optionally) Embree, the last two with
+/// `--integrator auto` otherwise.
 pub fn methods(base: &RenderSettings, scene: &Scene, compare_backends: bool) -> Vec<Method> {
     let native = AccelKind::Native(BvhBuilder::Sah);
-    let m = |name: &str, s: RenderSettings| Method {
-        name: name.to_string(),
-        settings: s,
-        accel: native,
+    let with = |name: &str, tweak: Tweak, accel: AccelKind| {
+        let mut settings = base.clone();
+        tweak(&mut settings);
+        Method {
+            name: name.to_string(),
+            settings,
+            accel,
+        }
     };
-    let mut v = Vec::new();
-    let default_strategy = None;
-    if base.max_depth <= 1 {
-        v.push(m(
-            "hemisphere",
-            RenderSettings {
-                strategy: Some(DirectStrategy::Hemisphere),
-                ..base.clone()
-            },
-        ));
-        v.push(m(
-            "light sampling",
-            RenderSettings {
-                strategy: Some(DirectStrategy::Light),
-                ..base.clone()
-            },
-        ));
-        v.push(m(
-            "MIS",
-            RenderSettings {
-                strategy: Some(DirectStrategy::Mis),
-                ..base.clone()
-            },
-        ));
+    let table = if base.max_depth <= 1 {
+        DIRECT_METHODS
     } else {
-        v.push(m(
-            "light sampling, RR",
-            RenderSettings {
-                strategy: Some(DirectStrategy::Light),
-                ..base.clone()
-            },
-        ));
-        v.push(m(
-            "MIS, RR",
-            RenderSettings {
-                strategy: Some(DirectStrategy::Mis),
-                ..base.clone()
-            },
-        ));
-        v.push(m(
-            "MIS, no RR",
-            RenderSettings {
-                strategy: Some(DirectStrategy::Mis),
-                roulette: Roulette::Off,
-                ..base.clone()
-            },
-        ));
-        v.push(m(
-            "MIS, RR, -l 4",
-            RenderSettings {
-                strategy: Some(DirectStrategy::Mis),
-                light_samples: 4,
-                ..base.clone()
-            },
-        ));
-        v.push(m(
-            "MIS, RR, -l 16",
-            RenderSettings {
-                strategy: Some(DirectStrategy::Mis),
-                light_samples: 16,
-                ..base.clone()
-            },
-        ));
-    }
+        PATH_METHODS
+    };
+    // First ember's default, whatever `--integrator auto` picks for the scene: the
+    // method the tables divide by each peer's figure.
+    let mut v = vec![with(DEFAULT_METHOD, auto, native)];
+    v.extend(table.iter().map(|&(name, tweak)| with(name, tweak, native)));
     // Light tracing cannot show specular surfaces to the camera: only where it can converge.
     if !scene.materials.iter().any(|mat| mat.is_delta()) {
-        v.push(m(
-            "light tracing",
-            RenderSettings {
-                estimator: Some(Estimator::LightTracing),
-                ..base.clone()
-            },
-        ));
+        let light_tracing: Tweak = |s| s.estimator = Some(Estimator::LightTracing);
+        v.push(with("light tracing", light_tracing, native));
     }
-    v.push(m(
-        "adaptive (-a 16 0.05)",
-        RenderSettings {
-            strategy: default_strategy,
-            adaptive: Some(Adaptive::new(16, 0.05)),
-            ..base.clone()
-        },
-    ));
+    let adaptive: Tweak = |s| {
+        auto(s);
+        s.adaptive = Some(Adaptive::new(16, 0.05));
+    };
+    v.push(with("adaptive (-a 16 0.05)", adaptive, native));
     if compare_backends && cfg!(any(feature = "embree", feature = "embree4")) {
-        v.push(Method {
-            name: "Embree backend".into(),
-            settings: RenderSettings {
-                strategy: default_strategy,
-                ..base.clone()
-            },
-            accel: AccelKind::embree(EmbreeQuality::Medium),
-        });
+        let embree = AccelKind::embree(EmbreeQuality::Medium);
+        v.push(with("Embree backend", auto, embree));
     }
     v
 }
@@ -207,30 +195,78 @@ pub fn run(opts: &ConvergeOptions, log: &mut dyn FnMut(&str)) -> Result<Converge
         ..Default::default()
     };
     let reference = reference(opts, &scene, &base, log)?;
+    let camera = Camera::new(&scene.camera, &scene.bounds, opts.width, opts.height);
+    let mut peer_notes = Vec::new();
+    let cycles = cycles_peer(opts, &scene, &camera, log, &mut peer_notes)?;
     let mut points = Vec::new();
     for method in methods(&base, &scene, opts.compare_backends) {
         log(&format!("method: {}", method.name));
         points.extend(run_method(&scene, &method, opts, &reference)?);
     }
     if let Some(peer) = &opts.mitsuba {
+        let dir = opts.out_dir.join("mitsuba");
         for variant in &peer.variants {
-            let dir = opts.out_dir.join("mitsuba");
-            let runner = MitsubaRunner::new(&peer.python, variant, &dir)?;
-            log(&format!("method: Mitsuba 3 {variant}"));
-            points.extend(run_mitsuba(&scene, &runner, opts, &reference)?);
+            for &sampler in &peer.samplers {
+                let runner = MitsubaRunner::new(&peer.python, variant, sampler, &dir)?;
+                log(&format!("method: {}", runner.name()));
+                let render = |spp, seed, _: &mut dyn FnMut(&str)| {
+                    runner.render(&scene, &camera, opts.max_depth, spp, seed)
+                };
+                let counts = runner.sample_counts(opts.max_spp);
+                let name = runner.name();
+                points.extend(run_peer(&name, &counts, render, opts, &reference, log)?);
+            }
         }
     }
-    let target = opts.target_rmse.unwrap_or_else(|| default_target(&points));
-    let time_to_target = time_to_reach(&points, target);
+    if let Some(runner) = cycles {
+        log(&format!("method: {}", runner.name()));
+        let render = |spp, seed, log: &mut dyn FnMut(&str)| {
+            runner.render(&scene, &camera, opts.max_depth, spp, seed, log)
+        };
+        // The summary keeps the check of the highest spp; the log has every one.
+        let mut note = |m: &str| {
+            log(m);
+            peer_notes = vec![m.to_string()];
+        };
+        let counts = runner.sample_counts(opts.max_spp);
+        let name = runner.name();
+        points.extend(run_peer(
+            &name, &counts, render, opts, &reference, &mut note,
+        )?);
+    }
     Ok(ConvergeReport {
         scene: scene_stem(&opts.scene),
         max_depth: opts.max_depth,
         width: opts.width,
         height: opts.height,
         points,
-        target_rmse: target,
-        time_to_target,
         reference_note: reference.note,
+        peer_notes,
+    })
+}
+
+/// Cycles, when asked for and able to translate the scene exactly; otherwise a note
+/// says why it is left out. Checked before the long run.
+fn cycles_peer(
+    opts: &ConvergeOptions,
+    scene: &Scene,
+    camera: &Camera,
+    log: &mut dyn FnMut(&str),
+    notes: &mut Vec<String>,
+) -> Result<Option<CyclesRunner>> {
+    let Some(python) = &opts.cycles else {
+        return Ok(None);
+    };
+    let dir = opts.out_dir.join("cycles");
+    let runner = CyclesRunner::new(python, &dir, opts.reference.as_deref())?;
+    Ok(match runner.check(scene, camera, opts.max_depth) {
+        Ok(()) => Some(runner),
+        Err(e) => {
+            let note = format!("Blender Cycles left out: {e}");
+            log(&note);
+            notes.push(note);
+            None
+        }
     })
 }
 
@@ -255,6 +291,7 @@ fn run_method(
         let (rmse, rel_mse) = errors(&o.image, r);
         out.push(Point {
             method: method.name.clone(),
+            peer: false,
             spp,
             samples: o.total_samples(),
             seconds,
@@ -269,25 +306,26 @@ fn run_method(
     Ok(out)
 }
 
-/// The same doubling sequence as [`run_method`], rendered by Mitsuba: each point
-/// is the render-only time of a warm call in its own process.
-fn run_mitsuba(
-    scene: &Scene,
-    runner: &MitsubaRunner,
+/// A peer's points at `counts` (its own version of the doubling sequence), each
+/// rendered in its own process by `render(spp, seed, log)`.
+fn run_peer(
+    name: &str,
+    counts: &[u32],
+    render: impl Fn(u32, u64, &mut dyn FnMut(&str)) -> Result<PeerRender>,
     opts: &ConvergeOptions,
     r: &Reference,
+    log: &mut dyn FnMut(&str),
 ) -> Result<Vec<Point>> {
-    let camera = Camera::new(&scene.camera, &scene.bounds, opts.width, opts.height);
     let mut out = Vec::new();
-    let mut spp = 1;
-    while spp <= opts.max_spp {
+    for &spp in counts {
         let seed = opts.seed.wrapping_add(1000 + spp as u64);
-        let m = runner.render(scene, &camera, opts.max_depth, spp, seed)?;
+        let m = render(spp, seed, log)?;
         let (rmse, rel_mse) = errors(&m.image, r);
         out.push(Point {
-            method: format!("Mitsuba 3 {}", runner.variant()),
-            spp,
-            samples: u64::from(spp) * u64::from(opts.width) * u64::from(opts.height),
+            method: name.to_string(),
+            peer: true,
+            spp: m.spp,
+            samples: u64::from(m.spp) * u64::from(opts.width) * u64::from(opts.height),
             seconds: m.seconds,
             rmse,
             rel_mse,
@@ -295,7 +333,6 @@ fn run_mitsuba(
         if m.seconds > opts.max_seconds_per_point {
             break;
         }
-        spp *= 2;
     }
     Ok(out)
 }
@@ -415,98 +452,30 @@ fn own_reference(
     })
 }
 
-/// The median of the methods' final RMSEs: about half the methods reach it, and the
-/// heavy-tailed ones (whose curves wander) do not set it.
-fn default_target(points: &[Point]) -> f64 {
-    let mut finals: std::collections::BTreeMap<&str, f64> = Default::default();
-    for p in points {
-        finals.insert(&p.method, p.rmse);
-    }
-    let mut v: Vec<f64> = finals.values().copied().collect();
-    v.sort_by(f64::total_cmp);
-    v.get(v.len() / 2).copied().unwrap_or(0.0)
-}
-
-/// Seconds each method needs to reach `target`, from its Monte Carlo efficiency:
-/// an unbiased estimator has MSE ∝ 1/time, so `k = RMSE²·time` is constant in the
-/// converged regime and the time to reach `target` is `k/target²`. `k` is the median
-/// over the points with at least `MIN_SPP` samples per pixel (the first few points
-/// are dominated by fixed costs). A single run's crossing point would be decided by
-/// noise; this uses every point. Methods whose error stalls (bias) get a growing `k`
-/// and so a long time, as they should.
-pub fn time_to_reach(points: &[Point], target: f64) -> Vec<(String, Option<f64>)> {
-    const MIN_SPP: u32 = 8;
-    let mut names: Vec<String> = Vec::new();
-    for p in points {
-        if !names.contains(&p.method) {
-            names.push(p.method.clone());
-        }
-    }
-    names
-        .into_iter()
-        .map(|name| {
-            let mut ks: Vec<f64> = points
-                .iter()
-                .filter(|p| {
-                    p.method == name && p.spp >= MIN_SPP && p.seconds > 0.0 && p.rmse.is_finite()
-                })
-                .map(|p| p.rmse * p.rmse * p.seconds)
-                .collect();
-            let t = (!ks.is_empty() && target > 0.0)
-                .then(|| super::median(&mut ks) / (target * target));
-            (name, t)
-        })
-        .collect()
-}
-
-/// `method`'s RMSE at `seconds`, interpolated log-log between its two points that
-/// bracket it (`None` outside its points' range).
-pub fn rmse_at(points: &[Point], method: &str, seconds: f64) -> Option<f64> {
+/// `method`'s RMSE at `x` on its curve, interpolated log-log between the two
+/// points that bracket it (`None` outside its points' range); `x` is in render
+/// seconds, or in spp when `by_spp`. Curves are read as measured: nothing assumes
+/// MSE ∝ 1/time, which stratified samplers beat.
+pub fn rmse_at(points: &[Point], method: &str, x: f64, by_spp: bool) -> Option<f64> {
     let mut pts: Vec<(f64, f64)> = points
         .iter()
         .filter(|p| p.method == method && p.seconds > 0.0 && p.rmse > 0.0)
-        .map(|p| (p.seconds, p.rmse))
+        .map(|p| (if by_spp { f64::from(p.spp) } else { p.seconds }, p.rmse))
         .collect();
     pts.sort_by(|a, b| a.0.total_cmp(&b.0));
+    if let Some(p) = pts.iter().find(|p| p.0 == x) {
+        return Some(p.1);
+    }
     let (a, b) = pts
         .windows(2)
         .map(|w| (w[0], w[1]))
-        .find(|(a, b)| a.0 <= seconds && seconds <= b.0)?;
-    if a.0 == b.0 {
-        return Some(a.1);
-    }
-    let f = (seconds / a.0).ln() / (b.0 / a.0).ln();
+        .find(|(a, b)| a.0 <= x && x <= b.0)?;
+    let f = (x / a.0).ln() / (b.0 / a.0).ln();
     Some((a.1.ln() + f * (b.1 / a.1).ln()).exp())
 }
 
-/// Three render times, log-spaced over the range the first method (ember's default)
-/// and every Mitsuba method have all measured, from their 8-spp points on.
-fn common_times(points: &[Point]) -> Vec<f64> {
-    let Some(first) = points.first().map(|p| p.method.clone()) else {
-        return Vec::new();
-    };
-    let (mut lo, mut hi) = (0.0f64, f64::INFINITY);
-    let mut names = vec![first];
-    for p in points.iter().filter(|p| p.method.starts_with("Mitsuba")) {
-        if !names.contains(&p.method) {
-            names.push(p.method.clone());
-        }
-    }
-    for name in &names {
-        let secs = points
-            .iter()
-            .filter(|p| &p.method == name && p.spp >= 8)
-            .map(|p| p.seconds);
-        let (a, b) = secs.fold((f64::INFINITY, 0.0f64), |(a, b), t| (a.min(t), b.max(t)));
-        (lo, hi) = (lo.max(a), hi.min(b));
-    }
-    if !(lo > 0.0 && hi > lo) {
-        return Vec::new();
-    }
-    (0..3)
-        .map(|k| lo * (hi / lo).powf(k as f64 / 2.0))
-        .collect()
-}
+/// The sample counts of ember's default the tables compare at (issue 24's bar).
+const TABLE_SPP: [u32; 3] = [16, 64, 256];
 
 /// `path`'s file name without its extension ("" when it has none).
 fn scene_stem(path: &Path) -> String {
@@ -518,12 +487,13 @@ fn scene_stem(path: &Path) -> String {
 impl ConvergeReport {
     pub fn to_csv(&self) -> String {
         let mut t = Table::new([
-            "scene", "method", "spp", "samples", "seconds", "rmse", "relmse",
+            "scene", "method", "peer", "spp", "samples", "seconds", "rmse", "relmse",
         ]);
         for p in &self.points {
             t.push(vec![
                 self.scene.clone(),
                 p.method.clone(),
+                p.peer.to_string(),
                 p.spp.to_string(),
                 p.samples.to_string(),
                 format!("{:.6}", p.seconds),
@@ -534,69 +504,101 @@ impl ConvergeReport {
         t.to_csv()
     }
 
-    /// Time each method needs to reach the target RMSE, and its ratio to the fastest.
-    pub fn efficiency_table(&self) -> String {
-        let best = self
-            .time_to_target
-            .iter()
-            .filter_map(|(_, t)| *t)
-            .fold(f64::INFINITY, f64::min);
-        let mut table = Table::new([
-            "method".to_string(),
-            format!(
-                "seconds to RMSE {:.4} (from median RMSE²·time)",
-                self.target_rmse
-            ),
-            "× fastest".to_string(),
-        ]);
-        for (name, t) in &self.time_to_target {
-            table.push(match t {
-                Some(t) => vec![name.clone(), format!("{t:.3}"), format!("{:.2}", t / best)],
-                None => vec![name.clone(), "not reached".into(), "–".into()],
-            });
-        }
-        table.to_markdown()
-    }
-
-    /// Each method's RMSE at three common render times (interpolated on its curve),
-    /// and the first method's RMSE as a fraction of each Mitsuba method's: the
-    /// comparison at equal time that holds whatever the shape of the curves.
-    pub fn equal_time_table(&self) -> String {
-        let times = common_times(&self.points);
-        if times.is_empty() {
-            return String::new();
-        }
-        let mut header = vec!["method".to_string()];
-        header.extend(times.iter().map(|t| format!("RMSE at {t:.3} s")));
-        let mut table = Table::new(header);
+    /// Method names in the order they ran; ember's default first.
+    fn names(&self) -> Vec<&str> {
         let mut names: Vec<&str> = Vec::new();
         for p in &self.points {
             if !names.contains(&p.method.as_str()) {
                 names.push(&p.method);
             }
         }
+        names
+    }
+
+    fn peers(&self) -> Vec<&str> {
+        let names = self.names();
+        names
+            .into_iter()
+            .filter(|n| self.points.iter().any(|p| p.peer && p.method == *n))
+            .collect()
+    }
+
+    /// ember's default (the first method, [`DEFAULT_METHOD`]) at [`TABLE_SPP`]:
+    /// (spp, its render seconds).
+    fn default_points(&self) -> Vec<(u32, f64)> {
+        let Some(first) = self.points.first() else {
+            return Vec::new();
+        };
+        TABLE_SPP
+            .iter()
+            .filter_map(|&n| {
+                self.points
+                    .iter()
+                    .find(|p| p.method == first.method && p.spp == n)
+                    .map(|p| (n, p.seconds))
+            })
+            .collect()
+    }
+
+    /// One row per method of its RMSE at each `x` (seconds, or spp with `by_spp`),
+    /// then ember's default divided by each peer's and by the best peer's there.
+    fn comparison(&self, header: Vec<String>, xs: &[f64], by_spp: bool) -> String {
+        let names = self.names();
+        let mut table = Table::new(header);
         let cell =
             |v: Option<f64>, digits: usize| v.map_or("–".into(), |v| format!("{v:.digits$}"));
+        let at = |name: &str, x: f64| rmse_at(&self.points, name, x, by_spp);
         for name in &names {
             let mut row = vec![name.to_string()];
-            row.extend(
-                times
-                    .iter()
-                    .map(|&t| cell(rmse_at(&self.points, name, t), 5)),
-            );
+            row.extend(xs.iter().map(|&x| cell(at(name, x), 5)));
             table.push(row);
         }
-        for peer in names.iter().filter(|n| n.starts_with("Mitsuba")) {
+        let peers = self.peers();
+        let ratio = |x: f64, peer: Option<f64>| at(names[0], x).zip(peer).map(|(a, b)| a / b);
+        for peer in &peers {
             let mut row = vec![format!("{} ÷ {peer}", names[0])];
-            row.extend(times.iter().map(|&t| {
-                let ratio = rmse_at(&self.points, names[0], t)
-                    .zip(rmse_at(&self.points, peer, t))
-                    .map(|(a, b)| a / b);
-                cell(ratio, 2)
+            row.extend(xs.iter().map(|&x| cell(ratio(x, at(peer, x)), 2)));
+            table.push(row);
+        }
+        if peers.len() > 1 {
+            let mut row = vec![format!("{} ÷ the best peer there", names[0])];
+            row.extend(xs.iter().map(|&x| {
+                let best = peers.iter().filter_map(|p| at(p, x)).reduce(f64::min);
+                cell(ratio(x, best), 2)
             }));
             table.push(row);
         }
         table.to_markdown()
+    }
+
+    /// Each method's RMSE at the render times of ember's default at 16, 64 and 256
+    /// spp, interpolated log-log on its own curve ("–" outside the range it
+    /// measured), and ember's default as a fraction of each peer's.
+    pub fn equal_time_table(&self) -> String {
+        let at = self.default_points();
+        if at.is_empty() {
+            return String::new();
+        }
+        let mut header = vec!["method (RMSE at equal render time)".to_string()];
+        header.extend(
+            at.iter()
+                .map(|(n, t)| format!("{t:.3} s (ember's {n} spp)")),
+        );
+        let xs: Vec<f64> = at.iter().map(|&(_, t)| t).collect();
+        self.comparison(header, &xs, false)
+    }
+
+    /// Each method's RMSE at 16, 64 and 256 spp (peers whose sampler takes other
+    /// counts interpolated log-log in spp), and ember's default as a fraction of each peer's.
+    pub fn equal_spp_table(&self) -> String {
+        let at = self.default_points();
+        if at.is_empty() {
+            return String::new();
+        }
+        let mut header = vec!["method (RMSE at equal spp)".to_string()];
+        header.extend(at.iter().map(|(n, _)| format!("{n} spp")));
+        let xs: Vec<f64> = at.iter().map(|&(n, _)| f64::from(n)).collect();
+        self.comparison(header, &xs, true)
     }
 
     fn series(&self, y: impl Fn(&Point) -> f64) -> Vec<Series> {
@@ -616,7 +618,7 @@ impl ConvergeReport {
 
 impl Report for ConvergeReport {
     /// `<scene>_m<M>.csv`, and error-vs-time charts `<scene>_m<M>_rmse.{png,svg}` and
-    /// `<scene>_m<M>_relmse.{png,svg}`.
+    /// `<scene>_m<M>_relmse.{png,svg}`, every method's curve on one chart.
     fn write(&self, out_dir: &Path) -> Result<Vec<PathBuf>> {
         create_out_dir(out_dir)?;
         let stem = format!("{}_m{}", self.scene, self.max_depth);
@@ -632,17 +634,17 @@ impl Report for ConvergeReport {
         );
         let spec = ChartSpec {
             title: &title,
-            x_label: "render time (s, 2 threads)",
+            x_label: "render time (s, all threads)",
             y_label: "RMSE vs reference",
             log_x: true,
             log_y: true,
         };
-        write_chart(&rmse, &spec, &self.series(|p| p.rmse))?;
+        write_chart_legend_outside(&rmse, &spec, &self.series(|p| p.rmse))?;
         let spec = ChartSpec {
             y_label: "relMSE vs reference",
             ..spec
         };
-        write_chart(&relmse, &spec, &self.series(|p| p.rel_mse))?;
+        write_chart_legend_outside(&relmse, &spec, &self.series(|p| p.rel_mse))?;
         let mut files = vec![csv];
         for chart in [rmse, relmse] {
             files.extend(["png", "svg"].map(|ext| chart.with_extension(ext)));
@@ -650,14 +652,17 @@ impl Report for ConvergeReport {
         Ok(files)
     }
 
-    /// Where the reference came from, the time each method needs to reach the target
-    /// RMSE, and the RMSEs at equal render time.
+    /// Where the reference came from, what the peers said of their own images, and
+    /// the RMSEs at equal render time and at equal spp.
     fn summary(&self) -> String {
+        let mut s = self.reference_note.clone();
+        for note in &self.peer_notes {
+            s += &format!("\n{note}");
+        }
         format!(
-            "{}\n{}\n{}",
-            self.reference_note,
-            self.efficiency_table(),
-            self.equal_time_table()
+            "{s}\n\n{}\n{}",
+            self.equal_time_table(),
+            self.equal_spp_table()
         )
     }
 }
@@ -666,30 +671,87 @@ impl Report for ConvergeReport {
 mod tests {
     use super::*;
 
-    #[test]
-    fn time_to_reach_uses_the_efficiency() {
-        let pt = |method: &str, spp, seconds, rmse| Point {
+    fn pt(method: &str, peer: bool, spp: u32, seconds: f64, rmse: f64) -> Point {
+        Point {
             method: method.into(),
+            peer,
             spp,
             samples: 1,
             seconds,
             rmse,
             rel_mse: 0.0,
-        };
-        // RMSE² · time = 0.01 at every converged point: 0.05 is reached at 0.01/0.0025 = 4 s.
-        let pts = vec![
-            pt("a", 1, 0.01, 5.0),
-            pt("a", 8, 1.0, 0.1),
-            pt("a", 16, 4.0, 0.05),
-            pt("a", 32, 16.0, 0.025),
-        ];
-        let t = time_to_reach(&pts, 0.05);
-        assert!((t[0].1.unwrap() - 4.0).abs() < 1e-9);
-        assert_eq!(time_to_reach(&[pt("b", 1, 1.0, 1.0)], 0.1)[0].1, None);
+        }
+    }
+
+    /// The first method is what `ember SCENE` renders (`--integrator auto`), not
+    /// `RenderSettings::default()`'s light sampling: on glossy spheres that is MIS.
+    #[test]
+    fn the_first_method_is_embers_default() {
+        let path = format!(
+            "{}/scenes/cs184/sky/CBspheres_microfacet_al_ag.dae",
+            env!("CARGO_MANIFEST_DIR")
+        );
+        let scene = collada::load(Path::new(&path)).unwrap();
+        let base = RenderSettings::default();
+        let all = methods(&base, &scene, false);
+        assert_eq!(all[0].name, DEFAULT_METHOD);
+        let s = &all[0].settings;
+        assert_eq!(s.strategy_for(&scene), DirectStrategy::Mis);
+        assert_eq!(s.estimator_for(&scene), Estimator::auto_for(&scene));
+        let adaptive = all.iter().find(|m| m.settings.adaptive.is_some()).unwrap();
+        assert_eq!(adaptive.settings.strategy_for(&scene), DirectStrategy::Mis);
+    }
+
+    #[test]
+    fn curves_are_read_log_log_as_measured() {
         // On the log-log line RMSE = 0.1/√t: 2 s lies between the 1 s and 4 s points.
-        let r = rmse_at(&pts, "a", 2.0).unwrap();
+        let pts = vec![
+            pt("a", false, 1, 0.01, 5.0),
+            pt("a", false, 8, 1.0, 0.1),
+            pt("a", false, 16, 4.0, 0.05),
+            pt("a", false, 32, 16.0, 0.025),
+        ];
+        let r = rmse_at(&pts, "a", 2.0, false).unwrap();
         assert!((r - 0.1 / 2f64.sqrt()).abs() < 1e-12, "{r}");
-        assert_eq!(rmse_at(&pts, "a", 20.0), None);
-        assert_eq!(rmse_at(&pts, "b", 1.0), None);
+        assert_eq!(rmse_at(&pts, "a", 16.0, true), Some(0.05));
+        assert_eq!(rmse_at(&pts, "a", 20.0, false), None);
+        assert_eq!(rmse_at(&pts, "b", 1.0, false), None);
+    }
+
+    /// A peer whose error falls faster than 1/√time is compared where it was
+    /// measured, not extrapolated from its efficiency: the ratio follows its curve.
+    #[test]
+    fn tables_compare_at_the_defaults_times_and_spp() {
+        let mut pts = Vec::new();
+        for (k, spp) in [16u32, 64, 256].into_iter().enumerate() {
+            let t = 0.1 * 4f64.powi(k as i32);
+            pts.push(pt("ember", false, spp, t, 0.01 / 2f64.powi(k as i32)));
+        }
+        // The peer: 10x slower per sample, RMSE ∝ 1/spp (faster than 1/√spp).
+        for spp in [4u32, 16, 64, 256, 1024] {
+            let t = 1e-2 * f64::from(spp) / 16.0 * 10.0;
+            pts.push(pt("peer", true, spp, t, 0.16 / f64::from(spp)));
+        }
+        let report = ConvergeReport {
+            scene: "s".into(),
+            max_depth: 5,
+            width: 1,
+            height: 1,
+            points: pts,
+            reference_note: String::new(),
+            peer_notes: Vec::new(),
+        };
+        let time = report.equal_time_table();
+        // At 0.1 s the peer has rendered 16 spp: RMSE 0.01, the ratio 1.00; at 1.6 s,
+        // 256 spp: 0.000625 against ember's 0.0025, ratio 4.00.
+        assert!(
+            time.contains("| ember ÷ peer | 1.00 | 2.00 | 4.00 |"),
+            "{time}"
+        );
+        let spp = report.equal_spp_table();
+        assert!(
+            spp.contains("| ember ÷ peer | 1.00 | 2.00 | 4.00 |"),
+            "{spp}"
+        );
     }
 }

@@ -89,6 +89,41 @@ pub fn log2_fit(points: &[(f64, f64)]) -> Option<LinearFit> {
     linear_fit(&logs)
 }
 
+/// `y = c + d·log2 N` with `c ≥ 0` and `d ≥ 0`, by non-negative least squares: a
+/// time per ray is never negative, not even extrapolated to one triangle, and does
+/// not fall as the tree deepens. The problem is convex, so the free fit is the answer
+/// when it keeps both signs; otherwise the answer lies on a bound: the best line
+/// through the origin (`c = 0`) or the best constant (`d = 0`), whichever fits better.
+pub fn log2_fit_nonnegative(points: &[(f64, f64)]) -> Option<LinearFit> {
+    let free = log2_fit(points)?;
+    let logs: Vec<(f64, f64)> = points
+        .iter()
+        .filter(|p| p.0 > 0.0)
+        .map(|&(n, y)| (n.log2(), y))
+        .collect();
+    if free.intercept >= 0.0 && free.slope >= 0.0 {
+        return Some(free);
+    }
+    let sxx: f64 = logs.iter().map(|p| p.0 * p.0).sum();
+    let sxy: f64 = logs.iter().map(|p| p.0 * p.1).sum();
+    let mean = logs.iter().map(|p| p.1).sum::<f64>() / logs.len() as f64;
+    let candidates = [
+        (0.0, if sxx > 0.0 { (sxy / sxx).max(0.0) } else { 0.0 }),
+        (mean.max(0.0), 0.0),
+    ];
+    let sse =
+        |(c, d): (f64, f64)| -> f64 { logs.iter().map(|&(x, y)| (y - c - d * x).powi(2)).sum() };
+    let (intercept, slope) = candidates
+        .into_iter()
+        .min_by(|a, b| sse(*a).total_cmp(&sse(*b)))
+        .expect("two candidates");
+    Some(LinearFit {
+        intercept,
+        slope,
+        r2: r_squared(&logs, |x| intercept + slope * x),
+    })
+}
+
 /// `1 − SS_res/SS_tot`; 1 when the data are constant and matched exactly.
 fn r_squared(points: &[(f64, f64)], model: impl Fn(f64) -> f64) -> f64 {
     let mean = points.iter().map(|p| p.1).sum::<f64>() / points.len() as f64;
@@ -151,6 +186,40 @@ mod tests {
         assert!(close(fit.intercept, 40.0, 1e-10), "{fit:?}");
         assert!(close(fit.slope, 7.5, 1e-10), "{fit:?}");
         assert!(close(fit.r2, 1.0, 1e-12), "{fit:?}");
+    }
+
+    #[test]
+    fn nonnegative_log2_fit_keeps_a_free_fit_that_is_already_nonnegative() {
+        let pts: Vec<_> = SIZES.iter().map(|&n| (n, 40.0 + 7.5 * n.log2())).collect();
+        assert_eq!(log2_fit_nonnegative(&pts), log2_fit(&pts));
+    }
+
+    #[test]
+    fn nonnegative_log2_fit_never_gives_a_negative_time() {
+        // Steep growth from 16k up: the free line crosses zero above one triangle.
+        let pts: Vec<_> = [16e3, 64e3, 256e3, 1e6, 4e6]
+            .iter()
+            .map(|&n: &f64| (n, 10.0 * (n.log2() - 12.0)))
+            .collect();
+        let free = log2_fit(&pts).unwrap();
+        assert!(free.intercept < 0.0, "{free:?}");
+        let fit = log2_fit_nonnegative(&pts).unwrap();
+        assert!(fit.intercept == 0.0 && fit.slope > 0.0, "{fit:?}");
+        // It is the best line through the origin: nudging the slope only adds error.
+        let sse = |d: f64| {
+            pts.iter()
+                .map(|&(n, y)| (y - d * n.log2()).powi(2))
+                .sum::<f64>()
+        };
+        assert!(
+            sse(fit.slope) <= sse(fit.slope * 1.001) && sse(fit.slope) <= sse(fit.slope * 0.999)
+        );
+        // Falling times: the best constant.
+        let falling: Vec<_> = SIZES.iter().map(|&n| (n, 100.0 - n.log2())).collect();
+        let flat = log2_fit_nonnegative(&falling).unwrap();
+        assert_eq!(flat.slope, 0.0);
+        let mean = falling.iter().map(|p| p.1).sum::<f64>() / falling.len() as f64;
+        assert!(close(flat.intercept, mean, 1e-12), "{flat:?}");
     }
 
     #[test]

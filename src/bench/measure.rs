@@ -7,7 +7,7 @@ use super::median;
 use crate::accel::{Accel, AccelBuilder, AccelError, AccelKind, BvhBuilder, BvhStats};
 use crate::camera::Camera;
 use crate::geometry::Ray;
-use crate::sampling::{uniform_sphere, Sampler};
+use crate::sampling::{uniform_sphere, Rng};
 use crate::scene::Scene;
 use glam::{Vec2, Vec3};
 use rayon::prelude::*;
@@ -26,7 +26,7 @@ pub(crate) struct RaySets {
 /// many shadow rays from where those hit (found with the SAH BVH) to random points
 /// of the bounds (from the miss's origin when a ray hits nothing).
 pub(crate) fn make_rays(scene: &Scene, width: u32, height: u32, rays: usize, seed: u64) -> RaySets {
-    let mut rng = Sampler::from_seed(seed);
+    let mut rng = Rng::from_seed(seed);
     let camera = tiled_camera_rays(scene, width, height);
     let incoherent: Vec<Ray> = (0..rays)
         .map(|_| {
@@ -79,7 +79,7 @@ pub fn tiled_camera_rays(scene: &Scene, width: u32, height: u32) -> Vec<Ray> {
     rays
 }
 
-fn point_in_bounds(scene: &Scene, rng: &mut Sampler) -> Vec3 {
+fn point_in_bounds(scene: &Scene, rng: &mut Rng) -> Vec3 {
     let u = Vec3::new(rng.next_f32(), rng.next_f32(), rng.next_f32());
     scene.bounds.min + u * scene.bounds.diagonal()
 }

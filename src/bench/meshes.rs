@@ -5,7 +5,7 @@
 use crate::color::Color;
 use crate::geometry::Aabb;
 use crate::materials::Material;
-use crate::sampling::Sampler;
+use crate::sampling::Rng;
 use crate::scene::{CameraDesc, Scene, Sphere, Triangle, NO_LIGHT};
 use glam::Vec3;
 use std::f32::consts::PI;
@@ -41,9 +41,7 @@ pub fn geometry_scene(positions: Vec<Vec3>, tris: &[[u32; 3]], spheres: &[(Vec3,
         positions,
         triangles,
         spheres,
-        materials: vec![Material::Lambertian {
-            albedo: Color::splat(0.5),
-        }],
+        materials: vec![Material::lambertian(Color::splat(0.5))],
         ..Scene::default()
     };
     scene.bounds =
@@ -129,7 +127,7 @@ pub fn shared_edge_grid(n: u32) -> Scene {
 /// Random triangles of which a third are degenerate (repeated or collinear corners)
 /// and a third are slivers (height 1e-4 of their length), mixed with ordinary ones.
 pub fn degenerate_soup(n: usize, seed: u64) -> Scene {
-    let mut rng = Sampler::from_seed(seed);
+    let mut rng = Rng::from_seed(seed);
     let mut point = |s: f32| Vec3::new(rng.next_f32(), rng.next_f32(), rng.next_f32()) * s;
     let mut positions = Vec::new();
     let mut tris = Vec::new();
@@ -153,7 +151,7 @@ pub fn degenerate_soup(n: usize, seed: u64) -> Scene {
 /// Spheres of mixed sizes, some overlapping and some nested, over a two-triangle
 /// floor: exercises the id mapping (triangles first) and rays starting inside spheres.
 pub fn sphere_cluster(n: usize, seed: u64) -> Scene {
-    let mut rng = Sampler::from_seed(seed);
+    let mut rng = Rng::from_seed(seed);
     let mut spheres = Vec::new();
     for k in 0..n {
         let c = Vec3::new(rng.next_f32(), rng.next_f32(), rng.next_f32()) * 4.0 - Vec3::splat(2.0);
@@ -178,7 +176,7 @@ pub fn sphere_cluster(n: usize, seed: u64) -> Scene {
 /// triangle) and with it the mean free path of a ray (about one box side) stay the
 /// same at every `n`, and only the fineness of the geometry changes.
 pub fn random_soup(n: usize, seed: u64) -> Scene {
-    let mut rng = Sampler::from_seed(seed);
+    let mut rng = Rng::from_seed(seed);
     let side = 16.0 / (n.max(1) as f32).sqrt();
     let mut unit = || Vec3::new(rng.next_f32(), rng.next_f32(), rng.next_f32());
     let mut positions = Vec::with_capacity(3 * n);

@@ -4,7 +4,7 @@
 //! ever run as a separate process, never linked.
 
 use crate::camera::Camera;
-use crate::export::{write_mitsuba, MitsubaSettings};
+use crate::export::{write_mitsuba, MitsubaSampler, MitsubaSettings};
 use crate::film::Image;
 use crate::image_io::read_image;
 use crate::integrators::Roulette;
@@ -16,25 +16,28 @@ use std::process::Command;
 /// The render script, embedded so the binary needs no source tree.
 const RENDER_SCRIPT: &str = include_str!("../../scripts/mitsuba-render.py");
 
-/// One Mitsuba variant driven through a Python interpreter.
+/// One Mitsuba variant and sampler driven through a Python interpreter.
 pub struct MitsubaRunner {
     python: PathBuf,
     script: PathBuf,
     variant: String,
+    sampler: MitsubaSampler,
     dir: PathBuf,
 }
 
-/// One timed Mitsuba render.
-pub struct MitsubaRender {
-    /// Render-only seconds of a warm call (JIT compilation excluded).
+/// One timed render by a peer renderer.
+pub struct PeerRender {
+    /// Render-only seconds (Mitsuba: a warm call, JIT compilation excluded).
     pub seconds: f64,
+    /// Samples per pixel the peer reports it rendered.
+    pub spp: u32,
     pub image: Image,
 }
 
 impl MitsubaRunner {
     /// Checks that `python` imports Mitsuba with `variant` and writes the render
     /// script into `dir`.
-    pub fn new(python: &Path, variant: &str, dir: &Path) -> Result<Self> {
+    pub fn new(python: &Path, variant: &str, sampler: MitsubaSampler, dir: &Path) -> Result<Self> {
         std::fs::create_dir_all(dir)
             .with_context(|| format!("{}: cannot create", dir.display()))?;
         let probe = Command::new(python)
@@ -58,16 +61,31 @@ impl MitsubaRunner {
             python: python.to_path_buf(),
             script,
             variant: variant.to_string(),
+            sampler,
             dir: dir.to_path_buf(),
         })
     }
 
-    pub fn variant(&self) -> &str {
-        &self.variant
+    /// "Mitsuba 3 llvm_ad_rgb, multijitter".
+    pub fn name(&self) -> String {
+        format!("Mitsuba 3 {}, {}", self.variant, self.sampler)
+    }
+
+    /// The sample counts of the doubling sequence 1, 2, 4, … up to `max_spp` as
+    /// this sampler takes them (rounded up as Mitsuba does, repeats dropped).
+    pub fn sample_counts(&self, max_spp: u32) -> Vec<u32> {
+        let mut v: Vec<u32> = std::iter::successors(Some(1u32), |n| n.checked_mul(2))
+            .take_while(|&n| n <= max_spp)
+            .map(|n| self.sampler.sample_count(n))
+            .filter(|&n| n <= max_spp)
+            .collect();
+        v.dedup();
+        v
     }
 
     /// Exports `scene` as ember renders it (`-m max_depth`, default roulette) at
-    /// `spp` and renders it twice in one process, timing the second call.
+    /// `spp` and renders it twice in one process, timing the second call. Fails
+    /// when Mitsuba renders another count than `spp` rounded for the sampler.
     pub fn render(
         &self,
         scene: &Scene,
@@ -75,9 +93,13 @@ impl MitsubaRunner {
         max_depth: u32,
         spp: u32,
         seed: u64,
-    ) -> Result<MitsubaRender> {
-        let stem = format!("scene_m{max_depth}_{spp}spp");
-        let xml = export(scene, camera, max_depth, spp, &self.dir, &stem)?;
+    ) -> Result<PeerRender> {
+        let stem = format!("scene_m{max_depth}_{spp}spp_{}", self.sampler);
+        let settings = MitsubaSettings {
+            sampler: self.sampler,
+            ..MitsubaSettings::for_ember(spp, max_depth, &Roulette::default())
+        };
+        let xml = export(scene, camera, &settings, &self.dir, &stem)?;
         let exr = self.dir.join(format!("{stem}_{}_{seed}.exr", self.variant));
         let out = Command::new(&self.python)
             .arg(&self.script)
@@ -96,40 +118,50 @@ impl MitsubaRunner {
             );
         }
         let stdout = String::from_utf8_lossy(&out.stdout);
-        let seconds = stdout
-            .lines()
-            .last()
-            .and_then(seconds_of)
+        let last = stdout.lines().last().unwrap_or_default();
+        let seconds = number_of(last, "seconds")
             .with_context(|| format!("{}: no timing in Mitsuba's output", xml.display()))?;
+        let used = number_of(last, "spp").unwrap_or(0.0) as u32;
+        let expected = self.sampler.sample_count(spp);
+        if used != expected {
+            bail!(
+                "{}: Mitsuba's {} sampler rendered {used} spp where {expected} were expected",
+                xml.display(),
+                self.sampler
+            );
+        }
         let image = read_image(&exr)?;
-        Ok(MitsubaRender { seconds, image })
+        Ok(PeerRender {
+            seconds,
+            spp: used,
+            image,
+        })
     }
 }
 
-/// Writes `scene` as ember renders it (`-m max_depth`, default roulette, `spp`) to
-/// `dir/stem.xml` and its meshes, always anew: a file left there by another scene
-/// (the names do not say which scene) must not be rendered in its place.
-fn export(
+/// Writes `scene` with `settings` to `dir/stem.xml` and its meshes, always anew: a
+/// file left there by another scene (the names do not say which scene) must not
+/// be rendered in its place.
+pub(crate) fn export(
     scene: &Scene,
     camera: &Camera,
-    max_depth: u32,
-    spp: u32,
+    settings: &MitsubaSettings,
     dir: &Path,
     stem: &str,
 ) -> Result<PathBuf> {
-    let settings = MitsubaSettings::for_ember(spp, max_depth, &Roulette::default());
-    write_mitsuba(scene, camera, &settings, dir, stem)?;
+    write_mitsuba(scene, camera, settings, dir, stem)?;
     Ok(dir.join(format!("{stem}.xml")))
 }
 
-/// The `"seconds"` field of one JSON line printed by the render script.
-fn seconds_of(line: &str) -> Option<f64> {
-    let rest = &line[line.find("\"seconds\":")? + "\"seconds\":".len()..];
+/// The number in field `key` of one flat JSON line printed by a render script.
+pub(crate) fn number_of(line: &str, key: &str) -> Option<f64> {
+    let tag = format!("\"{key}\":");
+    let rest = &line[line.find(&tag)? + tag.len()..];
     let end = rest.find([',', '}'])?;
     rest[..end].trim().parse().ok()
 }
 
-fn last_line(bytes: &[u8]) -> String {
+pub(crate) fn last_line(bytes: &[u8]) -> String {
     let s = String::from_utf8_lossy(bytes);
     s.lines()
         .rev()
@@ -155,7 +187,8 @@ mod tests {
         for f in ["CBspheres_lambertian.dae", "CBbunny.dae"] {
             let scene = load(f);
             let camera = Camera::new(&scene.camera, &scene.bounds, 16, 12);
-            let xml = export(&scene, &camera, 5, 4, &dir, "scene_m5_4spp").unwrap();
+            let settings = MitsubaSettings::for_ember(4, 5, &Roulette::default());
+            let xml = export(&scene, &camera, &settings, &dir, "scene_m5_4spp").unwrap();
             texts.push(std::fs::read_to_string(xml).unwrap());
         }
         std::fs::remove_dir_all(&dir).unwrap();
@@ -168,10 +201,11 @@ mod tests {
     }
 
     #[test]
-    fn reads_the_seconds_of_a_render_line() {
-        let line = r#"{"render": 1, "seconds": 0.25, "samples_per_second": 1.0}"#;
-        assert_eq!(seconds_of(line), Some(0.25));
-        assert_eq!(seconds_of(r#"{"seconds": 3e-2}"#), Some(0.03));
-        assert_eq!(seconds_of("Traceback"), None);
+    fn reads_the_numbers_of_a_render_line() {
+        let line = r#"{"render": 1, "seconds": 0.25, "samples_per_second": 1.0, "spp": 16}"#;
+        assert_eq!(number_of(line, "seconds"), Some(0.25));
+        assert_eq!(number_of(line, "spp"), Some(16.0));
+        assert_eq!(number_of(r#"{"seconds": 3e-2}"#, "seconds"), Some(0.03));
+        assert_eq!(number_of("Traceback", "seconds"), None);
     }
 }

@@ -6,6 +6,7 @@
 pub mod accel;
 pub mod chart;
 pub mod converge;
+pub mod cycles;
 pub mod embree_modes;
 pub mod fit;
 pub mod measure;

@@ -47,6 +47,7 @@ impl RenderBenchOptions {
         let mut list = match backend {
             Backend::Native => vec![native],
             Backend::Embree => vec![embree],
+            Backend::None => vec![AccelKind::None],
             Backend::Auto if Backend::Embree.available() => vec![native, embree],
             Backend::Auto => vec![native],
         };
@@ -175,7 +176,7 @@ fn measure(path: &Path, opts: &RenderBenchOptions) -> Result<Vec<RenderBenchRow>
             };
             let build_s = t1.elapsed().as_secs_f64();
             let ran = if settings.uses_packets(&job) {
-                format!("packets ({})", crate::simd::instruction_set())
+                format!("packets ({})", crate::lanes::instruction_set())
             } else {
                 "scalar".into()
             };

@@ -7,9 +7,9 @@
 
 use crate::accel::{self, Accel, AccelKind, BvhBuilder, HitPacket, RayPacket};
 use crate::geometry::{Ray, NO_PRIM};
+use crate::lanes::LaneBits;
 use crate::render::{PixelRect, RenderJob, RenderSettings};
 use crate::scene::{PrimHit, Scene};
-use crate::simd::LaneBits;
 use rayon::prelude::*;
 use std::sync::{Arc, Mutex};
 use std::time::Instant;
@@ -293,7 +293,7 @@ fn spawned_lanes(rays: &RayPacket, active: LaneBits) -> LaneBits {
 }
 
 fn lanes(bits: LaneBits) -> impl Iterator<Item = usize> {
-    (0..crate::simd::LANES).filter(move |&i| bits >> i & 1 != 0)
+    (0..crate::lanes::LANES).filter(move |&i| bits >> i & 1 != 0)
 }
 
 /// Spawned rays of a render's calls on which a backend and the native BVH disagree.

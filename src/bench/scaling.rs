@@ -7,7 +7,9 @@
 //! ray should grow like log N. The fits say how close each backend comes.
 
 use super::chart::{write_chart, ChartSpec, Series};
-use super::fit::{log2_fit, n_log_n_fit, power_law_fit, LinearFit, NLogNFit, PowerLawFit};
+use super::fit::{
+    log2_fit_nonnegative, n_log_n_fit, power_law_fit, LinearFit, NLogNFit, PowerLawFit,
+};
 use super::measure::{make_rays, measure_all, three_digits, Measurement, Repeats};
 use super::meshes;
 use super::table::Table;
@@ -235,7 +237,8 @@ pub struct GrowthFits {
     /// Build time in ms as a·N·log2 N.
     pub build_n_log_n: Option<NLogNFit>,
     pub memory_power: Option<PowerLawFit>,
-    /// Nanoseconds per ray as c + d·log2 N, for camera, incoherent and shadow rays.
+    /// Nanoseconds per ray as c + d·log2 N with c, d ≥ 0 (non-negative least
+    /// squares), for camera, incoherent and shadow rays.
     pub per_ray: [Option<LinearFit>; 3],
     /// Nanoseconds per ray as a power law: an exponent well above 0 means the cost
     /// grows faster than log N (e.g. once the tree no longer fits in cache).
@@ -308,7 +311,7 @@ impl ScalingReport {
             build_power: power_law_fit(&build),
             build_n_log_n: n_log_n_fit(&build),
             memory_power: power_law_fit(&pts(|r| r.measured.memory_mb)),
-            per_ray: ns.clone().map(|p| log2_fit(&p)),
+            per_ray: ns.clone().map(|p| log2_fit_nonnegative(&p)),
             per_ray_power: ns.map(|p| power_law_fit(&p)),
         }
     }
@@ -357,7 +360,9 @@ impl ScalingReport {
         format!(
             "Growth, least squares over N ≥ {} triangles (all sizes when fewer than two qualify). \
              Build: a power law N^b fitted on log-log axes, and a·N·log2 N (a in ns). \
-             Traversal: time per ray (ns, wall time over all threads) = c + d·log2 N, and its power-law exponent.",
+             Traversal: time per ray (ns, wall time over all threads) = c + d·log2 N, fitted by non-negative least squares \
+             (c, d ≥ 0: a time per ray can be neither negative nor fall as the tree deepens; where the free line would cross \
+             zero above one triangle, c = 0), and its power-law exponent.",
             self.fit_min_triangles
         )
     }
@@ -370,9 +375,9 @@ impl ScalingReport {
             "build ~ N^b (R²)",
             "build = a·N·log2 N: a (R²)",
             "memory ~ N^b (R²)",
-            "camera: c + d·log2 N (R²)",
-            "incoherent: c + d·log2 N (R²)",
-            "shadow: c + d·log2 N (R²)",
+            "camera: c + d·log2 N, c, d ≥ 0 (R²)",
+            "incoherent: c + d·log2 N, c, d ≥ 0 (R²)",
+            "shadow: c + d·log2 N, c, d ≥ 0 (R²)",
         ]);
         let power = |p: Option<PowerLawFit>| {
             p.map_or("—".into(), |p| {

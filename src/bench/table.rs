@@ -59,9 +59,13 @@ impl Table {
         Ok(t)
     }
 
-    /// A GitHub-flavoured Markdown table.
+    /// A GitHub-flavoured Markdown table: a `|` inside a cell is escaped, so every row
+    /// has as many cells as the header.
     pub fn to_markdown(&self) -> String {
-        let line = |cells: &[String]| format!("| {} |\n", cells.join(" | "));
+        let line = |cells: &[String]| {
+            let cells: Vec<String> = cells.iter().map(|c| markdown_cell(c)).collect();
+            format!("| {} |\n", cells.join(" | "))
+        };
         let mut s = line(&self.header);
         s += &format!("|{}\n", "---|".repeat(self.header.len()));
         for r in &self.rows {
@@ -78,6 +82,20 @@ impl Table {
         }
         Ok(())
     }
+}
+
+/// A cell's text for a Markdown table: `|` would end the cell, a newline the row.
+fn markdown_cell(c: &str) -> String {
+    c.replace('|', "\\|").replace('\n', " ")
+}
+
+/// The cells of each row of a Markdown table (header and rule included), counting
+/// `\|` as text: what a reader of the table sees.
+pub fn markdown_cell_counts(md: &str) -> Vec<usize> {
+    md.lines()
+        .filter(|l| l.starts_with('|'))
+        .map(|l| l.replace("\\|", "").matches('|').count() - 1)
+        .collect()
 }
 
 fn csv_cell(c: &str) -> String {
@@ -131,6 +149,15 @@ mod tests {
         t.push(vec!["1".into(), "x, \"y\"".into()]);
         assert_eq!(t.to_csv(), "a,b\n1,\"x, \"\"y\"\"\"\n");
         assert_eq!(t.to_markdown(), "| a | b |\n|---|---|\n| 1 | x, \"y\" |\n");
+    }
+
+    #[test]
+    fn markdown_escapes_pipes_so_rows_keep_their_cell_count() {
+        let mut t = Table::new(["case", "note"]);
+        t.push(vec!["6".into(), "max |y| 2.4e-7".into()]);
+        let md = t.to_markdown();
+        assert!(md.contains("max \\|y\\| 2.4e-7"), "{md}");
+        assert_eq!(super::markdown_cell_counts(&md), [2, 2, 2]);
     }
 
     #[test]

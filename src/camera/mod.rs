@@ -1,4 +1,5 @@
-//! The camera of spec §4: direction from the file, eye from the bounds, field of view
+//! The camera of spec §4: direction from the file, eye from the bounds (or the file's own
+//! camera position, `CameraDesc::placement`), field of view
 //! independent of the pixel count; a pinhole unless a thin lens is set (course project
 //! 3-2 part 4, README "Thin lens"). `course_file` reads and writes the course's camera
 //! settings files (`-c`).
@@ -6,10 +7,11 @@
 pub mod course_file;
 
 use crate::geometry::{Aabb, Ray};
-use crate::sampling::Sampler;
+use crate::lanes::math::sin_cos_turns;
+use crate::lanes::{Lanes, One, Real, V3};
+use crate::sampling::{SampleStream, LENS_PAIR, PIXEL_PAIR};
 use crate::scene::CameraDesc;
 use glam::{Vec2, Vec3};
-use std::f32::consts::PI;
 
 /// The course's focal distance when none is given (its `AppConfig` default).
 pub const COURSE_FOCAL_DISTANCE: f32 = 4.7;
@@ -60,7 +62,10 @@ impl Camera {
         } else {
             (bounds.centre(), bounds.diagonal().length())
         };
-        let eye = c - 1.5 * d * f;
+        let eye = match (desc.placement, desc.position) {
+            (crate::scene::Placement::File, Some(p)) => p,
+            _ => c - 1.5 * d * f,
+        };
         let (tx, ty) = output_fov(
             desc.tan_half_x,
             desc.tan_half_y,
@@ -87,52 +92,83 @@ impl Camera {
         )
     }
 
-    /// Ray through pixel `(i, j)` (column from the left, row from the top) at offset `xi ∈ [0,1)²`.
-    #[inline]
-    pub fn generate_ray(&self, i: u32, j: u32, xi: Vec2) -> Ray {
-        let u = (i as f32 + xi.x) / self.width as f32;
-        let v = (j as f32 + xi.y) / self.height as f32;
-        let d = (2.0 * u - 1.0) * self.tan_half_x * self.right
-            + (1.0 - 2.0 * v) * self.tan_half_y * self.up
-            + self.forward;
-        Ray::new(self.eye, d.normalize())
-    }
-
-    /// One camera sample of pixel `(i, j)` drawn from the pixel's own stream: the offset in
-    /// the pixel, then (only with a lens, so pinhole images keep their random numbers) the
-    /// point on the lens.
-    #[inline]
-    pub fn sample_ray(&self, i: u32, j: u32, sampler: &mut Sampler) -> Ray {
-        let xi = sampler.next_2d();
-        if self.lens.is_pinhole() {
-            self.generate_ray(i, j, xi)
-        } else {
-            self.generate_lens_ray(i, j, xi, sampler.next_2d())
-        }
-    }
-
-    /// Ray through pixel `(i, j)` at offset `xi` from lens point `u ∈ [0,1)²`, mapped
-    /// uniformly onto the lens disk as the course does (`r = radius·√u₁`, `φ = 2π·u₂`).
-    /// It passes through the point where the pinhole ray of the same `xi` meets the
+    /// Rays through pixels `(x, y)` (column from the left, row from the top, as
+    /// floats) at offsets `xi ∈ [0,1)²` in them, and (only with a lens) from lens
+    /// points `u_lens ∈ [0,1)²`, per lane: origins and unit directions. A lens ray
+    /// passes through the point where the pinhole ray of the same `xi` meets the
     /// focal plane.
-    pub fn generate_lens_ray(&self, i: u32, j: u32, xi: Vec2, u: Vec2) -> Ray {
-        let u_px = (i as f32 + xi.x) / self.width as f32;
-        let v_px = (j as f32 + xi.y) / self.height as f32;
-        let sx = (2.0 * u_px - 1.0) * self.tan_half_x;
-        let sy = (1.0 - 2.0 * v_px) * self.tan_half_y;
-        let l = self.lens_offset(u);
-        let fd = self.lens.focal_distance;
+    #[inline(always)]
+    pub fn rays<L: Lanes>(
+        &self,
+        l: L,
+        (x, y): (L::F, L::F),
+        xi: (L::F, L::F),
+        u_lens: (L::F, L::F),
+    ) -> (V3<L::F>, V3<L::F>) {
+        let (one, two) = (l.f(1.0), l.f(2.0));
+        let u = (x + xi.0) / l.f(self.width as f32);
+        let v = (y + xi.1) / l.f(self.height as f32);
+        let sx = (two * u - one) * l.f(self.tan_half_x);
+        let sy = (one - two * v) * l.f(self.tan_half_y);
+        let (right, up, forward) = (
+            V3::splat(l, self.right),
+            V3::splat(l, self.up),
+            V3::splat(l, self.forward),
+        );
+        let eye = V3::splat(l, self.eye);
+        if self.lens.is_pinhole() {
+            return (eye, ((right * sx + up * sy) + forward).normalize());
+        }
+        let (lx, ly) = self.lens_offset(l, u_lens);
+        let fd = l.f(self.lens.focal_distance);
         // Camera space: lens point (lx, ly, 0), focus point (sx·fd, sy·fd, fd along forward).
-        let d = (sx * fd - l.x) * self.right + (sy * fd - l.y) * self.up + fd * self.forward;
-        Ray::new(self.eye + l.x * self.right + l.y * self.up, d.normalize())
+        let d = (right * (sx * fd - lx) + up * (sy * fd - ly)) + forward * fd;
+        ((eye + right * lx) + up * ly, d.normalize())
     }
 
-    /// The lens point of `u ∈ [0,1)²` in the lens plane's (right, up) coordinates.
-    #[inline]
-    fn lens_offset(&self, u: Vec2) -> Vec2 {
-        let r = self.lens.radius * u.x.sqrt();
-        let (sin, cos) = (2.0 * PI * u.y).sin_cos();
-        Vec2::new(r * cos, r * sin)
+    /// The camera rays of pixel samples `stream` of pixels `(x, y)`: the offset in the
+    /// pixel from pair [`PIXEL_PAIR`], the lens point (only with a lens) from
+    /// [`LENS_PAIR`].
+    #[inline(always)]
+    pub fn sample_rays<L: Lanes>(
+        &self,
+        l: L,
+        pixel: (L::F, L::F),
+        stream: &SampleStream<L>,
+    ) -> (V3<L::F>, V3<L::F>) {
+        let xi = stream.get_2d_at(l, PIXEL_PAIR);
+        let u_lens = if self.lens.is_pinhole() {
+            (l.f(0.0), l.f(0.0))
+        } else {
+            stream.get_2d_at(l, LENS_PAIR)
+        };
+        self.rays(l, pixel, xi, u_lens)
+    }
+
+    /// Ray through pixel `(i, j)` at offset `xi ∈ [0,1)²`, through the pinhole.
+    pub fn generate_ray(&self, i: u32, j: u32, xi: Vec2) -> Ray {
+        let pinhole = Camera {
+            lens: ThinLens::PINHOLE,
+            ..*self
+        };
+        pinhole.generate_lens_ray(i, j, xi, Vec2::ZERO)
+    }
+
+    /// Ray through pixel `(i, j)` at offset `xi` from lens point `u ∈ [0,1)²` (`rays`
+    /// for one path).
+    pub fn generate_lens_ray(&self, i: u32, j: u32, xi: Vec2, u: Vec2) -> Ray {
+        let (o, d) = self.rays(One, (i as f32, j as f32), (xi.x, xi.y), (u.x, u.y));
+        Ray::new(o.vec3(), d.vec3())
+    }
+
+    /// The lens point of `u ∈ [0,1)²` in the lens plane's (right, up) coordinates,
+    /// mapped uniformly onto the lens disk as the course does (`r = radius·√u₁`,
+    /// `φ = 2π·u₂`).
+    #[inline(always)]
+    fn lens_offset<L: Lanes>(&self, l: L, u: (L::F, L::F)) -> (L::F, L::F) {
+        let r = l.f(self.lens.radius) * u.0.sqrt();
+        let (sin, cos) = sin_cos_turns(u.1);
+        (r * cos, r * sin)
     }
 
     /// Pixel `(x, y)` whose centre sees world point `p`, if it is in front of the camera and in the image.
@@ -177,8 +213,8 @@ impl Camera {
         let origin = if pinhole {
             self.eye
         } else {
-            let l = self.lens_offset(u_lens);
-            self.eye + l.x * self.right + l.y * self.up
+            let (lx, ly) = self.lens_offset(One, (u_lens.x, u_lens.y));
+            self.eye + lx * self.right + ly * self.up
         };
         let d = p - origin;
         let dist = d.length();
@@ -282,7 +318,7 @@ mod tests {
             radius: 0.4,
             focal_distance: 2.5,
         };
-        let mut s = Sampler::from_seed(11);
+        let mut s = crate::sampling::Rng::from_seed(11);
         for k in 0..200u32 {
             let (i, j) = (k % 16, (k / 16) % 12);
             let (xi, u) = (Vec2::new(0.25, 0.75), s.next_2d());
@@ -310,7 +346,7 @@ mod tests {
             let t = (fd - (r.o - cam.eye).dot(cam.forward)) / r.d.dot(cam.forward);
             r.o + t * r.d
         };
-        let mut s = Sampler::from_seed(7);
+        let mut s = crate::sampling::Rng::from_seed(7);
         for k in 0..2000u32 {
             let (i, j) = (k % 64, (k / 64) % 48);
             let (xi, u) = (s.next_2d(), s.next_2d());
@@ -329,7 +365,7 @@ mod tests {
         let b = Aabb::new(Vec3::splat(-1.0), Vec3::splat(1.0));
         let mut cam = Camera::new(&CameraDesc::default(), &b, 8, 8);
         cam.lens.radius = 2.0;
-        let mut s = Sampler::from_seed(3);
+        let mut s = crate::sampling::Rng::from_seed(3);
         let n = 40_000;
         let (mut inner, mut sum) = (0u32, Vec3::ZERO);
         for _ in 0..n {

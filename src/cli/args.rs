@@ -3,14 +3,22 @@
 use clap::builder::{PossibleValue, PossibleValuesParser, TypedValueParser};
 use clap::{Args, Parser, Subcommand, ValueEnum};
 use ember::accel::{Backend, BvhBuilder, EmbreeQuality};
+use ember::export::MitsubaSampler;
 use ember::integrators::{DirectStrategy, Estimator};
 use ember::names::Named;
 use ember::render::{Engine, Shading};
+use ember::sampling::SamplerKind;
 use std::path::PathBuf;
 
 /// What `--help` adds after the options: stopping a render, and where ember differs
 /// from the course's binary on purpose (the README says the same).
 const AFTER_HELP: &str = "\
+Examples:
+  ember -s 64 -l 4 -m 5 -r 480 360 -f bunny.png scenes/cs184/sky/CBbunny.dae
+  ember info scenes/cs184/sky/CBbunny.dae       what a scene holds, and the backends
+  ember report --out write-up                   the CS184 write-up's figures as a page
+  ember bench render | accel | converge SCENE | stability    (see ember bench --help)
+
 Stopping a render:
   Ctrl-C (or SIGTERM) stops within one pixel's time, writes the pixels finished so far
   (the rest black; samples per pixel and `stopped: interrupted` in the file's metadata,
@@ -26,16 +34,20 @@ Where ember differs from the CS184 binary on purpose:
   - -a does not stop a pixel after one batch of identical samples (a pixel of zeros
     beside a small light), it takes more batches first;
   - -t defaults to all cores, and the image does not depend on it;
-  - <out>_rate.png is written only with -a.
+  - <out>_rate.png is written only with -a, with a legend below the map: blue = 0, red = -s
+    samples per pixel (an <out>_rate.exr holds the raw counts).
   The full list is in docs/scene-semantics.md, section 9.";
 
-/// ember — a physically based CPU path tracer for the CS184 COLLADA scenes.
-///
-/// Accepts the CS184 pathtracer command line verbatim, e.g.
-///   ember -t 8 -s 64 -l 16 -m 5 -r 480 360 -f out.png scene.dae
+/// What `ember -h` and `--help` say first.
+const ABOUT: &str = "\
+ember: a physically based CPU path tracer for the CS184 COLLADA (.dae) scenes.
+Without a command it renders SCENE, and takes the CS184 pathtracer's command line verbatim:
+  ember -t 8 -s 64 -l 16 -m 5 -r 480 360 -f out.png scene.dae";
+
+/// The whole command line: the render's flags, or a subcommand.
 #[derive(Parser, Debug)]
 #[command(after_help = AFTER_HELP)]
-#[command(name = "ember", version, about, long_about = None, args_conflicts_with_subcommands = true, args_override_self = true, allow_negative_numbers = true)]
+#[command(name = "ember", version, about = ABOUT, long_about = None, args_conflicts_with_subcommands = true, args_override_self = true, allow_negative_numbers = true)]
 pub struct Cli {
     #[command(subcommand)]
     pub command: Option<Command>,
@@ -48,11 +60,29 @@ pub struct Cli {
     pub render: RenderArgs,
 }
 
+/// The subcommands; `--help` lists each with the first line of its comment.
 #[derive(Subcommand, Debug)]
 pub enum Command {
-    /// Assemble the parts of a render made on many machines (`--shard`, `--spp-offset`):
-    /// bands are copied, sample ranges averaged by their sample counts. Refuses parts of
-    /// different renders, gaps, overlaps and duplicates.
+    /// Print what a scene contains, or how an image was made and what it holds.
+    ///
+    /// For a .dae scene: meshes with their object and material names, lights, materials,
+    /// camera, bounds, the native BVH's shape and build time, and the backends of this
+    /// build. For a .png or .exr: its size, channels and per-channel statistics, and the
+    /// settings ember wrote into it, if ember wrote it.
+    #[command(allow_negative_numbers = true)]
+    Info {
+        /// The .dae scene file, or a .png/.exr image.
+        #[arg(value_name = "SCENE_OR_IMAGE")]
+        path: PathBuf,
+        /// Resolution at which to report the camera's field of view.
+        #[arg(short = 'r', num_args = 2, action = clap::ArgAction::Set, value_names = ["WIDTH", "HEIGHT"], default_values_t = [480, 360])]
+        resolution: Vec<u32>,
+    },
+    /// Assemble the parts of a render made on many machines into one image.
+    ///
+    /// The parts are .exr files written with --shard K/N and/or --spp-offset S: bands are
+    /// copied, sample ranges averaged by their sample counts. Refuses parts of different
+    /// renders, gaps, overlaps and duplicates.
     Merge {
         /// The merged image; .png or .exr.
         out: PathBuf,
@@ -60,29 +90,59 @@ pub enum Command {
         #[arg(required = true)]
         parts: Vec<PathBuf>,
     },
-    /// Print what a scene contains (meshes with their object and material names, lights, materials, camera, bounds),
-    /// the native BVH's shape and build time, and the backends of this build; for a .png/.exr ember wrote, how it was made.
-    #[command(allow_negative_numbers = true)]
-    Info {
-        /// The .dae scene file, or an image ember wrote.
-        scene: PathBuf,
-        /// Resolution at which to report the camera's field of view.
-        #[arg(short = 'r', num_args = 2, action = clap::ArgAction::Set, value_names = ["WIDTH", "HEIGHT"], default_values_t = [480, 360])]
-        resolution: Vec<u32>,
-    },
-    /// Write the course's camera settings file (what -c reads) for a scene's own camera at
-    /// resolution -r: `ember camera --save view.cam SCENE.dae`. Without --save, print it.
+    /// Write the course's camera settings file (what -c reads) for a scene's camera.
+    ///
+    /// `ember camera --save view.cam SCENE.dae` records the scene's own camera at
+    /// resolution -r (with -b/-d, a lens). Without --save, prints it.
     Camera(CameraArgs),
-    /// Write the scene for another renderer, meaning exactly what ember renders
-    /// (spec semantics): `ember export --format mitsuba SCENE.dae -r W H -s SPP -m M --out DIR`.
+    /// Write the scene for Mitsuba 3, meaning exactly what ember renders.
+    ///
+    /// `ember export --format mitsuba SCENE.dae -r W H -s SPP -m M --out DIR`: spec
+    /// semantics, for side-by-side measurements.
     #[command(allow_negative_numbers = true)]
     Export(ExportArgs),
-    /// Measure speed: `ember bench render` (samples/s of full renders).
+    /// Measure speed and accuracy: render, accel, converge, stability.
     #[cfg(feature = "bench")]
     Bench {
         #[command(subcommand)]
         which: BenchCommand,
     },
+    /// Render the CS184 write-up's figures and write them as a page (index.html, README.md).
+    ///
+    /// The course's five parts (normal shading; large meshes and render times with ember's
+    /// BVH, Embree and no acceleration; hemisphere against light sampling at -l 1, 4, 16,
+    /// 64; direct and indirect light, -m 0 to 5, 1 to 1024 spp; adaptive sampling with its
+    /// rate maps) and the speed-against-accuracy charts of `ember bench converge`. Under
+    /// every figure: the ember command that renders it bit for bit. About 6 minutes on
+    /// two busy cores (4 minutes of CPU time); --quick, seconds.
+    #[cfg(feature = "bench")]
+    Report(ReportArgs),
+}
+
+/// `ember report`'s flags.
+#[cfg(feature = "bench")]
+#[derive(Args, Debug)]
+pub struct ReportArgs {
+    /// Scenes to use in every part instead of the course's (part 4's rows and the
+    /// charts use the first).
+    pub scenes: Vec<PathBuf>,
+    /// Folder of the page: index.html, README.md, figures/ and converge/ (created if missing).
+    #[arg(long, default_value = "report")]
+    pub out: PathBuf,
+    /// Small sizes and sample counts (every part still present), for a first look or a test.
+    #[arg(long)]
+    pub quick: bool,
+    /// Random seed of every render (each figure's command repeats it).
+    #[arg(long, default_value_t = 0)]
+    pub seed: u64,
+    /// Python that imports Mitsuba 3, to chart it beside ember [default: the one
+    /// scripts/mitsuba-env installed in the data folder's .cache/mitsuba, if any, except
+    /// with --quick].
+    #[arg(long, value_name = "PYTHON")]
+    pub mitsuba: Option<PathBuf>,
+    /// Worker threads (default: all cores). The figures do not depend on it.
+    #[arg(short = 't', value_name = "THREADS", value_parser = at_least_one::<usize>)]
+    pub threads: Option<usize>,
 }
 
 #[derive(Args, Debug)]
@@ -113,6 +173,22 @@ pub struct LensArgs {
     /// course: must be positive.
     #[arg(short = 'd', value_name = "DISTANCE", allow_negative_numbers = true)]
     pub focal_distance: Option<f32>,
+
+    /// Where the camera's eye goes. auto: the course's rule for the course's files (they use its
+    /// CGL/CMU462 extension, were written by its Blender 2.72/2.74, or name no authoring tool), the
+    /// camera node's own position for files other tools wrote (`ember info` says which and why);
+    /// course: the course's rule (the scene's centre, 1.5 diagonals back along the view); file:
+    /// the camera node's position (the course's rule when the file has no camera).
+    #[arg(long = "camera-placement", value_enum, value_name = "PLACEMENT", default_value_t = CameraPlacement::Auto)]
+    pub camera_placement: CameraPlacement,
+}
+
+/// `--camera-placement`.
+#[derive(clap::ValueEnum, Clone, Copy, Debug, PartialEq, Eq)]
+pub enum CameraPlacement {
+    Auto,
+    Course,
+    File,
 }
 
 #[derive(Args, Debug)]
@@ -126,7 +202,7 @@ pub struct ExportArgs {
     #[arg(short = 'r', num_args = 2, action = clap::ArgAction::Set, value_names = ["WIDTH", "HEIGHT"], default_values_t = [480, 360])]
     pub resolution: Vec<u32>,
     /// Samples per pixel.
-    #[arg(short = 's', default_value_t = 64)]
+    #[arg(short = 's', default_value_t = 64, value_parser = at_least_one::<u32>)]
     pub spp: u32,
     /// Max ray depth (bounces), as ember's -m; Mitsuba's max_depth is m + 1.
     #[arg(short = 'm', default_value_t = 5)]
@@ -137,6 +213,10 @@ pub struct ExportArgs {
     /// Environment map replacing the scene's ambient light, as the renderer's -e (exported in Mitsuba's orientation).
     #[arg(short = 'e', value_name = "FILE.exr")]
     pub env_map: Option<PathBuf>,
+    /// Mitsuba's sampler. Default multijitter: the lowest error of Mitsuba's samplers in ember's measurements, and it
+    /// takes nearly any count. A count the sampler does not take is rounded up as Mitsuba would, with a warning.
+    #[arg(long, value_parser = named::<MitsubaSampler>(), default_value_t = MitsubaSampler::default())]
+    pub sampler: MitsubaSampler,
 }
 
 #[derive(Clone, Copy, Debug, ValueEnum)]
@@ -145,143 +225,175 @@ pub enum ExportFormat {
     Mitsuba,
 }
 
+/// `ember bench ...`: each benchmark's flags in their own struct, which its command reads.
 #[cfg(feature = "bench")]
 #[derive(Subcommand, Debug)]
 pub enum BenchCommand {
-    /// Where methods fail: a row per case (delta lights, tiny lights, glossy vs rough, caustics, scale, grazing rays,
-    /// adaptive sampling, roulette) with what each method does there. Writes stability.csv, stability.md and a chart.
+    /// Samples per second of full renders (default: CBspheres_lambertian and CBbunny, 480x360, 64 spp, -m 5).
     #[command(allow_negative_numbers = true)]
-    Stability {
-        /// Output folder.
-        #[arg(long, default_value = "bench-out/stability")]
-        out: PathBuf,
-        /// Multiplies every case's samples per pixel.
-        #[arg(long, default_value_t = 1.0)]
-        spp_scale: f32,
-        /// Random seed.
-        #[arg(long, default_value_t = 0)]
-        seed: u64,
-        /// Worker threads (default: all cores).
-        #[arg(short = 't', value_name = "THREADS")]
-        threads: Option<usize>,
-    },
+    Render(BenchRenderArgs),
+    /// Acceleration structures: build time, memory, tree shape and Mrays/s of every backend.
+    ///
     /// Build time, memory, tree shape (nodes, leaves, depth, SAH cost) and Mrays/s (camera, incoherent, shadow rays)
     /// of every backend this build has (native midpoint and SAH; Embree robust and fast), at each thread count, with the
     /// native/Embree ratios; with Embree, also every Embree mode (scene flags × build quality × rtcIntersect1/4/8/16) on
     /// camera rays. Writes accel.csv/.md and embree_modes.csv/.md to --out. Default scenes: CBbunny, CBspheres_lambertian,
     /// mesh:1M. Merge an Embree 3 and an Embree 4 build's tables by running the second with --append.
     #[command(allow_negative_numbers = true)]
-    Accel {
-        /// Scenes to measure instead of the defaults: .dae files, or mesh:N for a generated displaced sphere of about
-        /// N triangles (mesh:250k, mesh:1M).
-        #[arg(value_parser = parse_bench_scene)]
-        scenes: Vec<ember::bench::accel::BenchScene>,
-        /// Incoherent and shadow rays per measurement (camera rays: one per pixel of a 480x360 render).
-        #[arg(long, default_value_t = 500_000)]
-        rays: usize,
-        /// Thread counts to measure: `-t 1 2` or `-t 1,2` (scenes go before the options, or after `--`).
-        #[arg(short = 't', long, num_args = 1.., value_delimiter = ',', default_values_t = [1, 2])]
-        threads: Vec<usize>,
-        /// Each figure is the median of this many runs.
-        #[arg(long, default_value_t = 5)]
-        repeats: usize,
-        /// Embree's build quality in the main table (the Embree modes table has all three).
-        #[arg(long, value_parser = named::<EmbreeQuality>(), default_value_t = EmbreeQuality::default())]
-        quality: EmbreeQuality,
-        /// Leave out the Embree modes table.
-        #[arg(long)]
-        no_embree_modes: bool,
-        /// Add this run's rows to the tables already in --out (e.g. an Embree 4 build's after an Embree 3 build's)
-        /// instead of replacing them.
-        #[arg(long, conflicts_with = "scaling")]
-        append: bool,
-        /// Instead: generated meshes (displaced sphere, random soup) from 1k to 4M triangles, every native builder and
-        /// Embree quality, charted against triangle count (log-log) with fitted growth. Writes CSV, Markdown and charts to --out.
-        #[arg(long)]
-        scaling: bool,
-        /// Output folder (default: bench-out/accel, or bench-out/scaling with --scaling).
-        #[arg(long)]
-        out: Option<PathBuf>,
-    },
-    /// Error against render time for each method (direct: hemisphere / light / MIS; GI: roulette, -l, adaptive, backends).
-    /// Writes <out>/<scene>_m<M>.csv and error-vs-time charts (PNG and SVG), prints the time each method needs to reach an error.
+    Accel(BenchAccelArgs),
+    /// Error against render time for each method, charted.
+    ///
+    /// Methods: direct lighting by hemisphere, light or MIS sampling; for global illumination, roulette, -l, adaptive
+    /// sampling and the backends; peers: Mitsuba 3 with each sampler, Blender Cycles. Writes <out>/<scene>_m<M>.csv and
+    /// error-vs-time charts (PNG and SVG); prints each method's RMSE at the render times and spp of ember's default at
+    /// 16, 64 and 256 spp.
     #[command(allow_negative_numbers = true)]
-    Converge {
-        /// The .dae scene.
-        scene: PathBuf,
-        /// Reference image (linear EXR at the render resolution). Default: ember's own high-spp render, cached under <out>/cache.
-        #[arg(long)]
-        reference: Option<PathBuf>,
-        /// Per-pixel RMS noise of --reference, if known (e.g. noise_rmse_per_pixel from the references' manifest); subtracted from every MSE.
-        #[arg(long)]
-        reference_noise: Option<f64>,
-        /// Max ray depth.
-        #[arg(short = 'm', default_value_t = 1)]
-        max_depth: u32,
-        /// Resolution.
-        #[arg(short = 'r', num_args = 2, action = clap::ArgAction::Set, value_names = ["WIDTH", "HEIGHT"], default_values_t = [160, 120])]
-        resolution: Vec<u32>,
-        /// Largest spp of the doubling sequence 1, 2, 4, ...
-        #[arg(long, default_value_t = 1024)]
-        max_spp: u32,
-        /// Stop doubling a method once one render takes longer than this (seconds).
-        #[arg(long, default_value_t = 8.0)]
-        max_seconds: f64,
-        /// spp of ember's own reference.
-        #[arg(long, default_value_t = 8192)]
-        reference_spp: u32,
-        /// RMSE whose time-to-reach is tabulated (default: the median of the methods' final RMSEs).
-        #[arg(long)]
-        target_rmse: Option<f64>,
-        /// Output folder.
-        #[arg(long, default_value = "bench-out")]
-        out: PathBuf,
-        /// Random seed.
-        #[arg(long, default_value_t = 0)]
-        seed: u64,
-        /// Also run Mitsuba 3 as a method, through this Python (one that imports `mitsuba`; scripts/mitsuba-env creates one and prints its path). Each point is the warm, render-only time of its own process.
-        #[arg(long, value_name = "PYTHON")]
-        mitsuba: Option<PathBuf>,
-        /// Mitsuba variants to run with --mitsuba, comma-separated.
-        #[arg(long, value_delimiter = ',', default_value = "llvm_ad_rgb")]
-        mitsuba_variants: Vec<String>,
-        /// Worker threads (default: all cores).
-        #[arg(short = 't', value_name = "THREADS")]
-        threads: Option<usize>,
-    },
-    /// Samples per second for CBspheres_lambertian and CBbunny at 480x360, 64 spp, -m 5.
+    Converge(BenchConvergeArgs),
+    /// Where methods fail: a row per hard case with what each method does there.
+    ///
+    /// The cases: delta lights, tiny lights, glossy vs rough, caustics, scale, grazing rays, adaptive sampling,
+    /// roulette. Writes stability.csv, stability.md and a chart.
     #[command(allow_negative_numbers = true)]
-    Render {
-        /// Scenes to render (default: the course's CBspheres_lambertian and CBbunny from the
-        /// repository's scenes/, or $EMBER_DATA's).
-        scenes: Vec<PathBuf>,
-        /// Samples per pixel.
-        #[arg(short = 's', default_value_t = 64)]
-        spp: u32,
-        /// Max ray depth.
-        #[arg(short = 'm', default_value_t = 5)]
-        max_depth: u32,
-        /// Repetitions per scene (the median is reported).
-        #[arg(long, default_value_t = 3)]
-        repeats: u32,
-        /// Worker threads (default: all cores).
-        #[arg(short = 't', value_name = "THREADS")]
-        threads: Option<usize>,
-        /// Backend (auto: the native BVH and, in builds with Embree, Embree as `--accel
-        /// embree` renders, in one table).
-        #[arg(long, value_parser = named::<Backend>(), default_value_t = Backend::Auto)]
-        accel: Backend,
-        /// Also render through each step of how ember drives Embree (builds with Embree;
-        /// the steps of `ember bench accel`'s Embree variants table), a row each.
-        #[arg(long)]
-        embree_steps: bool,
-        /// Engines to compare, in turn within each repetition (a row per backend each).
-        #[arg(long, value_parser = named::<Engine>(), value_delimiter = ',', default_value = "auto,scalar")]
-        engines: Vec<Engine>,
-        /// Output folder (render.csv, render.md).
-        #[arg(long, default_value = "bench-out/render")]
-        out: PathBuf,
-    },
+    Stability(BenchStabilityArgs),
+}
+
+#[cfg(feature = "bench")]
+#[derive(Args, Debug)]
+pub struct BenchRenderArgs {
+    /// Scenes to render (default: the course's CBspheres_lambertian and CBbunny from the
+    /// repository's scenes/, or $EMBER_DATA's).
+    pub scenes: Vec<PathBuf>,
+    /// Samples per pixel.
+    #[arg(short = 's', default_value_t = 64, value_parser = at_least_one::<u32>)]
+    pub spp: u32,
+    /// Max ray depth.
+    #[arg(short = 'm', default_value_t = 5)]
+    pub max_depth: u32,
+    /// Repetitions per scene (the median is reported).
+    #[arg(long, default_value_t = 3)]
+    pub repeats: u32,
+    /// Worker threads (default: all cores).
+    #[arg(short = 't', value_name = "THREADS", value_parser = at_least_one::<usize>)]
+    pub threads: Option<usize>,
+    /// Backend (auto: the native BVH and, in builds with Embree, Embree as `--accel embree`
+    /// renders, in one table).
+    #[arg(long, value_parser = named::<Backend>(), default_value_t = Backend::Auto)]
+    pub accel: Backend,
+    /// Also render through each step of how ember drives Embree (builds with Embree; the
+    /// steps of `ember bench accel`'s Embree variants table), a row each.
+    #[arg(long)]
+    pub embree_steps: bool,
+    /// Engines to compare, in turn within each repetition (a row per backend each).
+    #[arg(long, value_parser = named::<Engine>(), value_delimiter = ',', default_value = "auto,scalar")]
+    pub engines: Vec<Engine>,
+    /// Output folder (render.csv, render.md).
+    #[arg(long, default_value = "bench-out/render")]
+    pub out: PathBuf,
+}
+
+#[cfg(feature = "bench")]
+#[derive(Args, Debug)]
+pub struct BenchAccelArgs {
+    /// Scenes to measure instead of the defaults: .dae files, or mesh:N for a generated displaced sphere of about
+    /// N triangles (mesh:250k, mesh:1M).
+    #[arg(value_parser = parse_bench_scene)]
+    pub scenes: Vec<ember::bench::accel::BenchScene>,
+    /// Incoherent and shadow rays per measurement (camera rays: one per pixel of a 480x360 render).
+    #[arg(long, default_value_t = 500_000)]
+    pub rays: usize,
+    /// Thread counts to measure: `-t 1 2` or `-t 1,2` (scenes go before the options, or after `--`).
+    #[arg(short = 't', long, num_args = 1.., value_delimiter = ',', default_values_t = [1, 2])]
+    pub threads: Vec<usize>,
+    /// Each figure is the median of this many runs.
+    #[arg(long, default_value_t = 5)]
+    pub repeats: usize,
+    /// Embree's build quality in the main table (the Embree modes table has all three).
+    #[arg(long, value_parser = named::<EmbreeQuality>(), default_value_t = EmbreeQuality::default())]
+    pub quality: EmbreeQuality,
+    /// Leave out the Embree modes table.
+    #[arg(long)]
+    pub no_embree_modes: bool,
+    /// Add this run's rows to the tables already in --out (e.g. an Embree 4 build's after an Embree 3 build's)
+    /// instead of replacing them.
+    #[arg(long, conflicts_with = "scaling")]
+    pub append: bool,
+    /// Instead: generated meshes (displaced sphere, random soup) from 1k to 4M triangles, every native builder and
+    /// Embree quality, charted against triangle count (log-log) with fitted growth. Writes CSV, Markdown and charts to --out.
+    #[arg(long)]
+    pub scaling: bool,
+    /// Output folder (default: bench-out/accel, or bench-out/scaling with --scaling).
+    #[arg(long)]
+    pub out: Option<PathBuf>,
+}
+
+#[cfg(feature = "bench")]
+#[derive(Args, Debug)]
+pub struct BenchConvergeArgs {
+    /// The .dae scene.
+    pub scene: PathBuf,
+    /// Reference image (linear EXR at the render resolution). Default: ember's own high-spp render, cached under <out>/cache.
+    #[arg(long)]
+    pub reference: Option<PathBuf>,
+    /// Per-pixel RMS noise of --reference, if known (e.g. noise_rmse_per_pixel from the references' manifest); subtracted from every MSE.
+    #[arg(long)]
+    pub reference_noise: Option<f64>,
+    /// Max ray depth.
+    #[arg(short = 'm', default_value_t = 1)]
+    pub max_depth: u32,
+    /// Resolution.
+    #[arg(short = 'r', num_args = 2, action = clap::ArgAction::Set, value_names = ["WIDTH", "HEIGHT"], default_values_t = [160, 120])]
+    pub resolution: Vec<u32>,
+    /// Largest spp of the doubling sequence 1, 2, 4, ...
+    #[arg(long, default_value_t = 1024)]
+    pub max_spp: u32,
+    /// Stop doubling a method once one render takes longer than this (seconds).
+    #[arg(long, default_value_t = 8.0)]
+    pub max_seconds: f64,
+    /// spp of ember's own reference.
+    #[arg(long, default_value_t = 8192)]
+    pub reference_spp: u32,
+    /// Output folder.
+    #[arg(long, default_value = "bench-out/converge")]
+    pub out: PathBuf,
+    /// Random seed.
+    #[arg(long, default_value_t = 0)]
+    pub seed: u64,
+    /// Also run Mitsuba 3 as a method, through this Python (one that imports `mitsuba`; scripts/mitsuba-env creates one and prints its path). Each point is the warm, render-only time of its own process.
+    #[arg(long, value_name = "PYTHON")]
+    pub mitsuba: Option<PathBuf>,
+    /// Mitsuba variants to run with --mitsuba, comma-separated.
+    #[arg(long, value_delimiter = ',', default_value = "llvm_ad_rgb")]
+    pub mitsuba_variants: Vec<String>,
+    /// Mitsuba samplers to run with --mitsuba, comma-separated: each variant with each sampler is one method.
+    /// Each renders the doubling sequence rounded up to the counts it takes (ldsampler: 4, 16, 64, ...).
+    #[arg(long, value_delimiter = ',', value_parser = named::<MitsubaSampler>(),
+          default_value = "independent,stratified,multijitter,ldsampler,orthogonal")]
+    pub mitsuba_samplers: Vec<MitsubaSampler>,
+    /// Also run Blender Cycles as a method, through this Python (one that imports `bpy`; scripts/cycles-env
+    /// creates one and prints its path). Scenes of Lambertian surfaces and rectangular area lights only; its
+    /// image mean is checked against --reference's manifest.
+    #[arg(long, value_name = "PYTHON")]
+    pub cycles: Option<PathBuf>,
+    /// Worker threads (default: all cores).
+    #[arg(short = 't', value_name = "THREADS", value_parser = at_least_one::<usize>)]
+    pub threads: Option<usize>,
+}
+
+#[cfg(feature = "bench")]
+#[derive(Args, Debug)]
+pub struct BenchStabilityArgs {
+    /// Output folder.
+    #[arg(long, default_value = "bench-out/stability")]
+    pub out: PathBuf,
+    /// Multiplies every case's samples per pixel.
+    #[arg(long, default_value_t = 1.0)]
+    pub spp_scale: f32,
+    /// Random seed.
+    #[arg(long, default_value_t = 0)]
+    pub seed: u64,
+    /// Worker threads (default: all cores).
+    #[arg(short = 't', value_name = "THREADS", value_parser = at_least_one::<usize>)]
+    pub threads: Option<usize>,
 }
 
 #[cfg(feature = "bench")]
@@ -291,15 +403,15 @@ fn parse_bench_scene(s: &str) -> Result<ember::bench::accel::BenchScene, String>
 
 #[derive(Args, Debug)]
 pub struct RenderArgs {
-    /// The .dae scene to render.
+    /// The .dae (COLLADA) scene to render.
     pub scene: Option<PathBuf>,
 
     /// Worker threads (default: all cores). The image does not depend on it.
-    #[arg(short = 't', value_name = "THREADS")]
+    #[arg(short = 't', value_name = "THREADS", value_parser = at_least_one::<usize>)]
     pub threads: Option<usize>,
 
-    /// Camera rays (samples) per pixel; with -a, the cap per pixel [default: 1; with --time, no cap].
-    #[arg(short = 's', value_name = "SPP")]
+    /// Camera rays (samples) per pixel; with -a, the most a pixel takes [default: 1; with --time, no cap].
+    #[arg(short = 's', value_name = "SPP", value_parser = at_least_one::<u32>)]
     pub spp: Option<u32>,
 
     /// Light samples per area light at every shading point (delta lights take one).
@@ -314,7 +426,7 @@ pub struct RenderArgs {
     #[arg(short = 'o', value_name = "0|1", default_value_t = 1, value_parser = clap::value_parser!(u8).range(0..=1))]
     pub accumulate: u8,
 
-    /// Adaptive sampling: after every BATCH samples stop a pixel once 1.96·σ/√n ≤ TOL·μ (or at -s). A pixel whose samples are all zero stops only once n zeros would have a chance of at most 1% if light reached it a quarter as often as it reaches the pixels within 5 px in their first batch, so light found rarely is not missed (README). `-a` alone means 32 0.05.
+    /// Adaptive sampling: after every BATCH samples stop a pixel once 1.96·σ/√n ≤ TOL·μ (or at -s). A pixel whose samples are all zero stops only once n zeros would have a chance of at most 1% if light reached it a quarter as often as it reaches the pixels within 5 px in their first batch, so light found rarely is not missed (README). `-a` alone means 32 0.05. As in the course, -s is the most samples a pixel takes (its default is 1: give it, e.g. -s 1024 -a).
     #[arg(short = 'a', num_args = 0..=2, action = clap::ArgAction::Set, value_names = ["BATCH", "TOL"])]
     pub adaptive: Option<Vec<String>>,
 
@@ -381,6 +493,12 @@ pub struct RenderArgs {
     #[arg(long, value_parser = named::<Engine>(), default_value_t = Engine::Auto)]
     pub engine: Engine,
 
+    /// Which numbers pixel samples draw: sobol stratifies every pair of numbers of every bounce
+    /// over a pixel's samples (Owen-scrambled Sobol points); independent draws uniform numbers
+    /// (for comparison).
+    #[arg(long, value_parser = named::<SamplerKind>(), default_value_t = SamplerKind::Sobol)]
+    pub sampler: SamplerKind,
+
     /// Estimator. auto: light tracing when every light is a point light and nothing is specular or self-emitting (CBempty: see BENCHMARKS.md, stability case 9); otherwise path tracing with MIS (light + BSDF sampling) when the scene has glossy surfaces or an ambient or environment (-e) light, light sampling otherwise. A direct-lighting strategy name means path tracing with it. -H forces hemisphere.
     #[arg(long, value_parser = integrator(), default_value = AUTO)]
     pub integrator: IntegratorChoice,
@@ -420,6 +538,20 @@ pub struct RenderArgs {
     /// No progress bar and no summary.
     #[arg(short = 'q', long)]
     pub quiet: bool,
+}
+
+/// A count of at least 1 (`-s`, `-t`): "-s 0" and "-s -1" get the same message.
+fn at_least_one<T: TryFrom<u64>>(s: &str) -> Result<T, String> {
+    let n: i128 = s
+        .parse()
+        .map_err(|_| "expected a whole number of at least 1".to_string())?;
+    if n < 1 {
+        return Err("must be at least 1".into());
+    }
+    u64::try_from(n)
+        .ok()
+        .and_then(|n| T::try_from(n).ok())
+        .ok_or_else(|| "too large".to_string())
 }
 
 /// A flag parsed straight into a library enum through its name table; `--help`

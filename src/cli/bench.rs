@@ -1,176 +1,108 @@
 //! `ember bench ...`: each benchmark runs, writes its report, prints its summary.
 
-use super::args::BenchCommand;
-use super::convert::{check_resolution, threads_invalid};
-use anyhow::{bail, Context, Result};
+use super::args::{BenchAccelArgs, BenchCommand};
+use super::convert::{
+    bench_accel_options, bench_converge_options, bench_render_options, bench_stability_options,
+};
+use anyhow::{Context, Result};
 use ember::bench::{self, Report};
 use std::path::{Path, PathBuf};
 
-/// `ember bench ...`: each benchmark runs, writes its report, prints its summary.
+/// Runs one benchmark on a pool of its `-t` threads (`bench accel` measures its own list).
 pub(super) fn run(which: BenchCommand) -> Result<()> {
-    // `-t` of the benchmarks that run on one rayon pool (accel measures its own list).
     let threads = match &which {
-        BenchCommand::Stability { threads, .. }
-        | BenchCommand::Converge { threads, .. }
-        | BenchCommand::Render { threads, .. } => *threads,
-        BenchCommand::Accel { .. } => None,
+        BenchCommand::Stability(a) => a.threads,
+        BenchCommand::Converge(a) => a.threads,
+        BenchCommand::Render(a) => a.threads,
+        BenchCommand::Accel(_) => None,
     };
-    super::commands::thread_pool(threads)?.install(|| run_on_pool(which))
-}
-
-fn run_on_pool(which: BenchCommand) -> Result<()> {
-    match which {
-        BenchCommand::Stability {
-            out,
-            spp_scale,
-            seed,
-            ..
-        } => bench_stability(out, spp_scale, seed),
-        BenchCommand::Accel {
-            scaling: true,
-            out,
-            repeats,
-            ..
-        } => bench_scaling(out.unwrap_or_else(|| "bench-out/scaling".into()), repeats),
-        BenchCommand::Accel {
-            scenes,
-            rays,
-            threads,
-            repeats,
-            quality,
-            no_embree_modes,
-            append,
-            out,
-            ..
-        } => {
-            if threads_invalid(&threads) {
-                bail!("--threads: each count must be at least 1");
-            }
-            let defaults = bench::accel::AccelBenchOptions::default();
-            let opts = bench::accel::AccelBenchOptions {
-                scenes: if scenes.is_empty() {
-                    bench::accel::AccelBenchOptions::default_scenes()?
-                } else {
-                    scenes
-                },
-                rays,
-                threads,
-                repeats: repeats.max(1),
-                embree_quality: quality,
-                embree_modes: !no_embree_modes,
-                ..defaults
-            };
-            bench_accel(
-                &opts,
-                &out.unwrap_or_else(|| "bench-out/accel".into()),
-                append,
-            )
+    super::commands::thread_pool(threads)?.install(|| match which {
+        BenchCommand::Render(a) => {
+            let out = a.out.clone();
+            finish(&bench::render::run(&bench_render_options(a)?)?, &out)
         }
-        BenchCommand::Converge {
-            scene,
-            reference,
-            reference_noise,
-            max_depth,
-            resolution,
-            max_spp,
-            max_seconds,
-            reference_spp,
-            target_rmse,
-            out,
-            seed,
-            mitsuba,
-            mitsuba_variants,
-            ..
-        } => {
-            check_resolution(resolution[0], resolution[1])?;
-            bench_converge(bench::converge::ConvergeOptions {
-                scene,
-                reference,
-                reference_noise,
-                width: resolution[0],
-                height: resolution[1],
-                max_depth,
-                max_spp,
-                max_seconds_per_point: max_seconds,
-                reference_spp,
-                out_dir: out,
-                target_rmse,
-                seed,
-                compare_backends: true,
-                mitsuba: mitsuba.map(|python| bench::converge::MitsubaPeer {
-                    python,
-                    variants: mitsuba_variants,
-                }),
-            })
+        BenchCommand::Accel(a) if a.scaling => bench_scaling(a),
+        BenchCommand::Accel(a) => bench_accel(a),
+        BenchCommand::Converge(a) => {
+            let opts = bench_converge_options(a)?;
+            let report = bench::converge::run(&opts, &mut |m| ember::errln!("ember: {m}"))?;
+            finish(&report, &opts.out_dir)
         }
-        BenchCommand::Render {
-            scenes,
-            spp,
-            max_depth,
-            repeats,
-            accel: a,
-            embree_steps,
-            engines,
-            out,
-            ..
-        } => bench_render(
-            bench::render::RenderBenchOptions {
-                scenes: if scenes.is_empty() {
-                    bench::render::RenderBenchOptions::default_scenes()?
-                } else {
-                    scenes
-                },
-                spp,
-                max_depth,
-                repeat: repeats.max(1),
-                accels: bench::render::RenderBenchOptions::accels_for(a, embree_steps),
-                engines,
-            },
-            out,
-        ),
-    }
+        BenchCommand::Stability(a) => {
+            let report = bench::stability::run_stability(&bench_stability_options(&a)?)?;
+            finish(&report, &a.out)
+        }
+    })
 }
 
-fn bench_stability(out: PathBuf, spp_scale: f32, seed: u64) -> Result<()> {
-    if !(spp_scale.is_finite() && spp_scale > 0.0) {
-        bail!("--spp-scale must be a positive number");
-    }
-    let opts = bench::stability::StabilityOptions { spp_scale, seed };
-    finish(&bench::stability::run_stability(&opts)?, &out)
-}
-
-fn bench_scaling(out: PathBuf, repeats: usize) -> Result<()> {
+fn bench_scaling(a: BenchAccelArgs) -> Result<()> {
     let opts = bench::scaling::ScalingOptions {
-        repeats: repeats.max(1),
+        repeats: a.repeats.max(1),
         ..Default::default()
     };
+    let out = a.out.unwrap_or_else(|| "bench-out/scaling".into());
     let report = bench::scaling::run_scaling(&opts, |line| ember::errln!("ember: {line}"))?;
     finish(&report, &out)
 }
 
-fn bench_accel(opts: &bench::accel::AccelBenchOptions, out: &Path, append: bool) -> Result<()> {
-    use bench::accel::{run, AccelBenchReport};
+/// `ember bench accel`: the rows so far are written after every scene and thread
+/// count, so a run that is stopped (Ctrl-C: after the measurement under way) or killed
+/// leaves the rows it finished.
+fn bench_accel(a: BenchAccelArgs) -> Result<()> {
+    use bench::accel::{AccelBenchReport, Progress};
+    let out: PathBuf = a.out.clone().unwrap_or_else(|| "bench-out/accel".into());
+    let append = a.append;
+    let opts = bench_accel_options(a)?;
     // Read what to append to before the long run, so a missing file fails at once.
-    let earlier = if append {
-        Some(AccelBenchReport::read(out).context("--append")?)
-    } else {
-        None
+    let earlier = match append {
+        true => Some(AccelBenchReport::read(&out).context("--append")?),
+        false => None,
     };
-    let report = run(opts, |line| ember::errln!("ember: {line}"))?;
-    let report = match earlier {
-        Some(e) => e.merge(report),
-        None => report,
+    let with_earlier = |r: AccelBenchReport| match &earlier {
+        Some(e) => e.clone().merge(r),
+        None => r,
     };
-    finish(&report, out)
+    let interrupt = super::interrupt::install()?;
+    say_when_stopping(interrupt.clone());
+    let mut written = Ok(());
+    let report = bench::accel::run(
+        &opts,
+        |p| match p {
+            Progress::Line(line) => ember::errln!("ember: {line}"),
+            Progress::Rows(rows) => {
+                if written.is_ok() {
+                    written = with_earlier(rows.clone()).write(&out).map(drop);
+                }
+            }
+        },
+        &|| interrupt.load(std::sync::atomic::Ordering::Relaxed),
+    )?;
+    written?;
+    let stopped = report.stopped.clone();
+    finish(&with_earlier(report), &out)?;
+    match stopped {
+        Some(s) => Err(super::Interrupted(format!(
+            "interrupted: {s}; wrote the rows measured to {}",
+            out.display()
+        ))
+        .into()),
+        None => Ok(()),
+    }
 }
 
-fn bench_converge(opts: bench::converge::ConvergeOptions) -> Result<()> {
-    let report = bench::converge::run(&opts, &mut |m| ember::errln!("ember: {m}"))?;
-    finish(&report, &opts.out_dir)
-}
-
-fn bench_render(opts: bench::render::RenderBenchOptions, out: PathBuf) -> Result<()> {
-    finish(&bench::render::run(&opts)?, &out)
+/// Tells the user, once Ctrl-C is pressed, that the run ends after the measurement
+/// under way (which may take a minute on a large mesh).
+fn say_when_stopping(flag: std::sync::Arc<std::sync::atomic::AtomicBool>) {
+    std::thread::spawn(move || loop {
+        if flag.load(std::sync::atomic::Ordering::Relaxed) {
+            ember::errln!(
+                "ember: stopping after the measurement under way; the rows measured are written \
+                 (Ctrl-C again quits at once, keeping the rows already written)"
+            );
+            return;
+        }
+        std::thread::sleep(std::time::Duration::from_millis(100));
+    });
 }
 
 /// The end of every benchmark: write its report into `out`, print its summary and the files.

@@ -2,8 +2,9 @@
 
 use super::args::{CameraArgs, ExportArgs, ExportFormat, RenderArgs};
 use super::convert::{
-    self, adopt_scene_from_adaptive, apply_env_map, cell_rect, check_flags, check_lens,
-    check_resolution, flag_warnings, output_path, part_plan, run_plan, settings_from, RunPlan,
+    self, adopt_scene_from_adaptive, apply_env_map, cell_rect, check_flags,
+    check_image_destination, check_lens, check_resolution, check_scene_file, flag_warnings,
+    output_path, part_plan, run_plan, settings_from, RunPlan,
 };
 use super::interrupt::{self, Interrupted};
 use anyhow::{bail, Result};
@@ -46,7 +47,7 @@ pub(super) fn render(mut args: RenderArgs) -> Result<()> {
     if interrupt.load(Ordering::Relaxed) {
         return Err(Interrupted("interrupted before rendering; nothing written".into()).into());
     }
-    req.warn_before_rendering(&args, &job);
+    req.warn_before_rendering(&args, &job, pool.current_num_threads());
     let t2 = Instant::now();
     let mut stop = StopToken::never().with_flag(interrupt);
     if let Some(t) = req.plan.time {
@@ -81,7 +82,7 @@ pub(super) fn render(mut args: RenderArgs) -> Result<()> {
             samples,
             t_render.as_secs_f64(),
             samples as f64 / t_render.as_secs_f64() / 1e6,
-            run.settings_summary(&done, pool.current_num_threads()),
+            run.summary(&done, pool.current_num_threads()),
             req.out.display()
         );
     }
@@ -115,9 +116,6 @@ impl RenderRequest {
         let (width, height) = (args.resolution[0], args.resolution[1]);
         check_resolution(width, height)?;
         let settings = settings_from(args)?;
-        for w in flag_warnings(args) {
-            ember::errln!("ember: warning: {w}");
-        }
         let plan = run_plan(args, &settings)?;
         check_lens(&args.lens)?;
         let camera_file = (args.camera_file.as_deref())
@@ -128,6 +126,10 @@ impl RenderRequest {
             .transpose()?;
         let out = output_path(args, &scene_path)?;
         let part = part_plan(args, &out, width, height)?;
+        // Only once every flag is known to be good.
+        for w in flag_warnings(args, &settings) {
+            ember::errln!("ember: warning: {w}");
+        }
         Ok(RenderRequest {
             scene_path,
             width,
@@ -140,6 +142,26 @@ impl RenderRequest {
             part,
             full_frame: args.full_frame,
         })
+    }
+
+    /// At most how many rays the render traces: per sample, the camera ray and, at each
+    /// of up to -m bounces, one continuation and -l shadow rays per light (for
+    /// `--accel none`'s time estimate; roulette and escaping paths only make it fewer).
+    fn most_rays(&self, job: &RenderJob) -> f64 {
+        let pixels = match self.cell {
+            Some(r) => r.area(),
+            None => self.width as u64 * self.height as u64,
+        };
+        let s = &self.settings;
+        let per_sample = match s.shading {
+            Shading::Radiance => {
+                let shadow = s.light_samples as f64 * job.scene.lights.len() as f64;
+                1.0 + s.max_depth as f64 * (1.0 + shadow)
+            }
+            _ => 1.0,
+        };
+        let spp = if s.spp == u32::MAX { 1 } else { s.spp };
+        pixels as f64 * spp as f64 * per_sample
     }
 
     /// The buffers are the cell's, unless the cell is written in a full frame.
@@ -203,9 +225,15 @@ impl RenderRequest {
         Ok((job, t_load, t1.elapsed()))
     }
 
-    fn warn_before_rendering(&self, args: &RenderArgs, job: &RenderJob) {
+    fn warn_before_rendering(&self, args: &RenderArgs, job: &RenderJob, threads: usize) {
         for w in job.warnings(&self.settings) {
-            ember::errln!("ember: warning: {w}");
+            ember::errln!("ember: warning: {}: {w}", self.scene_path.display());
+        }
+        if args.accel == accel::Backend::None {
+            let rays = self.most_rays(job);
+            if let Some(w) = accel::brute::slow_warning(job.scene.num_prims(), rays, threads) {
+                ember::errln!("ember: warning: {}: {w}", self.scene_path.display());
+            }
         }
         if self.cell.is_some()
             && self.settings.shading == Shading::BvhCost
@@ -259,6 +287,7 @@ fn check_memory(width: u32, height: u32, plan: RunPlan) -> Result<()> {
 
 /// `ember merge OUT PARTS...`: the parts of a sharded render assembled into one image.
 pub(super) fn merge(out: &Path, parts: &[PathBuf]) -> Result<()> {
+    check_image_destination("merge", out)?;
     let inputs: Vec<&Path> = parts.iter().map(PathBuf::as_path).collect();
     let pending = ember::image_io::PendingImage::claim(out, &inputs)?;
     let parts = parts
@@ -281,6 +310,8 @@ pub(super) fn merge(out: &Path, parts: &[PathBuf]) -> Result<()> {
 /// What a render produced, and why it ended early if it did.
 struct Rendered {
     output: RenderOutput,
+    /// The pixels rendered: the whole image, the `-p` cell or a part's band.
+    frame: PixelRect,
     passes: Option<u32>,
     stopped: Option<StopReason>,
 }
@@ -338,10 +369,14 @@ impl RenderRun<'_> {
         };
         if let Some(pending_rate) = pending_rate {
             let rate = pending_rate.path().to_path_buf();
-            // The rate map: raw samples per pixel in an EXR, the course's colours in a PNG.
+            // The rate map: raw samples per pixel in an EXR, the course's colours (and
+            // a legend below) in a PNG.
             let image = match pending_rate.format() {
                 OutputFormat::Exr => done.output.sample_count_image(),
-                OutputFormat::Png => done.output.rate_image(self.settings.spp),
+                OutputFormat::Png => {
+                    let (w, h) = (done.output.image.width, done.output.image.height);
+                    ember::film::sample_rate_map(w, h, &done.output.samples, self.settings.spp)
+                }
             };
             pending_rate.write_with_metadata(&image, &meta)?;
             if !self.args.quiet {
@@ -367,15 +402,12 @@ impl RenderRun<'_> {
         match done.stopped {
             Some(StopReason::Interrupted) => Err(Interrupted(format!(
                 "interrupted: wrote what was rendered so far ({}) to {}",
-                coverage(&done.output.samples),
+                coverage(done),
                 self.out.display()
             ))
             .into()),
             Some(StopReason::TimeUp) if !self.args.quiet => {
-                ember::errln!(
-                    "ember: time budget spent: wrote {}",
-                    coverage(&done.output.samples)
-                );
+                ember::errln!("ember: time budget spent: wrote {}", coverage(done));
                 Ok(())
             }
             _ => Ok(()),
@@ -403,6 +435,7 @@ impl RenderRun<'_> {
             pb.finish_and_clear();
             return Ok(Rendered {
                 output: self.framed(output),
+                frame,
                 passes: None,
                 stopped: stop.reason(),
             });
@@ -436,6 +469,7 @@ impl RenderRun<'_> {
         pb.finish_and_clear();
         Ok(Rendered {
             output: self.framed(film.output()),
+            frame,
             passes: Some(film.passes),
             stopped,
         })
@@ -469,39 +503,63 @@ impl RenderRun<'_> {
         meta
     }
 
-    /// The settings that matter, for the summary line: estimator, samples, -m, -l, seed, threads.
-    fn settings_summary(&self, done: &Rendered, threads: usize) -> String {
+    /// What was rendered and how, for the summary line: the resolution (and cell or
+    /// band), what a pixel shows, the samples of the pixels rendered, seed, threads, engine.
+    fn summary(&self, done: &Rendered, threads: usize) -> String {
         let s = self.settings;
-        let n = done.output.samples.len().max(1) as f64;
-        let mean = done.output.total_samples() as f64 / n;
+        let mean = done.output.total_samples() as f64 / done.frame.area().max(1) as f64;
         let spp = match (s.adaptive, done.stopped, done.passes) {
             (None, None, _) => format!("{} spp", mean.round()),
-            (Some(_), _, _) => format!("mean {mean:.1} spp (cap {}, -a)", s.spp),
+            (Some(_), _, _) => format!("mean {mean:.1} spp (at most {}, -a)", s.spp),
             (None, _, _) => format!("mean {mean:.1} spp"),
         };
+        let shows = match s.shading {
+            Shading::Radiance => format!(
+                "{} estimator, -m {}, -l {}",
+                ember::image_metadata::estimator_label(s, &self.job.scene),
+                s.max_depth,
+                s.light_samples
+            ),
+            other => format!("--shading {other}"),
+        };
         let engine = if s.uses_packets(self.job) {
-            format!("packets of 16 ({})", ember::simd::instruction_set())
+            format!("packets of 16 ({})", ember::lanes::instruction_set())
         } else {
             "one path at a time".into()
         };
         format!(
-            "{} estimator, {spp}, -m {}, -l {}, seed {}, {threads} threads, {engine}",
-            ember::image_metadata::estimator_label(s, &self.job.scene),
-            s.max_depth,
-            s.light_samples,
+            "{}, {shows}, {spp}, seed {}, {threads} threads, {engine}",
+            self.region(done.frame),
             s.seed
         )
     }
+
+    /// `480x360`, or the part of it rendered: `cell 17x11 at (5, 3) of 40x30`.
+    fn region(&self, frame: PixelRect) -> String {
+        let (w, h) = (self.job.camera.width, self.job.camera.height);
+        match (self.cell, &self.part) {
+            (Some(_), _) => {
+                let c = self.args.cell.as_deref().unwrap_or_default();
+                format!("cell {}x{} at ({}, {}) of {w}x{h}", c[2], c[3], c[0], c[1])
+            }
+            (None, Some(_)) if frame.area() < w as u64 * h as u64 => {
+                format!("rows {}..{} of {w}x{h}", frame.y0, frame.y1)
+            }
+            _ => format!("{w}x{h}"),
+        }
+    }
 }
 
-/// "N of M pixels, mean X spp": how much of the image a stopped render holds.
-fn coverage(samples: &[u32]) -> String {
+/// "N of M pixels, mean X spp": how much of the pixels asked for (the image, cell or
+/// band) a stopped render holds.
+fn coverage(done: &Rendered) -> String {
+    let samples = &done.output.samples;
     let rendered = samples.iter().filter(|&&s| s > 0).count();
     let total: u64 = samples.iter().map(|&s| s as u64).sum();
+    let asked = done.frame.area().max(1);
     format!(
-        "{rendered} of {} pixels, mean {:.2} spp",
-        samples.len(),
-        total as f64 / samples.len().max(1) as f64
+        "{rendered} of {asked} pixels, mean {:.2} spp",
+        total as f64 / asked as f64
     )
 }
 
@@ -571,11 +629,11 @@ fn write_text_file(path: &Path, text: &str) -> Result<()> {
 
 /// `ember info SCENE`: what the scene holds and the backends of this build.
 pub(super) fn info(path: &Path, w: u32, h: u32) -> Result<()> {
-    // An image prints the metadata it was written with.
+    // An image: what it holds, and the metadata it was written with.
     if ember::image_io::OutputFormat::from_path(path).is_ok() {
-        let meta = ember::image_io::read_metadata(path)?;
+        let text = ember::info::image_info(path)?;
         ember::outln!("{}", path.display())?;
-        ember::out!("{}", meta.to_text())?;
+        ember::out!("{text}")?;
         return Ok(());
     }
     check_resolution(w, h)?;
@@ -605,7 +663,7 @@ pub(super) fn info(path: &Path, w: u32, h: u32) -> Result<()> {
     match defaults.packet_blocker(&scene, &camera) {
         None => ember::outln!(
             "--engine auto (the default) runs packets of 16 paths ({})",
-            ember::simd::instruction_set()
+            ember::lanes::instruction_set()
         )?,
         Some(why) => ember::outln!("--engine auto (the default) runs one path at a time: {why}")?,
     }
@@ -613,6 +671,7 @@ pub(super) fn info(path: &Path, w: u32, h: u32) -> Result<()> {
 }
 
 fn load_scene(path: &Path) -> Result<Scene> {
+    check_scene_file(path)?;
     let scene = collada::load(path)?;
     for w in &scene.warnings {
         ember::errln!("ember: warning: {w}");
@@ -620,10 +679,8 @@ fn load_scene(path: &Path) -> Result<Scene> {
     Ok(scene)
 }
 
+/// The pool of `-t` threads (at least 1, as the flag's parser checks), all cores without it.
 pub(super) fn thread_pool(threads: Option<usize>) -> Result<rayon::ThreadPool> {
-    if threads == Some(0) {
-        bail!("-t: thread count must be at least 1");
-    }
     Ok(accel::tracing_pool(threads)?)
 }
 
@@ -658,9 +715,6 @@ fn rate_path(out: &Path) -> PathBuf {
 pub(super) fn export(a: ExportArgs) -> Result<()> {
     let (w, h) = (a.resolution[0], a.resolution[1]);
     check_resolution(w, h)?;
-    if a.spp == 0 {
-        bail!("-s must be at least 1");
-    }
     let mut scene = load_scene(&a.scene)?;
     apply_env_map(a.env_map.as_deref(), &mut scene)?;
     let camera = ember::camera::Camera::new(&scene.camera, &scene.bounds, w, h);
@@ -671,11 +725,14 @@ pub(super) fn export(a: ExportArgs) -> Result<()> {
         .file_stem()
         .map_or("scene".into(), |s| s.to_string_lossy().into_owned());
     let ExportFormat::Mitsuba = a.format;
-    let settings = ember::export::MitsubaSettings::for_ember(
-        a.spp,
-        a.max_depth,
-        &ember::integrators::Roulette::default(),
-    );
+    let settings = ember::export::MitsubaSettings {
+        sampler: a.sampler,
+        ..ember::export::MitsubaSettings::for_ember(
+            a.spp,
+            a.max_depth,
+            &ember::integrators::Roulette::default(),
+        )
+    };
     let summary = ember::export::write_mitsuba(&scene, &camera, &settings, &a.out, &stem)?;
     for w in &summary.warnings {
         ember::errln!("ember: warning: {w}");

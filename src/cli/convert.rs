@@ -1,8 +1,14 @@
 //! Flags into library settings: every check and translation of a flag's value lives here.
 
-use super::args::{LensArgs, RenderArgs};
+#[cfg(feature = "bench")]
+use super::args::{
+    BenchAccelArgs, BenchConvergeArgs, BenchRenderArgs, BenchStabilityArgs, ReportArgs,
+};
+use super::args::{CameraPlacement, LensArgs, RenderArgs};
 use anyhow::{bail, Context, Result};
 use ember::accel::Backend;
+#[cfg(feature = "bench")]
+use ember::bench;
 use ember::camera::course_file::CourseCameraFile;
 use ember::camera::Camera;
 use ember::integrators::{DirectStrategy, Estimator, Roulette};
@@ -60,15 +66,18 @@ pub(super) fn check_resolution(w: u32, h: u32) -> Result<()> {
 /// Flags that would do nothing, or something meaningless, in the chosen configuration.
 pub(super) fn check_flags(args: &RenderArgs) -> Result<()> {
     let embree = args.accel == Backend::Embree;
-    if embree && args.bvh.is_some() {
-        bail!("--bvh chooses the native BVH's builder; it does nothing with --accel embree");
+    if (embree || args.accel == Backend::None) && args.bvh.is_some() {
+        bail!(
+            "--bvh chooses the native BVH's builder; it does nothing with --accel {}",
+            args.accel
+        );
     }
     if args.embree_quality.is_some() && !Backend::Embree.available() {
         bail!(
             "--embree-quality: this build has no Embree backend (rebuild with --features embree)"
         );
     }
-    if args.embree_quality.is_some() && args.accel == Backend::Native {
+    if args.embree_quality.is_some() && matches!(args.accel, Backend::Native | Backend::None) {
         bail!("--embree-quality applies only with --accel embree or auto");
     }
     if embree && args.shading == Shading::BvhCost {
@@ -85,15 +94,34 @@ pub(super) fn check_flags(args: &RenderArgs) -> Result<()> {
     Ok(())
 }
 
-/// Flags that ember accepts but reads differently than written.
-pub(super) fn flag_warnings(args: &RenderArgs) -> Vec<String> {
+/// Flags that ember accepts but that do less than they seem to: `-l 0`, and `-a` whose
+/// first batch already reaches the `-s` cap (the course's semantics: -s is the most).
+pub(super) fn flag_warnings(args: &RenderArgs, settings: &RenderSettings) -> Vec<String> {
     let mut w = Vec::new();
     if args.light_samples == 0 {
         w.push("-l 0 takes one light sample per area light, as -l 1 does".to_string());
     }
+    if let Some(a) = settings.adaptive {
+        if args.spp.is_none() && args.time.is_none() {
+            w.push(format!(
+                "-a: -s is the most samples a pixel takes, and without -s that is 1, so every \
+                 pixel gets one sample and none stops early; give the cap, e.g. -s {}",
+                32 * a.batch
+            ));
+        } else if settings.spp <= a.batch {
+            w.push(format!(
+                "-a {}: the first batch already reaches -s {}, the most samples a pixel takes, \
+                 so no pixel stops early; raise -s, e.g. -s {}",
+                a.batch,
+                settings.spp,
+                32 * a.batch
+            ));
+        }
+    }
     w
 }
 
+/// `-a [BATCH [TOL]]`: by default 32 and 0.05.
 pub(super) fn parse_adaptive(a: &Option<Vec<String>>) -> Result<Option<Adaptive>> {
     let Some(v) = a else { return Ok(None) };
     let batch: u32 = match v.first() {
@@ -154,7 +182,6 @@ pub(super) fn estimator(args: &RenderArgs) -> Option<Estimator> {
 pub(super) fn settings_from(args: &RenderArgs) -> Result<RenderSettings> {
     // With --time and no -s, the clock decides how many samples a pixel gets.
     let spp = match (args.spp, args.time) {
-        (Some(0), _) => bail!("-s: samples per pixel must be at least 1"),
         (Some(s), _) => s,
         (None, Some(_)) => u32::MAX,
         (None, None) => 1,
@@ -184,6 +211,7 @@ pub(super) fn settings_from(args: &RenderArgs) -> Result<RenderSettings> {
         seed: args.seed,
         spp_offset: args.spp_offset.unwrap_or(0),
         engine: args.engine,
+        sampler: args.sampler,
     })
 }
 
@@ -230,6 +258,9 @@ pub(super) fn part_plan(
 }
 
 pub(super) fn output_path(args: &RenderArgs, scene: &Path) -> Result<PathBuf> {
+    if let Some(out) = &args.output {
+        check_image_destination("-f", out)?;
+    }
     let out = match &args.output {
         Some(p) => p.clone(),
         None => PathBuf::from(format!(
@@ -242,6 +273,49 @@ pub(super) fn output_path(args: &RenderArgs, scene: &Path) -> Result<PathBuf> {
     };
     ember::image_io::OutputFormat::from_path(&out)?;
     Ok(out)
+}
+
+/// An image is written to a file: `-` (standard output, for a text tool) is not one.
+pub(super) fn check_image_destination(what: &str, out: &Path) -> Result<()> {
+    if out == Path::new("-") {
+        bail!("{what} -: standard output is not an image destination; give a file name ending in .png or .exr");
+    }
+    Ok(())
+}
+
+/// File types people try first, whose own loaders ember does not have.
+const OTHER_SCENE_FORMATS: [&str; 12] = [
+    "obj", "ply", "stl", "off", "fbx", "gltf", "glb", "3ds", "blend", "usd", "usda", "usdz",
+];
+
+/// ember reads COLLADA: a file named or made otherwise (an OBJ, a PLY, anything that is
+/// not XML) is named as such, rather than reported as malformed XML by the loader.
+pub(super) fn check_scene_file(path: &Path) -> Result<()> {
+    let ext = (path.extension().and_then(|e| e.to_str()))
+        .map(str::to_ascii_lowercase)
+        .unwrap_or_default();
+    if OTHER_SCENE_FORMATS.contains(&ext.as_str()) {
+        bail!(
+            "{}: ember reads COLLADA (.dae) scenes, not .{ext} files; export the model as COLLADA (Blender: File > Export > Collada)",
+            path.display()
+        );
+    }
+    // The first bytes decide; a file that cannot be read is left to the loader's message.
+    let mut head = [0u8; 64];
+    let Ok(n) = std::fs::File::open(path).and_then(|mut f| std::io::Read::read(&mut f, &mut head))
+    else {
+        return Ok(());
+    };
+    let text = head[..n]
+        .strip_prefix(b"\xEF\xBB\xBF")
+        .unwrap_or(&head[..n]);
+    match text.iter().find(|b| !b.is_ascii_whitespace()) {
+        Some(b'<') | None => Ok(()),
+        Some(_) => bail!(
+            "{}: not a COLLADA (.dae) scene: the file is not XML; ember reads COLLADA scenes only",
+            path.display()
+        ),
+    }
 }
 
 /// `-a` takes up to two values, so `ember -a scene.dae` hands the scene to `-a`;
@@ -257,9 +331,118 @@ pub(super) fn adopt_scene_from_adaptive(args: &mut RenderArgs) {
     }
 }
 
+/// `ember bench render`'s flags as the benchmark's options.
 #[cfg(feature = "bench")]
-pub(super) fn threads_invalid(t: &[usize]) -> bool {
-    t.is_empty() || t.contains(&0)
+pub(super) fn bench_render_options(
+    a: BenchRenderArgs,
+) -> Result<bench::render::RenderBenchOptions> {
+    Ok(bench::render::RenderBenchOptions {
+        scenes: match a.scenes.is_empty() {
+            true => bench::render::RenderBenchOptions::default_scenes()?,
+            false => a.scenes,
+        },
+        spp: a.spp,
+        max_depth: a.max_depth,
+        repeat: a.repeats.max(1),
+        accels: bench::render::RenderBenchOptions::accels_for(a.accel, a.embree_steps),
+        engines: a.engines,
+    })
+}
+
+/// `ember bench accel`'s flags (without --scaling) as the benchmark's options.
+#[cfg(feature = "bench")]
+pub(super) fn bench_accel_options(a: BenchAccelArgs) -> Result<bench::accel::AccelBenchOptions> {
+    if a.threads.is_empty() || a.threads.contains(&0) {
+        bail!("--threads: each count must be at least 1");
+    }
+    let defaults = bench::accel::AccelBenchOptions::default();
+    Ok(bench::accel::AccelBenchOptions {
+        scenes: match a.scenes.is_empty() {
+            true => bench::accel::AccelBenchOptions::default_scenes()?,
+            false => a.scenes,
+        },
+        rays: a.rays,
+        threads: a.threads,
+        repeats: a.repeats.max(1),
+        embree_quality: a.quality,
+        embree_modes: !a.no_embree_modes,
+        ..defaults
+    })
+}
+
+/// `ember bench converge`'s flags as the benchmark's options.
+#[cfg(feature = "bench")]
+pub(super) fn bench_converge_options(
+    a: BenchConvergeArgs,
+) -> Result<bench::converge::ConvergeOptions> {
+    let (width, height) = (a.resolution[0], a.resolution[1]);
+    check_resolution(width, height)?;
+    Ok(bench::converge::ConvergeOptions {
+        scene: a.scene,
+        reference: a.reference,
+        reference_noise: a.reference_noise,
+        width,
+        height,
+        max_depth: a.max_depth,
+        max_spp: a.max_spp,
+        max_seconds_per_point: a.max_seconds,
+        reference_spp: a.reference_spp,
+        out_dir: a.out,
+        seed: a.seed,
+        compare_backends: true,
+        mitsuba: a.mitsuba.map(|python| bench::converge::MitsubaPeer {
+            python,
+            variants: a.mitsuba_variants,
+            samplers: a.mitsuba_samplers,
+        }),
+        cycles: a.cycles,
+    })
+}
+
+/// `ember bench stability`'s flags as the benchmark's options.
+#[cfg(feature = "bench")]
+pub(super) fn bench_stability_options(
+    a: &BenchStabilityArgs,
+) -> Result<bench::stability::StabilityOptions> {
+    if !(a.spp_scale.is_finite() && a.spp_scale > 0.0) {
+        bail!("--spp-scale must be a positive number");
+    }
+    Ok(bench::stability::StabilityOptions {
+        spp_scale: a.spp_scale,
+        seed: a.seed,
+    })
+}
+
+/// `ember report`'s flags as the report's options: the scenes are checked to be COLLADA
+/// files, and without --mitsuba a full report charts the Mitsuba that
+/// scripts/mitsuba-env installed, if any.
+#[cfg(feature = "bench")]
+pub(super) fn report_options(a: &ReportArgs) -> Result<ember::report::ReportOptions> {
+    for scene in &a.scenes {
+        check_scene_file(scene)?;
+        if !scene.is_file() {
+            bail!("{}: no such scene file", scene.display());
+        }
+    }
+    if a.out.is_file() {
+        bail!("--out {}: is a file, not a folder", a.out.display());
+    }
+    if let Some(python) = &a.mitsuba {
+        if !python.is_file() {
+            bail!(
+                "--mitsuba {}: no such file (scripts/mitsuba-env prints the Python to give)",
+                python.display()
+            );
+        }
+    }
+    let installed = || (!a.quick).then(ember::report::installed_mitsuba).flatten();
+    Ok(ember::report::ReportOptions {
+        out: a.out.clone(),
+        quick: a.quick,
+        scenes: a.scenes.clone(),
+        seed: a.seed,
+        mitsuba: a.mitsuba.clone().or_else(installed),
+    })
 }
 
 /// `-e FILE.exr`: the scene lit by that environment map instead of its ambient light.
@@ -270,6 +453,18 @@ pub(super) fn apply_env_map(env_map: Option<&Path>, scene: &mut ember::scene::Sc
     }
     Ok(())
 }
+/// The scene's camera with `--camera-placement` applied.
+fn placed(scene: &Scene, lens: &LensArgs) -> ember::scene::CameraDesc {
+    use ember::scene::Placement;
+    let mut desc = scene.camera;
+    match lens.camera_placement {
+        CameraPlacement::Auto => {}
+        CameraPlacement::Course => desc.placement = Placement::Course,
+        CameraPlacement::File => desc.placement = Placement::File,
+    }
+    desc
+}
+
 /// `-b` and `-d` on their own: a radius of at least 0, a positive distance.
 pub(super) fn check_lens(lens: &LensArgs) -> Result<()> {
     if let Some(b) = lens.lens_radius {
@@ -296,7 +491,7 @@ pub(super) fn camera(
     let (mut cam, warning) = match file {
         Some(f) => f.camera(width, height),
         None => (
-            Camera::new(&scene.camera, &scene.bounds, width, height),
+            Camera::new(&placed(scene, lens), &scene.bounds, width, height),
             None,
         ),
     };

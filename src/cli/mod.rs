@@ -8,6 +8,8 @@ mod bench;
 mod commands;
 mod convert;
 mod interrupt;
+#[cfg(feature = "bench")]
+mod report;
 
 pub use args::Cli;
 use args::Command;
@@ -18,7 +20,8 @@ const COURSE_FLAGS: &str = "s:l:t:m:o:e:h:H:f:r:c:b:d:a:p:";
 
 /// Parses the command line. Help and version go through [`ember::out!`], so a full
 /// disk is an error and a closed pipe is quiet; a course flag that ember does not
-/// have yet is named as such rather than as an unknown argument.
+/// have yet is named as such rather than as an unknown argument; any other error is
+/// one line, as every error of ember is.
 pub fn parse() -> Result<Cli, std::process::ExitCode> {
     use clap::error::{ContextKind, ContextValue, ErrorKind};
     use clap::Parser;
@@ -54,7 +57,54 @@ pub fn parse() -> Result<Cli, std::process::ExitCode> {
         }
         _ => {}
     }
-    e.exit()
+    if let Some(values) = extra_adaptive_values() {
+        ember::errln!(
+            "ember: error: -a takes at most two values, BATCH and TOL, but was given {}",
+            values.join(" ")
+        );
+        return Err(ExitCode::from(2));
+    }
+    ember::errln!("ember: error: {}", one_line(&e));
+    Err(ExitCode::from(e.exit_code().clamp(1, 255) as u8))
+}
+
+/// `-a 64 0.05 0.1 scene.dae`: clap gives `-a` two values and takes `0.1` for the scene
+/// and `scene.dae` for a subcommand. Parsed again with `-a` taking every value up to
+/// the next flag (and the last, if not a number, as the scene), its values if more than two.
+fn extra_adaptive_values() -> Option<Vec<String>> {
+    use clap::CommandFactory;
+    let cmd = Cli::command().mut_arg("adaptive", |a| a.num_args(0..));
+    let matches = cmd.try_get_matches().ok()?;
+    let mut values: Vec<String> = matches.get_many::<String>("adaptive")?.cloned().collect();
+    let scene_given = matches.get_one::<std::path::PathBuf>("scene").is_some();
+    if !scene_given && values.last().is_some_and(|v| v.parse::<f64>().is_err()) {
+        values.pop();
+    }
+    (values.len() > 2).then_some(values)
+}
+
+/// Clap's error (message, tips, usage, each on its own lines) as one line: the message,
+/// its tips, and the usage of the command it concerns.
+fn one_line(e: &clap::Error) -> String {
+    let text = e.render().to_string();
+    let lines: Vec<&str> = text.lines().map(str::trim).collect();
+    let message = lines
+        .iter()
+        .take_while(|l| !l.is_empty())
+        .map(|l| l.trim_start_matches("error: "))
+        .collect::<Vec<_>>()
+        .join(" ");
+    let mut parts = vec![message];
+    // Not the tip to pass a flag-like word as a scene path ("use '-- --frobnicate'").
+    let tips = lines.iter().filter_map(|l| l.strip_prefix("tip: "));
+    parts.extend(
+        tips.filter(|t| !t.contains("'-- "))
+            .map(|t| format!("tip: {t}")),
+    );
+    parts.extend(
+        (lines.iter().filter_map(|l| l.strip_prefix("Usage: "))).map(|u| format!("usage: {u}")),
+    );
+    parts.join("; ")
 }
 
 pub fn run(cli: Cli) -> anyhow::Result<()> {
@@ -62,14 +112,16 @@ pub fn run(cli: Cli) -> anyhow::Result<()> {
         ember::data::set_root(dir);
     }
     match cli.command {
-        Some(Command::Info { scene, resolution }) => {
-            commands::info(&scene, resolution[0], resolution[1])
+        Some(Command::Info { path, resolution }) => {
+            commands::info(&path, resolution[0], resolution[1])
         }
         Some(Command::Export(args)) => commands::export(args),
         Some(Command::Merge { out, parts }) => commands::merge(&out, &parts),
         Some(Command::Camera(args)) => commands::camera(args),
         #[cfg(feature = "bench")]
         Some(Command::Bench { which }) => bench::run(which),
+        #[cfg(feature = "bench")]
+        Some(Command::Report(args)) => report::run(args),
         None => commands::render(cli.render),
     }
 }

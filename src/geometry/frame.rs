@@ -1,32 +1,50 @@
 //! Orthonormal frames: BSDFs work in a local frame whose +z is the shading normal.
 
+use crate::lanes::{Real, V3};
 use glam::Vec3;
 
 #[derive(Clone, Copy, Debug)]
-pub struct Frame {
-    pub s: Vec3,
-    pub t: Vec3,
-    pub n: Vec3,
+pub struct Frame<F = f32> {
+    pub s: V3<F>,
+    pub t: V3<F>,
+    pub n: V3<F>,
 }
 
-impl Frame {
+impl<F: Real> Frame<F> {
     /// Frame around unit `n` (Duff et al. 2017, branchless and continuous almost everywhere).
-    pub fn from_normal(n: Vec3) -> Self {
-        let sign = 1.0f32.copysign(n.z);
-        let a = -1.0 / (sign + n.z);
+    #[inline(always)]
+    pub fn around(n: V3<F>) -> Self {
+        let one = n.z.splat_as(1.0);
+        let sign = one.copysign(n.z);
+        let a = n.z.splat_as(-1.0) / (sign + n.z);
         let b = n.x * n.y * a;
-        let s = Vec3::new(1.0 + sign * n.x * n.x * a, sign * b, -sign * n.x);
-        let t = Vec3::new(b, sign + n.y * n.y * a, -n.y);
+        let s = V3::new(one + sign * n.x * n.x * a, sign * b, -sign * n.x);
+        let t = V3::new(b, sign + n.y * n.y * a, -n.y);
         Frame { s, t, n }
     }
 
-    #[inline]
-    pub fn to_local(&self, v: Vec3) -> Vec3 {
-        Vec3::new(v.dot(self.s), v.dot(self.t), v.dot(self.n))
+    #[inline(always)]
+    pub fn local(&self, v: V3<F>) -> V3<F> {
+        V3::new(v.dot(self.s), v.dot(self.t), v.dot(self.n))
     }
 
-    #[inline]
+    #[inline(always)]
+    pub fn world(&self, v: V3<F>) -> V3<F> {
+        self.s * v.x + self.t * v.y + self.n * v.z
+    }
+}
+
+impl Frame {
+    /// [`Frame::around`] for one path.
+    pub fn from_normal(n: Vec3) -> Self {
+        Frame::around(n.into())
+    }
+
+    pub fn to_local(&self, v: Vec3) -> Vec3 {
+        self.local(v.into()).vec3()
+    }
+
     pub fn to_world(&self, v: Vec3) -> Vec3 {
-        v.x * self.s + v.y * self.t + v.z * self.n
+        self.world(v.into()).vec3()
     }
 }

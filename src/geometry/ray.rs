@@ -1,5 +1,6 @@
 //! Rays with a parametric interval, and spawning of rays from surfaces.
 
+use crate::lanes::{Real, UInt, V3};
 use glam::Vec3;
 
 /// A ray `o + t·d` restricted to `t ∈ [t_min, t_max]`. `d` need not be unit length
@@ -57,43 +58,65 @@ impl Ray {
 /// Rays leaving a surface should also skip its primitive: spawn them with
 /// `SurfaceInteraction::spawn_ray` / `spawn_segment`, which do both.
 pub fn offset_ray_origin(p: Vec3, p_error: Vec3, ng: Vec3, w: Vec3) -> Vec3 {
+    offset_origin(p.into(), p_error.into(), ng.into(), w.into()).vec3()
+}
+
+/// [`offset_ray_origin`] per lane.
+#[inline(always)]
+pub fn offset_origin<F: Real>(p: V3<F>, p_error: V3<F>, ng: V3<F>, w: V3<F>) -> V3<F> {
+    let zero = p.x.splat_as(0.0);
     let d = ng.abs().dot(p_error);
-    let mut offset = d * ng;
-    if w.dot(ng) < 0.0 {
-        offset = -offset;
-    }
-    let mut po = p + offset;
+    let offset = ng * d;
+    let offset = V3::select(w.dot(ng).lt(zero), -offset, offset);
+    let po = p + offset;
     // Round away from p so the offset survives the addition's own rounding.
-    for i in 0..3 {
-        if offset[i] > 0.0 {
-            po[i] = next_float_up(po[i]);
-        } else if offset[i] < 0.0 {
-            po[i] = next_float_down(po[i]);
-        }
-    }
-    po
+    V3::new(
+        round_away(po.x, offset.x),
+        round_away(po.y, offset.y),
+        round_away(po.z, offset.z),
+    )
+}
+
+/// `v` moved one float in the direction of `offset`'s sign (unchanged where it is 0).
+#[inline(always)]
+fn round_away<F: Real>(v: F, offset: F) -> F {
+    let zero = v.splat_as(0.0);
+    let up = F::select(offset.gt(zero), next_up(v), v);
+    F::select(offset.lt(zero), next_down(v), up)
 }
 
 /// Smallest float greater than `v`.
 pub fn next_float_up(v: f32) -> f32 {
-    if v.is_infinite() && v > 0.0 {
-        return v;
-    }
-    let v = if v == -0.0 { 0.0 } else { v };
-    let bits = v.to_bits();
-    let bits = if v >= 0.0 { bits + 1 } else { bits - 1 };
-    f32::from_bits(bits)
+    next_up(v)
 }
 
 /// Largest float smaller than `v`.
 pub fn next_float_down(v: f32) -> f32 {
-    if v.is_infinite() && v < 0.0 {
-        return v;
-    }
-    let v = if v == 0.0 { -0.0 } else { v };
-    let bits = v.to_bits();
-    let bits = if v > 0.0 { bits - 1 } else { bits + 1 };
-    f32::from_bits(bits)
+    next_down(v)
+}
+
+/// [`next_float_up`] per lane.
+#[inline(always)]
+pub fn next_up<F: Real>(v: F) -> F {
+    let zero = v.splat_as(0.0);
+    let v0 = F::select(v.eq(zero), zero, v);
+    let bits = v0.to_bits();
+    let up = bits.wrapping_add(bits.splat_as(1)).as_f32_bits();
+    let down = bits.wrapping_add(bits.splat_as(u32::MAX)).as_f32_bits();
+    let r = F::select(v0.ge(zero), up, down);
+    F::select(v.eq(v.splat_as(f32::INFINITY)), v, r)
+}
+
+/// [`next_float_down`] per lane.
+#[inline(always)]
+pub fn next_down<F: Real>(v: F) -> F {
+    let zero = v.splat_as(0.0);
+    let v0 = F::select(v.eq(zero), v.splat_as(-0.0), v);
+    let bits = v0.to_bits();
+    let up = bits.wrapping_add(bits.splat_as(1)).as_f32_bits();
+    let down = bits.wrapping_add(bits.splat_as(u32::MAX)).as_f32_bits();
+    let r = F::select(v0.gt(zero), down, up);
+    F::select(v.eq(v.splat_as(f32::NEG_INFINITY)), v, r)
 }
 
 /// `γ(n) = nε/(1−nε)`, the classic bound on the relative error of `n` float operations.

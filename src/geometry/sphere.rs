@@ -13,7 +13,7 @@
 
 use super::ray::gamma;
 use super::Ray;
-use crate::simd::{F32s, LaneBits, Mask, Simd, Vec3s};
+use crate::lanes::{F32s, LaneBits, Mask, Simd, Vec3s};
 use glam::Vec3;
 
 /// Whether a sphere can ever be hit.
@@ -227,7 +227,7 @@ mod tests {
     /// and far from the origin, where the plain test's on-surface band is too narrow.
     #[test]
     fn rays_leaving_the_surface_reach_only_the_far_side() {
-        let mut rng = crate::sampling::Sampler::from_seed(3);
+        let mut rng = crate::sampling::Rng::from_seed(3);
         for (centre, radius) in [(Vec3::ZERO, 1.0), (Vec3::splat(1e4), 0.5)] {
             for _ in 0..20000 {
                 let n = crate::sampling::uniform_sphere(rng.next_2d());
@@ -260,7 +260,7 @@ mod tests {
     /// reach its far side.
     #[test]
     fn spawn_origins_are_within_a_few_ulps_and_on_the_rays_side() {
-        let mut rng = crate::sampling::Sampler::from_seed(5);
+        let mut rng = crate::sampling::Rng::from_seed(5);
         for (centre, radius) in [(Vec3::new(0.3, -0.2, 0.1), 0.4), (Vec3::splat(1e5), 0.35)] {
             let ulp = |v: f32| super::super::ray::next_float_up(v.abs()) - v.abs();
             for _ in 0..20000 {
@@ -300,9 +300,8 @@ mod tests {
     /// which tests/bvh_brute_force.rs checks.)
     #[test]
     fn rays_from_unoffset_surface_points() {
-        let mut rng = crate::sampling::Sampler::from_seed(9);
-        let dir =
-            |rng: &mut crate::sampling::Sampler| crate::sampling::uniform_sphere(rng.next_2d());
+        let mut rng = crate::sampling::Rng::from_seed(9);
+        let dir = |rng: &mut crate::sampling::Rng| crate::sampling::uniform_sphere(rng.next_2d());
         let spheres = [
             (Vec3::ZERO, 1.0),
             (Vec3::new(1.0, -0.5, 0.25), 2.0),

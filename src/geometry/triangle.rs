@@ -13,7 +13,7 @@
 //! [`PackedTriangle`] so that one SIMD lane handles one corner.
 
 use super::Ray;
-use crate::simd::{F32s, LaneBits, Mask, Simd, Vec3s};
+use crate::lanes::{F32s, LaneBits, Mask, Simd, Vec3s};
 use glam::{Vec3, Vec4, Vec4Swizzles};
 
 /// A triangle hit: parametric distance and barycentrics of corners 1 and 2.
@@ -609,7 +609,7 @@ mod tests {
 #[cfg(test)]
 mod simd_tests {
     use super::*;
-    use crate::sampling::Sampler;
+    use crate::sampling::Rng;
 
     /// Every lane of the four-wide test equals the scalar test, bit for bit.
     fn check(tris: &[[Vec3; 3]; 4], ray: &Ray) {
@@ -631,7 +631,7 @@ mod simd_tests {
 
     #[test]
     fn four_wide_test_matches_scalar_on_random_and_adversarial_rays() {
-        let mut rng = Sampler::from_seed(9);
+        let mut rng = Rng::from_seed(9);
         let mut f = move || rng.next_f32();
         let mut hits = 0;
         for _ in 0..5000 {

@@ -11,46 +11,47 @@
 //! (a mirror or glass vertex cannot be connected to a pinhole), and emissive
 //! surfaces that are not lights (nothing starts a path there).
 //!
-//! Determinism: a render is `spp·W·H` light paths cut into chunks of `CHUNK_PATHS`,
-//! each with its own random stream; each chunk records its splats, and the splats
-//! are added to the film in chunk order, so the image depends on the seed only.
+//! Determinism: a render is `spp·W·H` light paths, numbered; each chunk of
+//! `CHUNK_PATHS` draws its numbers as one stratified set, and the render driver adds
+//! the splats chunk by chunk in order, so the image depends on the seed only.
 
-use super::{PathSettings, Roulette};
+use super::{PathIntegrator, PathSettings, SampleIntegrator, Splat, SplatIntegrator};
 use crate::accel::Accel;
 use crate::camera::Camera;
 use crate::color::is_finite;
-use crate::film::Image;
 use crate::geometry::{Frame, Ray};
+use crate::lanes::One;
 use crate::lights::Light;
-use crate::materials::{specular, Material};
-use crate::render::{PixelRect, RenderJob, RenderOutput, RenderSettings, Shading, StopToken};
-use crate::sampling::Sampler;
+use crate::materials::Material;
+use crate::render::Engine;
+use crate::sampling::{pixel_key, SampleStream};
 use crate::scene::{Scene, SurfaceInteraction};
 use crate::Color;
 use glam::{Vec2, Vec3};
-use rayon::prelude::*;
 
-/// Light paths per chunk (one random stream each).
-const CHUNK_PATHS: u64 = 4096;
-/// Chunks traced in parallel before their splats are added (bounds memory).
-const CHUNKS_PER_GROUP: u64 = 64;
-/// Sampler pass ids, distinct from the path tracer's pixel streams.
-const LIGHT_PASS: u64 = 0x4C54_0001;
-const CAMERA_PASS: u64 = 0x4C54_0002;
+/// Light paths per chunk: each chunk's paths are one stratified set (the chunk plays
+/// the part of a pixel), and a render's splats are added chunk by chunk, in order.
+pub const CHUNK_PATHS: u64 = 4096;
+
+/// The dimension pairs of a light path: the light's choice, the point on it and the
+/// direction leaving it, then per bounce the lens point, the BSDF direction and the
+/// lobe choice with roulette.
+const CHOICE_PAIR: u32 = 0;
+const POSITION_PAIR: u32 = 1;
+const DIRECTION_PAIR: u32 = 2;
+const PAIRS_PER_BOUNCE: u32 = 3;
 
 pub struct LightTracer<'a> {
     scene: &'a Scene,
     accel: &'a dyn Accel,
     camera: &'a Camera,
-    max_depth: u32,
-    accumulate: bool,
-    roulette: Roulette,
+    s: PathSettings,
+    seed: u64,
     /// Cumulative light-selection probabilities, proportional to emitted power.
     light_cdf: Vec<f32>,
+    /// Emitters seen directly (0-bounce paths), which only camera rays can find.
+    direct: Option<PathIntegrator<'a>>,
 }
-
-/// One splat: pixel column, row and value (before division by paths per pixel).
-type Splat = (u32, u32, Color);
 
 impl<'a> LightTracer<'a> {
     pub fn new(
@@ -58,6 +59,8 @@ impl<'a> LightTracer<'a> {
         accel: &'a dyn Accel,
         camera: &'a Camera,
         s: PathSettings,
+        engine: Engine,
+        seed: u64,
     ) -> Self {
         let radius = 0.5 * scene.bounds.diagonal().length();
         let radius = if radius.is_finite() { radius } else { 1.0 };
@@ -75,23 +78,31 @@ impl<'a> LightTracer<'a> {
                 }
             })
             .collect();
+        let zero_bounces = PathSettings {
+            max_depth: 0,
+            accumulate: true,
+            ..s
+        };
+        let counts_zero = s.accumulate || s.max_depth == 0;
+        let direct = (counts_zero && has_visible_emitters(scene))
+            .then(|| PathIntegrator::new(scene, accel, camera, zero_bounces, engine, seed));
         LightTracer {
             scene,
             accel,
             camera,
-            max_depth: s.max_depth,
-            accumulate: s.accumulate,
-            roulette: s.roulette,
+            s,
+            seed,
             light_cdf,
+            direct,
         }
     }
 
     #[inline]
     fn counts(&self, bounces: u32) -> bool {
-        if self.accumulate {
-            bounces <= self.max_depth
+        if self.s.accumulate {
+            bounces <= self.s.max_depth
         } else {
-            bounces == self.max_depth
+            bounces == self.s.max_depth
         }
     }
 
@@ -105,12 +116,15 @@ impl<'a> LightTracer<'a> {
 
     /// Traces one light path, pushing its camera connections to `splats`. Returns the
     /// number of non-finite contributions dropped.
-    pub fn trace(&self, sampler: &mut Sampler, splats: &mut Vec<Splat>) -> u32 {
-        let u_light = sampler.next_f32();
-        let (u_pos, u_dir) = (sampler.next_2d(), sampler.next_2d());
-        let Some((li, p_light)) = self.pick_light(u_light) else {
+    fn trace(&self, stream: &SampleStream<One>, splats: &mut Vec<Splat>) -> u32 {
+        let get = |pair: u32| {
+            let (x, y) = stream.get_2d(pair);
+            Vec2::new(x, y)
+        };
+        let Some((li, p_light)) = self.pick_light(get(CHOICE_PAIR).x) else {
             return 0;
         };
+        let (u_pos, u_dir) = (get(POSITION_PAIR), get(DIRECTION_PAIR));
         let Some(es) = self.scene.lights[li].sample_le(&self.scene.bounds, u_pos, u_dir) else {
             return 0;
         };
@@ -129,27 +143,25 @@ impl<'a> LightTracer<'a> {
             if let Some(from) = from {
                 si = self.scene.on_line(&si, from, ray.d.normalize());
             }
-            let material = &self.scene.materials[si.material as usize];
-            if material.is_black() || bounces >= self.max_depth {
+            let material = &self.scene.material_at(&si);
+            if !material.scatters() || bounces >= self.s.max_depth {
                 break;
             }
             bounces += 1;
+            let base = DIRECTION_PAIR + 1 + (bounces - 1) * PAIRS_PER_BOUNCE;
             let w_light = -ray.d.normalize();
             let frame = Frame::from_normal(si.ns);
             if !material.is_delta() && self.counts(bounces) {
-                // A lens point only with a lens, so pinhole renders keep their random numbers.
-                let u_lens = match self.camera.lens.is_pinhole() {
-                    true => Vec2::ZERO,
-                    false => sampler.next_2d(),
-                };
+                let u_lens = get(base);
                 let vertex = (&si, &frame, material);
                 nonfinite += self.connect_to_camera(vertex, u_lens, w_light, beta, splats);
             }
-            if bounces >= self.max_depth {
+            if bounces >= self.s.max_depth {
                 break;
             }
             let wl = frame.to_local(w_light);
-            let Some(bs) = material.sample(wl, sampler.next_f32(), sampler.next_2d()) else {
+            let u_lobe = get(base + 2);
+            let Some(bs) = material.sample(wl, u_lobe.x, get(base + 1)) else {
                 break;
             };
             let w_next = frame.to_world(bs.wi);
@@ -158,9 +170,10 @@ impl<'a> LightTracer<'a> {
                 break;
             }
             beta *= bs.weight * adjoint_factor(material, &si, wl, bs.wi, w_light, w_next);
-            let Some(q) = self.roulette.play(bounces, beta / beta0, sampler) else {
+            let q = self.s.roulette.continue_prob(bounces, beta / beta0);
+            if q < 1.0 && u_lobe.y >= q {
                 break;
-            };
+            }
             beta /= q;
             if !is_finite(beta) || beta == Color::ZERO {
                 break;
@@ -208,23 +221,30 @@ impl<'a> LightTracer<'a> {
         splats.push((c.x, c.y, value));
         0
     }
+}
 
-    /// Mean emitted radiance seen directly through pixel `(x, y)` (0-bounce paths).
-    fn seen_directly(&self, x: u32, y: u32, spp: u32, sampler: &mut Sampler) -> Color {
-        let mut sum = Color::ZERO;
-        for _ in 0..spp {
-            let ray = self.camera.sample_ray(x, y, sampler);
-            sum += match self.accel.intersect(&ray) {
-                Some(h) => {
-                    let si = self.scene.interaction(&ray, &h);
-                    self.scene.emission(&si, -ray.d.normalize())
-                }
-                None => self.scene.lights.iter().map(|l| l.le_escaped(ray.d)).sum(),
+impl SplatIntegrator for LightTracer<'_> {
+    fn trace_paths(&self, first: u64, count: u64, splats: &mut Vec<Splat>) -> u32 {
+        let mut nonfinite = 0;
+        for path in first..first + count {
+            let chunk = path / CHUNK_PATHS;
+            let stream = SampleStream::<One> {
+                kind: self.s.sampler,
+                key: pixel_key(self.seed ^ LIGHT_PATHS, chunk),
+                index: (path % CHUNK_PATHS) as u32,
             };
+            nonfinite += self.trace(&stream, splats);
         }
-        sum / spp as f32
+        nonfinite
+    }
+
+    fn camera_part(&self) -> Option<&dyn SampleIntegrator> {
+        self.direct.as_ref().map(|p| p as &dyn SampleIntegrator)
     }
 }
+
+/// Mixed into the seed of light paths, so they do not share the pixels' streams.
+const LIGHT_PATHS: u64 = 0x4C54_0001;
 
 /// `|wl·ns|/|wl·ng|`: the shading-normal factor of the adjoint BSDF (0 when grazing).
 fn shading_correction(si: &SurfaceInteraction, wl_local: Vec3, w_light: Vec3) -> f32 {
@@ -252,14 +272,8 @@ fn adjoint_factor(
     if ns_next.is_nan() || ns_next <= 0.0 {
         return 0.0;
     }
-    let mut k = shading_correction(si, wl, w_light) * w_next.dot(si.ng).abs() / ns_next;
-    let transmitted = wl.z * w_next_local.z < 0.0;
-    if let (true, Material::Glass { ior, .. } | Material::Refraction { ior, .. }) = (transmitted, m)
-    {
-        let (eta_i, eta_t) = specular::indices(wl, *ior);
-        k *= (eta_t / eta_i) * (eta_t / eta_i);
-    }
-    k
+    let k = shading_correction(si, wl, w_light) * w_next.dot(si.ng).abs() / ns_next;
+    k / m.radiance_scale(wl, w_next_local)
 }
 
 /// The side of the geometric surface must agree with the shading frame's choice of
@@ -276,35 +290,27 @@ fn geometrically_consistent(si: &SurfaceInteraction, a: Vec3, b: Vec3, reflect: 
 
 /// Emitters a camera ray can see directly (they need the camera pass).
 fn has_visible_emitters(scene: &Scene) -> bool {
-    scene.lights.iter().any(|l| !l.is_delta())
-        || scene.has_unsampled_emitters()
-        || scene
-            .materials
-            .iter()
-            .any(|m| matches!(m, Material::Emission { .. }))
+    scene.lights.iter().any(|l| !l.is_delta()) || scene.materials.iter().any(|m| m.emits())
 }
 
-/// What light tracing cannot show in `scene`, said out loud (for settings that use it).
-pub fn warnings(scene: &Scene, s: &RenderSettings) -> Vec<String> {
+/// What light tracing to depth `max_depth` cannot show in `scene`, said out loud.
+pub fn warnings(scene: &Scene, max_depth: u32) -> Vec<String> {
     let mut w = Vec::new();
-    if s.shading != Shading::Radiance {
-        return w;
-    }
-    if s.max_depth > 0 && scene.materials.iter().any(|m| m.is_delta()) {
+    if max_depth > 0 && scene.materials.iter().any(|m| m.is_delta()) {
         w.push(
             "light tracing cannot connect mirror or glass surfaces to the pinhole camera: \
              they look black except for light they transmit from behind; use path tracing"
                 .into(),
         );
     }
-    if s.max_depth > 0 && scene.has_unsampled_emitters() {
+    if max_depth > 0 && scene.has_unsampled_emitters() {
         w.push(
             "light tracing starts paths on lights only: light that emissive surfaces \
              (not lights) cast on the scene is missing; use path tracing"
                 .into(),
         );
     }
-    if s.max_depth > 0
+    if max_depth > 0
         && scene
             .lights
             .iter()
@@ -316,98 +322,5 @@ pub fn warnings(scene: &Scene, s: &RenderSettings) -> Vec<String> {
                 .into(),
         );
     }
-    if s.adaptive.is_some() {
-        w.push("adaptive sampling (-a) does not apply to light tracing: ignored".into());
-    }
     w
-}
-
-/// Renders pixels `rect` of `job` with light tracing: `spp·W·H` light paths over the
-/// whole image (a light path lands anywhere), of which the splats inside `rect` are
-/// kept, plus the 0-bounce image from the camera when the scene has emitters a camera
-/// can see. A rectangle is therefore exactly the crop of the full image, at the cost
-/// of tracing every path (one full frame's work per rectangle).
-pub fn render(
-    job: &RenderJob,
-    settings: &RenderSettings,
-    rect: PixelRect,
-    progress: &(dyn Fn(u64) + Sync),
-    stop: &StopToken,
-) -> RenderOutput {
-    let (scene, camera) = (&job.scene, &job.camera);
-    let npix = camera.width as u64 * camera.height as u64;
-    let spp = settings.spp.max(1);
-    let tracer = LightTracer::new(
-        scene,
-        job.accel.as_ref(),
-        camera,
-        settings.path_settings(scene),
-    );
-    let total = spp as u64 * npix;
-    let chunks = total.div_ceil(CHUNK_PATHS);
-    let (rw, rh) = (rect.width(), rect.height());
-    let mut sum = vec![Color::ZERO; rect.area() as usize];
-    let mut nonfinite = 0u64;
-    let done = |c: u64| c * rect.area() / chunks.max(1);
-    let mut group = 0;
-    while group < chunks && !stop.should_stop() {
-        let end = (group + CHUNKS_PER_GROUP).min(chunks);
-        let results: Vec<(Vec<Splat>, u32)> = (group..end)
-            .into_par_iter()
-            .map(|c| {
-                let mut sampler = Sampler::new(settings.seed, c, LIGHT_PASS);
-                let mut splats = Vec::new();
-                let mut bad = 0;
-                for _ in 0..CHUNK_PATHS.min(total - c * CHUNK_PATHS) {
-                    bad += tracer.trace(&mut sampler, &mut splats);
-                }
-                progress(done(c + 1) - done(c));
-                (splats, bad)
-            })
-            .collect();
-        for (splats, bad) in results {
-            nonfinite += bad as u64;
-            for (x, y, v) in splats {
-                if (rect.x0..rect.x1).contains(&x) && (rect.y0..rect.y1).contains(&y) {
-                    sum[((y - rect.y0) * rw + (x - rect.x0)) as usize] += v;
-                }
-            }
-        }
-        group = end;
-    }
-    // A stopped render divides by the paths it traced (`spp · pixels` when complete),
-    // and sees emitters directly with as many camera samples.
-    let traced = (group * CHUNK_PATHS).min(total);
-    let per_pixel = traced as f64 / npix as f64;
-    let spp = per_pixel.ceil() as u32;
-    let mut image = Image::new(rw, rh);
-    for (p, s) in image.pixels.iter_mut().zip(&sum) {
-        *p = if traced == 0 {
-            Color::ZERO
-        } else {
-            *s / per_pixel as f32
-        };
-    }
-    if spp > 0 && tracer.counts(0) && has_visible_emitters(scene) {
-        let direct: Vec<Color> = (0..rect.area())
-            .into_par_iter()
-            .map(|i| {
-                let (x, y) = (
-                    rect.x0 + (i % rw as u64) as u32,
-                    rect.y0 + (i / rw as u64) as u32,
-                );
-                let pixel = y as u64 * camera.width as u64 + x as u64;
-                let mut sampler = Sampler::new(settings.seed, pixel, CAMERA_PASS);
-                tracer.seen_directly(x, y, spp, &mut sampler)
-            })
-            .collect();
-        for (p, d) in image.pixels.iter_mut().zip(direct) {
-            *p += d;
-        }
-    }
-    RenderOutput {
-        image,
-        samples: vec![spp; rect.area() as usize],
-        nonfinite_samples: nonfinite,
-    }
 }

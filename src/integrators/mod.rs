@@ -1,16 +1,93 @@
-//! Light transport. One path tracer serves every CS184 mode (`-m 0` emitted
-//! light, `-m 1` direct lighting, `-m N` global illumination), with the
-//! direct-lighting strategy chosen by the user; debug views live in `debug`.
+//! Light transport, behind two interfaces the render driver calls
+//! (`crate::render` owns the pixel loop; nothing here imports it):
+//!
+//! - [`SampleIntegrator`]: estimates the radiance of pixel samples (pbrt-v4's
+//!   `RayIntegrator`, Mitsuba's `SamplingIntegrator`): the path tracer (`path`, every
+//!   CS184 mode: `-m 0` emitted light, `-m 1` direct lighting, `-m N` global
+//!   illumination, with the chosen direct-lighting strategy) and the debug views
+//!   (`debug`);
+//! - [`SplatIntegrator`]: traces paths from the lights and splats them into the
+//!   pixels that see them (Mitsuba's `AdjointIntegrator`): the light tracer.
+//!
+//! Both are written over the BSDFs and lights' one implementation.
 
 pub mod debug;
 pub mod light_tracing;
-pub mod packet;
 pub mod path;
 
-pub use path::{PathIntegrator, PathSettings};
+pub use light_tracing::LightTracer;
+pub use path::PathIntegrator;
 
+use crate::lanes::{Lanes, Real};
 use crate::names::{display_from_table, Named};
-use crate::sampling::Sampler;
+use crate::sampling::SamplerKind;
+use crate::Color;
+
+/// Samples `first .. first + count` of pixel `(x, y)` (column from the left, row
+/// from the top).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct PixelSamples {
+    pub x: u32,
+    pub y: u32,
+    pub first: u32,
+    pub count: u32,
+}
+
+/// What one pixel sample gives.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct SampleValue {
+    pub radiance: Color,
+    /// Whether the sample's camera ray met a surface.
+    pub met_surface: bool,
+}
+
+/// An integrator that estimates the radiance of each pixel sample.
+pub trait SampleIntegrator: Sync {
+    /// Renders the samples of `blocks`, starting them in order and a block only while
+    /// `stop` says no; `done(i, values)` receives block `i`'s values in sample order once
+    /// all are done. Blocks never started are not reported.
+    fn render_blocks(
+        &self,
+        blocks: &[PixelSamples],
+        stop: &(dyn Fn() -> bool + Sync),
+        done: &mut dyn FnMut(usize, &[SampleValue]),
+    );
+}
+
+/// One splat: pixel column, row and value (before division by paths per pixel).
+pub type Splat = (u32, u32, Color);
+
+/// An integrator that traces paths from the lights and splats them into pixels.
+pub trait SplatIntegrator: Sync {
+    /// Traces light paths `first .. first + count` of a render, pushing their splats;
+    /// returns how many non-finite contributions were dropped.
+    fn trace_paths(&self, first: u64, count: u64, splats: &mut Vec<Splat>) -> u32;
+    /// The pixel-sample integrator for what only camera rays can see (0-bounce paths:
+    /// emitters seen directly), when the scene has any.
+    fn camera_part(&self) -> Option<&dyn SampleIntegrator>;
+}
+
+/// The parameters of spec §7 that shape a path estimator.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct PathSettings {
+    pub max_depth: u32,
+    pub accumulate: bool,
+    pub light_samples: u32,
+    pub strategy: DirectStrategy,
+    pub roulette: Roulette,
+    pub sampler: SamplerKind,
+}
+
+/// Veach's power heuristic (β = 2) for `nf` samples of pdf `f` against `ng` of pdf `g`.
+#[inline(always)]
+pub fn power_heuristic<F: Real>(nf: F, f_pdf: F, ng: F, g_pdf: F) -> F {
+    let (zero, one) = (nf.splat_as(0.0), nf.splat_as(1.0));
+    let f = nf * f_pdf;
+    let g = ng * g_pdf;
+    let d = f * f + g * g;
+    let w = F::select(d.gt(zero), f * f / d, zero);
+    F::select(f.abs().eq(nf.splat_as(f32::INFINITY)), one, w)
+}
 
 /// How light arriving directly from emitters is estimated at each scattering vertex.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -102,10 +179,12 @@ impl Estimator {
     /// present, which light tracing cannot show (see `light_tracing`).
     pub fn auto_for(scene: &crate::scene::Scene) -> Estimator {
         let point_lights_only = !scene.lights.is_empty()
-            && scene
-                .lights
-                .iter()
-                .all(|l| matches!(l, crate::lights::Light::Point { .. }));
+            && scene.lights.iter().all(|l| {
+                matches!(
+                    l,
+                    crate::lights::Light::Point { .. } | crate::lights::Light::Spot(_)
+                )
+            });
         let specular = scene.materials.iter().any(|m| m.is_delta());
         if point_lights_only && !specular && !scene.has_unsampled_emitters() {
             Estimator::LightTracing
@@ -150,25 +229,31 @@ impl Roulette {
     }
 
     /// Continuation probability after `bounces` scattering events with throughput `beta`.
-    pub fn continue_prob(&self, bounces: u32, beta: crate::Color) -> f32 {
-        match *self {
-            Roulette::Off => 1.0,
-            Roulette::Throughput { start, min_prob } if bounces >= start => {
-                beta.max_element().clamp(min_prob, 1.0)
-            }
-            Roulette::Fixed { start, prob } if bounces >= start => prob.clamp(1e-6, 1.0),
-            _ => 1.0,
-        }
+    pub fn continue_prob(&self, bounces: u32, beta: Color) -> f32 {
+        let playing = crate::lanes::One.all();
+        self.continue_prob_l(crate::lanes::One, bounces as f32, playing, beta.into())
     }
 
-    /// Plays roulette for a path with throughput `beta` (relative to its start):
-    /// `None` ends the path; `Some(q)` is the survival probability to divide the
-    /// throughput by (1 when no roulette is played, and then nothing is drawn).
-    pub fn play(&self, bounces: u32, beta: crate::Color, sampler: &mut Sampler) -> Option<f32> {
-        let q = self.continue_prob(bounces, beta);
-        if q < 1.0 && sampler.next_f32() >= q {
-            return None;
-        }
-        Some(q)
+    /// [`continue_prob`](Self::continue_prob) per lane: 1 where the lane is not in
+    /// `lanes` (`bounces` are small integers, exact as floats).
+    #[inline(always)]
+    pub fn continue_prob_l<L: crate::lanes::Lanes>(
+        &self,
+        l: L,
+        bounces: L::F,
+        lanes: crate::lanes::LaneBits,
+        beta: crate::lanes::V3<L::F>,
+    ) -> L::F {
+        use crate::lanes::{clamp, LaneMask};
+        let one = l.f(1.0);
+        let (start, q) = match *self {
+            Roulette::Off => return one,
+            Roulette::Throughput { start, min_prob } => {
+                (start, clamp(beta.max_element(), l.f(min_prob), one))
+            }
+            Roulette::Fixed { start, prob } => (start, l.f(prob.clamp(1e-6, 1.0))),
+        };
+        let playing = bounces.ge(l.f(start as f32)).bits() & lanes;
+        L::F::select(l.mask(playing), q, one)
     }
 }

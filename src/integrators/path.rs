@@ -1,381 +1,937 @@
-//! The unidirectional path tracer of spec §7.
+//! The unidirectional path tracer of spec §7, written once over the lane type: one
+//! path at a time (`One`) or sixteen, one per SIMD lane, each lane performing exactly
+//! the operations a path alone performs, on the same numbers, so an image does not
+//! depend on which ran it.
 //!
 //! A path with `k` scattering events ("bounces") contributes when `k ≤ m`
-//! (accumulation on) or `k = m` (off). Emission found by a ray leaving vertex
-//! `x_k` and light sampled at `x_k` both belong to paths of `k` bounces.
+//! (accumulation on) or `k = m` (off). Emission found by a ray leaving vertex `x_k`
+//! and light sampled at `x_k` both belong to paths of `k` bounces.
+//!
+//! Lanes are refilled as paths end (a camera ray that escapes at once frees its lane
+//! for the next sample), taking the samples of the blocks in order; a block's values
+//! are handed back, in sample order, once all are done. Lanes whose materials differ
+//! run each kind present (`BsdfLanes`), masked.
 
-use super::{DirectStrategy, Roulette};
+use super::{
+    power_heuristic, DirectStrategy, PathSettings, PixelSamples, SampleIntegrator, SampleValue,
+};
 use crate::accel::Accel;
-use crate::color::is_finite;
-use crate::geometry::{Frame, Ray};
+use crate::camera::Camera;
+use crate::geometry::{Frame, NO_PRIM};
+use crate::lanes::rays::{HitPacket, RayPacket};
+use crate::lanes::{
+    dispatch, each_lane, per_lane, per_lane_v3, LaneBits, LaneMask, Lanes, One, Real, Simd,
+    SimdTask, UInt, LANES, V3,
+};
 use crate::lights::Light;
-use crate::materials::Material;
-use crate::sampling::{power_heuristic, uniform_hemisphere, uniform_hemisphere_pdf, Sampler};
-use crate::scene::{PrimHit, Scene, SurfaceInteraction, NO_LIGHT};
+use crate::materials::BsdfLanes;
+use crate::render::Engine;
+use crate::sampling::warps::{uniform_hemisphere_l, uniform_hemisphere_pdf};
+use crate::sampling::{pixel_key, SampleStream, FIRST_PATH_PAIR};
+use crate::scene::{Hits, Scene, NO_LIGHT};
 use crate::Color;
-use glam::Vec3;
+use glam::{Vec2, Vec3};
 
 /// Shadow rays stop this fraction short of the sampled light point, so the light's own
 /// surface does not occlude it; relative, so it works at every scene scale.
 pub(super) const SHADOW_EPSILON: f32 = 1e-4;
 
-/// The parameters of spec §7 that shape the estimator.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct PathSettings {
-    pub max_depth: u32,
-    pub accumulate: bool,
-    pub light_samples: u32,
-    pub strategy: DirectStrategy,
-    pub roulette: Roulette,
-}
-
+/// The path tracer over one scene, camera and set of settings.
 pub struct PathIntegrator<'a> {
     scene: &'a Scene,
     accel: &'a dyn Accel,
-    max_depth: u32,
-    accumulate: bool,
-    light_samples: u32,
-    strategy: DirectStrategy,
-    roulette: Roulette,
+    camera: &'a Camera,
+    s: PathSettings,
+    engine: Engine,
+    seed: u64,
+    /// Samples per vertex of each light (one for delta lights).
+    light_samples: Vec<u32>,
+    layout: DimLayout,
     unsampled_emitters: bool,
+    /// The triangles of area lights' surfaces, and their light.
+    light_prims: Vec<(u32, u32)>,
+    /// Per material: whether it scatters light at all.
+    scatters: Vec<bool>,
 }
 
-/// State of the vertex a ray just left, needed to weight emission it finds.
-#[derive(Clone, Copy)]
-struct PrevVertex {
-    p: Vec3,
-    bsdf_pdf: f32,
-    delta: bool,
+/// Which dimension pair each number of a path comes from: the pixel position, the
+/// lens, then per bounce its BSDF direction, its lobe choice with roulette, and its
+/// light samples (or hemisphere directions), so every number a path draws has a
+/// pair of its own, whatever the path does.
+#[derive(Clone, Copy, Debug)]
+struct DimLayout {
+    per_bounce: u32,
 }
+
+/// Offsets within a bounce's pairs.
+const BSDF_PAIR: u32 = 0;
+const LOBE_PAIR: u32 = 1;
+const LIGHT_PAIRS: u32 = 2;
 
 impl<'a> PathIntegrator<'a> {
-    pub fn new(scene: &'a Scene, accel: &'a dyn Accel, s: PathSettings) -> Self {
+    pub fn new(
+        scene: &'a Scene,
+        accel: &'a dyn Accel,
+        camera: &'a Camera,
+        s: PathSettings,
+        engine: Engine,
+        seed: u64,
+    ) -> Self {
+        let n = s.light_samples.max(1);
+        let light_samples: Vec<u32> = scene
+            .lights
+            .iter()
+            .map(|l| if l.is_delta() { 1 } else { n })
+            .collect();
+        let direct_pairs = match s.strategy {
+            DirectStrategy::Hemisphere => n,
+            DirectStrategy::Light | DirectStrategy::Mis => light_samples.iter().sum(),
+            DirectStrategy::Bsdf => 0,
+        };
         PathIntegrator {
             scene,
             accel,
-            max_depth: s.max_depth,
-            accumulate: s.accumulate,
-            light_samples: s.light_samples.max(1),
-            strategy: s.strategy,
-            roulette: s.roulette,
+            camera,
+            engine,
+            seed,
+            light_samples,
+            layout: DimLayout {
+                per_bounce: LIGHT_PAIRS + direct_pairs,
+            },
             unsampled_emitters: scene.has_unsampled_emitters(),
+            scatters: scene.materials.iter().map(|m| m.scatters()).collect(),
+            light_prims: (0..scene.triangles.len() as u32)
+                .map(|i| (i, scene.triangles[i as usize].light))
+                .filter(|&(_, light)| light != NO_LIGHT)
+                .collect(),
+            s: PathSettings {
+                light_samples: n,
+                ..s
+            },
         }
-    }
-
-    #[inline]
-    fn counts(&self, bounces: u32) -> bool {
-        if self.accumulate {
-            bounces <= self.max_depth
-        } else {
-            bounces == self.max_depth
-        }
-    }
-
-    /// Radiance arriving along the camera ray `ray`.
-    pub fn li(&self, mut ray: Ray, sampler: &mut Sampler) -> Color {
-        let mut l = Color::ZERO;
-        let mut beta = Color::ONE;
-        let mut prev: Option<PrevVertex> = None; // None: the camera
-        let mut bounces = 0u32;
-        loop {
-            let hit = self.accel.intersect(&ray);
-            // The unit direction, once: emission, the line test and `wo` all use it.
-            let w = ray.d.normalize();
-            if let Some(v) = prev {
-                if let Some(le) = self.area_light_on_line(v, &ray, w, hit.as_ref()) {
-                    if self.counts(bounces) {
-                        l += beta * le;
-                    }
-                    break;
-                }
-            }
-            let Some(hit) = hit else {
-                if self.counts(bounces) {
-                    l += beta * self.escaped(w, prev);
-                }
-                break;
-            };
-            let mut si = self.scene.interaction(&ray, &hit);
-            if let Some(v) = prev {
-                si = self.scene.on_line(&si, v.p, w);
-            }
-            let wo_world = -w;
-            let material = &self.scene.materials[si.material as usize];
-            if self.counts(bounces) {
-                l += beta * self.emitted(&si, wo_world, prev);
-            }
-            if bounces >= self.max_depth || material.is_black() {
-                break;
-            }
-            bounces += 1;
-            let frame = Frame::from_normal(si.ns);
-            let wo = frame.to_local(wo_world);
-            if !material.is_delta() && self.counts(bounces) {
-                l += beta * self.direct(&si, &frame, material, wo, sampler);
-            }
-            let Some(bs) = material.sample(wo, sampler.next_f32(), sampler.next_2d()) else {
-                break;
-            };
-            if bounces >= self.max_depth && !bs.delta && !self.bsdf_rays_find_light() {
-                // The ray could only find emission that this strategy gives weight 0.
-                break;
-            }
-            let wi_world = frame.to_world(bs.wi);
-            if !geometrically_consistent(&si, wo_world, wi_world, bs.wi.z * wo.z > 0.0) {
-                break;
-            }
-            beta *= bs.weight;
-            let Some(q) = self.roulette.play(bounces, beta, sampler) else {
-                break;
-            };
-            beta /= q;
-            if !is_finite(beta) || beta == Color::ZERO {
-                break;
-            }
-            prev = Some(PrevVertex {
-                p: si.p,
-                bsdf_pdf: bs.pdf,
-                delta: bs.delta,
-            });
-            ray = si.spawn_ray(wi_world);
-        }
-        l
     }
 
     /// Whether a BSDF-sampled ray leaving a non-delta vertex can add light: with MIS,
     /// or when the scene has emitters that light sampling cannot pick.
     fn bsdf_rays_find_light(&self) -> bool {
-        match self.strategy {
+        match self.s.strategy {
             DirectStrategy::Mis | DirectStrategy::Bsdf => true,
             DirectStrategy::Hemisphere => false,
             DirectStrategy::Light => self.unsampled_emitters,
         }
     }
+}
 
-    /// MIS weight of emission found by a BSDF-sampled ray leaving `prev`. `light` is
-    /// the light it belongs to (None for emissive surfaces that light sampling cannot pick).
-    fn bsdf_hit_weight(&self, prev: Option<PrevVertex>, light: Option<&Light>, dir: Vec3) -> f32 {
-        match prev {
-            None => 1.0,
-            Some(v) if v.delta => 1.0,
-            Some(v) => match (self.strategy, light) {
-                // The hemisphere estimator already counted every emitter the direction finds.
-                (DirectStrategy::Hemisphere, _) => 0.0,
-                // Nothing else estimates direct light: the BSDF-sampled ray counts in full.
-                (DirectStrategy::Bsdf, _) => 1.0,
-                (_, None) => 1.0,
-                (DirectStrategy::Light, Some(_)) => 0.0,
-                (DirectStrategy::Mis, Some(l)) => power_heuristic(
-                    1.0,
-                    v.bsdf_pdf,
-                    self.light_samples as f32,
-                    l.pdf_li(v.p, dir),
-                ),
+impl PathIntegrator<'_> {
+    /// The radiance arriving at `o` from direction `−d` (unit `d`), estimated by the
+    /// one path of sample `index` of the stream keyed `key`: the pixel sample's path
+    /// with the camera ray replaced by `(o, d)`.
+    pub fn radiance_along(&self, o: Vec3, d: Vec3, key: u32, index: u32) -> Color {
+        let mut out = Color::ZERO;
+        let block = [PixelSamples {
+            x: 0,
+            y: 0,
+            first: index,
+            count: 1,
+        }];
+        let mut kernel = Kernel::new(One, self, &block, &|| false);
+        kernel.first_ray = Some((o, d, key));
+        kernel.run(&mut |_, v| out = v[0].radiance);
+        out
+    }
+}
+
+impl SampleIntegrator for PathIntegrator<'_> {
+    fn render_blocks(
+        &self,
+        blocks: &[PixelSamples],
+        stop: &(dyn Fn() -> bool + Sync),
+        done: &mut dyn FnMut(usize, &[SampleValue]),
+    ) {
+        let task = BlocksTask {
+            it: self,
+            blocks,
+            stop,
+            done,
+        };
+        match self.engine {
+            Engine::Scalar => task.run_lanes(One),
+            Engine::Auto | Engine::Packet => dispatch(task),
+        }
+    }
+}
+
+struct BlocksTask<'t, 'a> {
+    it: &'t PathIntegrator<'a>,
+    blocks: &'t [PixelSamples],
+    stop: &'t (dyn Fn() -> bool + Sync),
+    done: &'t mut dyn FnMut(usize, &[SampleValue]),
+}
+
+impl BlocksTask<'_, '_> {
+    #[inline(always)]
+    fn run_lanes<L: Lanes>(self, l: L) {
+        Kernel::new(l, self.it, self.blocks, self.stop).run(self.done);
+    }
+}
+
+impl SimdTask for BlocksTask<'_, '_> {
+    type Output = ();
+    #[inline(always)]
+    fn run<S: Simd>(self, s: S) {
+        self.run_lanes(s)
+    }
+}
+
+/// Where blocks' finished samples wait until a block is complete.
+struct Slots {
+    /// Block of each slot (`usize::MAX`: free), its pixel's key, how many samples are
+    /// done, its values.
+    block: [usize; SLOTS],
+    key: [u32; SLOTS],
+    done: [u32; SLOTS],
+    values: Vec<SampleValue>,
+    stride: usize,
+}
+
+/// Blocks in flight at once: lanes may run ahead of a long path by this many blocks.
+const SLOTS: usize = 8;
+
+/// Per lane: a path's state between bounces.
+struct Kernel<'k, 'a, L: Lanes> {
+    l: L,
+    it: &'k PathIntegrator<'a>,
+    blocks: &'k [PixelSamples],
+    stop: &'k (dyn Fn() -> bool + Sync),
+    /// Lanes holding a live path.
+    live: LaneBits,
+    /// Slot and sample (within its block) of each lane.
+    slot: [u32; LANES],
+    sample: [u32; LANES],
+    stream: SampleStream<L>,
+    rays: RayPacket,
+    beta: V3<L::F>,
+    radiance: V3<L::F>,
+    /// Scattering events so far (small integers, exact as floats).
+    bounces: L::F,
+    /// The first dimension pair of the current bounce.
+    pair_base: L::U,
+    /// Lanes whose ray left a surface vertex (else the camera), that vertex, the BSDF
+    /// pdf of the ray's direction there, and whether it was a delta lobe.
+    has_prev: LaneBits,
+    prev_p: V3<L::F>,
+    prev_pdf: L::F,
+    prev_delta: LaneBits,
+    /// Lanes whose camera ray met a surface.
+    met_surface: LaneBits,
+    slots: Slots,
+    /// Next sample to start, as (block, sample).
+    next: (usize, u32),
+    stopped: bool,
+    /// A ray (and stream key) to start paths with instead of the camera's.
+    first_ray: Option<(Vec3, Vec3, u32)>,
+}
+
+impl<'k, 'a, L: Lanes> Kernel<'k, 'a, L> {
+    #[inline(always)]
+    fn new(
+        l: L,
+        it: &'k PathIntegrator<'a>,
+        blocks: &'k [PixelSamples],
+        stop: &'k (dyn Fn() -> bool + Sync),
+    ) -> Self {
+        let zero = V3::splat(l, Vec3::ZERO);
+        let stride = blocks.iter().map(|b| b.count).max().unwrap_or(0) as usize;
+        Kernel {
+            l,
+            it,
+            blocks,
+            stop,
+            live: 0,
+            slot: [0; LANES],
+            sample: [0; LANES],
+            stream: SampleStream {
+                kind: it.s.sampler,
+                key: l.u(0),
+                index: l.u(0),
             },
+            rays: RayPacket::default(),
+            beta: zero,
+            radiance: zero,
+            bounces: l.f(0.0),
+            pair_base: l.u(0),
+            has_prev: 0,
+            prev_p: zero,
+            prev_pdf: l.f(0.0),
+            prev_delta: 0,
+            met_surface: 0,
+            slots: Slots {
+                block: [usize::MAX; SLOTS],
+                key: [0; SLOTS],
+                done: [0; SLOTS],
+                values: vec![SampleValue::default(); SLOTS * stride],
+                stride,
+            },
+            next: (0, 0),
+            stopped: false,
+            first_ray: None,
         }
     }
 
-    /// The area light that the line from `v`'s surface point along `ray`'s direction
-    /// meets before what `ray` hit, and its MIS-weighted emission.
+    #[inline(always)]
+    fn run(mut self, done: &mut dyn FnMut(usize, &[SampleValue])) {
+        let mut hits = HitPacket::default();
+        loop {
+            self.refill();
+            if self.live == 0 {
+                break;
+            }
+            trace(self.l, self.it.accel, &self.rays, self.live, &mut hits);
+            let ended = self.bounce(&hits);
+            self.finish(ended, done);
+        }
+    }
+
+    // ---- lane helpers ----
+
+    #[inline(always)]
+    fn f(&self, x: f32) -> L::F {
+        self.l.f(x)
+    }
+
+    #[inline(always)]
+    fn mask(&self, bits: LaneBits) -> L::M {
+        self.l.mask(bits)
+    }
+
+    /// The 2D point of pair `offset` of the current bounce.
+    #[inline(always)]
+    fn bounce_2d(&self, offset: u32) -> (L::F, L::F) {
+        self.stream.get_2d(
+            self.pair_base
+                .wrapping_add(self.l.u(offset + FIRST_PATH_PAIR)),
+        )
+    }
+
+    /// Lanes of `lanes` where light found after `bounces` scattering events counts.
+    #[inline(always)]
+    fn counts(&self, lanes: LaneBits) -> LaneBits {
+        let max = self.f(self.it.s.max_depth as f32);
+        let ok = if self.it.s.accumulate {
+            self.bounces.le(max)
+        } else {
+            self.bounces.eq(max)
+        };
+        ok.bits() & lanes
+    }
+
+    /// Lanes of `lanes` at the depth cap.
+    #[inline(always)]
+    fn at_depth_cap(&self, lanes: LaneBits) -> LaneBits {
+        self.bounces.ge(self.f(self.it.s.max_depth as f32)).bits() & lanes
+    }
+
+    /// `L += beta · c` in lanes `m`.
+    #[inline(always)]
+    fn add_radiance(&mut self, m: LaneBits, c: V3<L::F>) {
+        if m != 0 {
+            let sum = self.radiance + self.beta * c;
+            self.radiance = V3::select(self.mask(m), sum, self.radiance);
+        }
+    }
+
+    /// Starts the next samples in the free lanes: their streams and camera rays.
+    #[inline(always)]
+    fn refill(&mut self) {
+        let l = self.l;
+        let (fresh, key, index, xy) = self.assign_samples();
+        if fresh == 0 {
+            return;
+        }
+        let m = self.mask(fresh);
+        let stream = SampleStream {
+            kind: self.it.s.sampler,
+            key: l.u_from(key),
+            index: l.u_from(index),
+        };
+        self.stream = SampleStream::select(m, stream, self.stream);
+        let pixel = (l.f_from(xy[0]), l.f_from(xy[1]));
+        let (o, d) = match self.first_ray {
+            Some((o, d, _)) => (V3::splat(l, o), V3::splat(l, d)),
+            None => self.it.camera.sample_rays(l, pixel, &self.stream),
+        };
+        self.set_rays(fresh, o, d, self.f(f32::INFINITY), l.u(NO_PRIM));
+        let zero = V3::splat(l, Vec3::ZERO);
+        self.beta = V3::select(m, V3::splat(l, Vec3::ONE), self.beta);
+        self.radiance = V3::select(m, zero, self.radiance);
+        self.bounces = L::F::select(m, self.f(0.0), self.bounces);
+        self.pair_base = L::U::select(m, l.u(0), self.pair_base);
+        self.has_prev &= !fresh;
+        self.prev_delta &= !fresh;
+        self.met_surface &= !fresh;
+        self.live |= fresh;
+    }
+
+    /// Gives the free lanes the next samples, in order: the lanes started, and per
+    /// lane its pixel's key, the sample's index and the pixel's `(x, y)`.
+    #[allow(clippy::type_complexity)]
+    #[inline(always)]
+    fn assign_samples(&mut self) -> (LaneBits, [u32; LANES], [u32; LANES], [[f32; LANES]; 2]) {
+        let width = self.it.camera.width as u64;
+        let all = self.l.all();
+        let mut fresh: LaneBits = 0;
+        let mut key = [0u32; LANES];
+        let mut index = [0u32; LANES];
+        let mut xy = [[0.0f32; LANES]; 2];
+        while (self.live | fresh) != all && !self.stopped {
+            let (b, sample) = self.next;
+            let Some(block) = self.blocks.get(b) else {
+                break;
+            };
+            let slot = b % SLOTS;
+            if sample == 0 {
+                // A new block needs a free slot, and leave to start.
+                if self.slots.block[slot] != usize::MAX {
+                    break;
+                }
+                if (self.stop)() {
+                    self.stopped = true;
+                    break;
+                }
+                self.slots.block[slot] = b;
+                self.slots.key[slot] = match self.first_ray {
+                    Some((_, _, k)) => k,
+                    None => pixel_key(self.it.seed, block.y as u64 * width + block.x as u64),
+                };
+                self.slots.done[slot] = 0;
+            }
+            let i = (!(self.live | fresh)).trailing_zeros() as usize;
+            key[i] = self.slots.key[slot];
+            index[i] = block.first + sample;
+            (xy[0][i], xy[1][i]) = (block.x as f32, block.y as f32);
+            self.slot[i] = slot as u32;
+            self.sample[i] = sample;
+            fresh |= 1 << i;
+            self.next = if sample + 1 < block.count {
+                (b, sample + 1)
+            } else {
+                (b + 1, 0)
+            };
+        }
+        (fresh, key, index, xy)
+    }
+
+    /// Records the values of the lanes in `ended` and frees them; blocks whose
+    /// samples are all done are handed to `done`.
+    #[inline(always)]
+    fn finish(&mut self, ended: LaneBits, done: &mut dyn FnMut(usize, &[SampleValue])) {
+        if ended == 0 {
+            return;
+        }
+        let l = self.radiance.to_arrays();
+        let stride = self.slots.stride;
+        for i in each_lane(ended) {
+            let (slot, sample) = (self.slot[i] as usize, self.sample[i] as usize);
+            self.slots.values[slot * stride + sample] = SampleValue {
+                radiance: Color::new(l[0][i], l[1][i], l[2][i]),
+                met_surface: self.met_surface >> i & 1 != 0,
+            };
+            self.slots.done[slot] += 1;
+            let b = self.slots.block[slot];
+            let count = self.blocks[b].count as usize;
+            if self.slots.done[slot] as usize == count {
+                done(b, &self.slots.values[slot * stride..slot * stride + count]);
+                self.slots.block[slot] = usize::MAX;
+            }
+        }
+        self.live &= !ended;
+    }
+
+    /// Rays `o + t·d`, `t ≤ t_max`, skipping `skip`, in lanes `lanes`.
+    #[inline(always)]
+    fn set_rays(&mut self, lanes: LaneBits, o: V3<L::F>, d: V3<L::F>, t_max: L::F, skip: L::U) {
+        let (l, m) = (self.l, self.mask(lanes));
+        let rays = &mut self.rays;
+        rays.o = V3::select(m, o, V3::from_arrays(l, &rays.o)).to_arrays();
+        rays.d = V3::select(m, d, V3::from_arrays(l, &rays.d)).to_arrays();
+        rays.t_max = L::F::select(m, t_max, l.f_from(rays.t_max)).to_array();
+        rays.skip = L::U::select(m, skip, l.u_from(rays.skip)).to_array();
+    }
+
+    /// One bounce of every live lane, from its traced ray's `hits` (the body of the
+    /// path loop): the lanes whose path ended.
+    #[inline(always)]
+    fn bounce(&mut self, hits: &HitPacket) -> LaneBits {
+        let l = self.l;
+        let live = self.live;
+        let o = V3::from_arrays(l, &self.rays.o);
+        let d = V3::from_arrays(l, &self.rays.d);
+        // The unit direction, once: emission, the line test and `wo` all use it.
+        let w = d.normalize();
+        let hit_lanes = !l.u_from(hits.prim).eq(l.u(NO_PRIM)).bits() & live;
+        self.met_surface |= hit_lanes & !self.has_prev;
+        let mut ended = 0;
+        // Area lights the sampled line meets before the hit end the path there.
+        let with_prev = live & self.has_prev;
+        if with_prev != 0 {
+            ended |= self.area_light_on_line(with_prev, hits, hit_lanes, o, d, w);
+        }
+        let escaped = live & !hit_lanes & !ended;
+        if escaped != 0 {
+            self.escaped(escaped, w);
+            ended |= escaped;
+        }
+        let lanes = live & !ended;
+        if lanes == 0 {
+            return ended;
+        }
+        let scene = self.it.scene;
+        let mut hit = scene.hits(l, lanes, o, d, hits);
+        let from_prev = lanes & self.has_prev;
+        if from_prev != 0 {
+            hit = hit.on_line(l, from_prev, self.prev_p, w);
+        }
+        let seen = self.counts(lanes);
+        if seen != 0 {
+            self.emitted(seen, &hit, w);
+        }
+        // Paths end at the depth cap and on surfaces that scatter nothing.
+        let dark = each_lane(lanes)
+            .filter(|&i| !self.it.scatters[hit.material[i] as usize])
+            .fold(0, |m, i| m | 1 << i);
+        let stop = self.at_depth_cap(lanes) | dark;
+        ended |= stop;
+        let lanes = lanes & !stop;
+        if lanes == 0 {
+            return ended;
+        }
+        let uv = (hit.uv.0.to_array(), hit.uv.1.to_array());
+        let bsdf = BsdfLanes::gather(l, lanes, |i| {
+            scene.bsdf_at(hit.material[i], Vec2::new(uv.0[i], uv.1[i]))
+        });
+        let m = self.mask(lanes);
+        self.bounces = L::F::select(m, self.bounces + self.f(1.0), self.bounces);
+        let next_base = self.pair_base.wrapping_add(l.u(self.it.layout.per_bounce));
+        // The first bounce's pairs start at the base; later ones move it on.
+        let moved = m & self.bounces.gt(self.f(1.0));
+        self.pair_base = L::U::select(moved, next_base, self.pair_base);
+        let frame = Frame::around(hit.ns);
+        let wo_world = -w;
+        let wo = frame.local(wo_world);
+        let direct = self.counts(lanes) & !bsdf.delta;
+        if direct != 0 {
+            self.direct(direct, &hit, &bsdf, &frame, wo);
+        }
+        ended |= self.scatter(lanes, &hit, &bsdf, &frame, wo, wo_world);
+        ended
+    }
+
+    /// The MIS weight of emission found by a BSDF-sampled ray in lanes `lanes`, from
+    /// their previous vertex, of a light whose pdf there is `light_pdf` (`None`: an
+    /// emissive surface that light sampling cannot pick).
+    #[inline(always)]
+    fn hit_weight(&self, lanes: LaneBits, light_pdf: Option<L::F>) -> L::F {
+        let (zero, one) = (self.f(0.0), self.f(1.0));
+        let w = match (self.it.s.strategy, light_pdf) {
+            // The hemisphere estimator already counted every emitter the direction finds.
+            (DirectStrategy::Hemisphere, _) => zero,
+            // Nothing else estimates direct light: the BSDF-sampled ray counts in full.
+            (DirectStrategy::Bsdf, _) | (_, None) => one,
+            (DirectStrategy::Light, Some(_)) => zero,
+            (DirectStrategy::Mis, Some(pdf)) => power_heuristic(
+                one,
+                self.prev_pdf,
+                self.f(self.it.s.light_samples as f32),
+                pdf,
+            ),
+        };
+        // From the camera or a delta vertex, nothing else could have found it.
+        let full = !self.has_prev | self.prev_delta;
+        L::F::select(self.mask(full & lanes), one, w)
+    }
+
+    /// For the lanes in `lanes` (all with a previous vertex): the area light that the
+    /// line from the previous vertex along `w` meets before what the ray hit, and its
+    /// MIS-weighted emission; those lanes end there (lights do not reflect).
     ///
-    /// `ray` starts off the surface by the point's rounding error (`offset_ray_origin`:
-    /// a few ulps of the coordinates, 1e-3…4e-3 at 1e4), on a line parallel to the
-    /// sampled one and that much closer to what it finds: seen from there an area light
-    /// covers more directions (a floor 2 below a light gains 2·δ/2: 0.4 % for δ = 4e-3;
-    /// stability case 5), and with MIS those extra directions get the full BSDF weight,
-    /// because the light's pdf from `v.p` is 0 there. So which light the sampled line
-    /// reaches is decided analytically from `v.p`, relative to each light (`AreaLight::
-    /// intersect`); the traced ray only says what lies in front of it. The path ends at
-    /// the light, as it would on its surface (lights do not reflect).
-    ///
-    /// `w` is `ray.d` normalised.
+    /// The traced ray starts off the surface by the point's rounding error
+    /// (`offset_ray_origin`), on a line parallel to the sampled one and that much
+    /// closer to what it finds: seen from there an area light covers more directions
+    /// (a floor 2 below a light gains 2·δ/2: 0.4 % for δ = 4e-3; stability case 5),
+    /// and with MIS those extra directions would get the full BSDF weight, because the
+    /// light's pdf from the vertex is 0 there. So which light the sampled line reaches
+    /// is decided analytically from the vertex, relative to each light
+    /// (`AreaLight::intersect`); the traced ray only says what lies in front of it.
+    #[inline(always)]
     fn area_light_on_line(
-        &self,
-        v: PrevVertex,
-        ray: &Ray,
-        w: Vec3,
-        hit: Option<&PrimHit>,
-    ) -> Option<Color> {
-        // How far along the line from v.p the traced ray's hit lies (∞ for a miss).
-        let t_hit = hit.map_or(f32::INFINITY, |h| (ray.at(h.t) - v.p).dot(w));
-        // Primitives past the triangles are spheres, never lights.
-        let hit_light = hit
-            .and_then(|h| self.scene.triangles.get(h.prim as usize))
-            .map_or(NO_LIGHT, |t| t.light);
-        let mut best: Option<(f32, &Light)> = None;
-        for (i, light) in self.scene.lights.iter().enumerate() {
-            let Some(t) = light.intersect_area(v.p, w) else {
+        &mut self,
+        lanes: LaneBits,
+        hits: &HitPacket,
+        hit_lanes: LaneBits,
+        o: V3<L::F>,
+        d: V3<L::F>,
+        w: V3<L::F>,
+    ) -> LaneBits {
+        let l = self.l;
+        let prev = self.prev_p;
+        let at = o + d * l.f_from(hits.t);
+        let t_hit = L::F::select(
+            self.mask(hit_lanes),
+            (at - prev).dot(w),
+            self.f(f32::INFINITY),
+        );
+        // The light whose surface each lane hit, from the lights' primitive ids (no
+        // scene lookup: the triangle records are not in cache yet).
+        let prims = l.u_from(hits.prim);
+        let mut hit_light = l.u(NO_LIGHT);
+        for &(prim, light) in &self.it.light_prims {
+            let on = prims.eq(l.u(prim)) & self.mask(hit_lanes);
+            hit_light = L::U::select(on, l.u(light), hit_light);
+        }
+        let mut best_t = self.f(f32::INFINITY);
+        let mut best: LaneBits = 0;
+        let mut best_light = l.u(0);
+        for (k, light) in self.it.scene.lights.iter().enumerate() {
+            let Light::Area(area) = light else {
                 continue;
             };
-            // The light the ray hit counts wherever the line meets it (they differ by the offset).
-            if (t < t_hit || i as u32 == hit_light) && best.is_none_or(|(b, _)| t < b) {
-                best = Some((t, light));
-            }
+            let (met, t_light) = area.intersect_l(l, prev, w);
+            // The light the ray hit counts wherever the line meets it (they differ by
+            // the offset).
+            let own = hit_light.eq(l.u(k as u32));
+            let nearer = t_light.lt(t_hit) | own;
+            let better = self.mask(!best) | t_light.lt(best_t);
+            let take = (met & nearer & better).bits() & lanes;
+            let m = self.mask(take);
+            best_t = L::F::select(m, t_light, best_t);
+            best_light = L::U::select(m, l.u(k as u32), best_light);
+            best |= take;
         }
-        let (_, light) = best?;
-        let le = light.as_area()?.radiance;
-        Some(le * self.bsdf_hit_weight(Some(v), Some(light), w))
+        let counted = self.counts(best);
+        if counted != 0 {
+            let lights = &self.it.scene.lights;
+            let ids = best_light.to_array();
+            let area = |i: usize| lights[ids[i] as usize].as_area().expect("an area light");
+            let le = per_lane_v3(w.x, |i| area(i).radiance);
+            let (p, d) = (prev.to_arrays(), w.to_arrays());
+            let at = |v: &[[f32; LANES]; 3], i: usize| Vec3::new(v[0][i], v[1][i], v[2][i]);
+            let pdf = per_lane(w.x, |i| area(i).pdf_li(at(&p, i), at(&d, i)));
+            let weight = self.hit_weight(counted, Some(pdf));
+            self.add_radiance(counted, le * weight);
+        }
+        best
     }
 
-    fn emitted(&self, si: &SurfaceInteraction, wo: Vec3, prev: Option<PrevVertex>) -> Color {
-        let le = self.scene.emission(si, wo);
-        if le == Color::ZERO {
-            return le;
+    /// Light from the lights at infinity reaching the escaped rays of `lanes`.
+    #[inline(always)]
+    fn escaped(&mut self, lanes: LaneBits, w: V3<L::F>) {
+        let lanes = self.counts(lanes);
+        if lanes == 0 {
+            return;
         }
-        let light = (si.light != NO_LIGHT).then(|| &self.scene.lights[si.light as usize]);
-        // `area_light_on_line` already counted any area light the sampled line meets.
-        if let (Some(v), Some(l)) = (prev, light) {
-            if !l.seen_along(v.p, -wo) {
-                return Color::ZERO;
+        let l = self.l;
+        let mut sum = V3::splat(l, Vec3::ZERO);
+        for light in &self.it.scene.lights {
+            if !light.is_environment() {
+                continue;
             }
+            let le = light.le_escaped_l(l, w);
+            let pdf = light.pdf_incident(l, self.prev_p, w);
+            sum = sum + le * self.hit_weight(lanes, Some(pdf));
         }
-        le * self.bsdf_hit_weight(prev, light, -wo)
+        self.add_radiance(lanes, sum);
     }
 
-    /// Light reaching a ray that left the scene in unit direction `d`.
-    fn escaped(&self, d: Vec3, prev: Option<PrevVertex>) -> Color {
-        let mut l = Color::ZERO;
-        for light in &self.scene.lights {
-            let le = light.le_escaped(d);
-            if le != Color::ZERO {
-                l += le * self.bsdf_hit_weight(prev, Some(light), d);
-            }
+    /// Emission at the hits of `lanes` (where it counts): area lights seen by camera
+    /// rays (other vertices' were found on the line), and emissive materials.
+    #[inline(always)]
+    fn emitted(&mut self, lanes: LaneBits, hit: &Hits<L>, w: V3<L::F>) {
+        let scene = self.it.scene;
+        let cos_out = (-w).dot(hit.ng).to_array();
+        let on_light = !self.l.u_from(hit.light).eq(self.l.u(NO_LIGHT)).bits();
+        let camera_on_light = lanes & on_light & !self.has_prev;
+        if camera_on_light != 0 {
+            let le = per_lane_v3(w.x, |i| match scene.lights.get(hit.light[i] as usize) {
+                Some(Light::Area(a)) if camera_on_light >> i & 1 != 0 => a.emitted(cos_out[i]),
+                _ => Vec3::ZERO,
+            });
+            self.add_radiance(camera_on_light, le);
         }
-        l
+        if !self.it.unsampled_emitters {
+            return;
+        }
+        let emissive = each_lane(lanes & !on_light)
+            .filter(|&i| scene.materials[hit.material[i] as usize].emits())
+            .fold(0, |m, i| m | 1 << i);
+        if emissive != 0 {
+            let le = per_lane_v3(w.x, |i| {
+                let m = &scene.materials[hit.material[i] as usize];
+                m.emitted(Vec3::new(0.0, 0.0, cos_out[i]))
+            });
+            let weight = self.hit_weight(emissive, None);
+            self.add_radiance(emissive, le * weight);
+        }
     }
 
-    /// Direct light at a non-delta vertex by the chosen strategy.
+    /// Direct light at the (non-delta) hits of `lanes` by the chosen strategy.
+    #[inline(always)]
     fn direct(
-        &self,
-        si: &SurfaceInteraction,
-        frame: &Frame,
-        m: &Material,
-        wo: Vec3,
-        s: &mut Sampler,
-    ) -> Color {
-        match self.strategy {
-            DirectStrategy::Hemisphere => self.direct_hemisphere(si, frame, m, wo, s),
-            DirectStrategy::Bsdf => Color::ZERO,
+        &mut self,
+        lanes: LaneBits,
+        hit: &Hits<L>,
+        bsdf: &BsdfLanes<L>,
+        frame: &Frame<L::F>,
+        wo: V3<L::F>,
+    ) {
+        let acc = match self.it.s.strategy {
+            DirectStrategy::Bsdf => return,
+            DirectStrategy::Hemisphere => self.direct_hemisphere(lanes, hit, bsdf, frame, wo),
             DirectStrategy::Light | DirectStrategy::Mis => {
-                let mut l = Color::ZERO;
-                for light in &self.scene.lights {
-                    let n = if light.is_delta() {
-                        1
-                    } else {
-                        self.light_samples.max(1)
-                    };
-                    for _ in 0..n {
-                        l += self.light_sample(si, frame, m, wo, light, n, s) / n as f32;
-                    }
+                self.direct_lights(lanes, hit, bsdf, frame, wo)
+            }
+        };
+        self.add_radiance(lanes, acc);
+    }
+
+    /// Light sampling (with MIS weights when asked): each light's samples, one shadow
+    /// packet each, averaged per light and summed over the lights.
+    #[inline(always)]
+    fn direct_lights(
+        &mut self,
+        lanes: LaneBits,
+        hit: &Hits<L>,
+        bsdf: &BsdfLanes<L>,
+        frame: &Frame<L::F>,
+        wo: V3<L::F>,
+    ) -> V3<L::F> {
+        let l = self.l;
+        let zero = self.f(0.0);
+        let wo_world = frame.world(wo);
+        let mis = self.it.s.strategy == DirectStrategy::Mis;
+        let mut acc = V3::splat(l, Vec3::ZERO);
+        let mut shadow = RayPacket {
+            skip: hit.prim,
+            ..RayPacket::default()
+        };
+        let mut pair = LIGHT_PAIRS;
+        for (light, &n) in self.it.scene.lights.iter().zip(&self.it.light_samples) {
+            let nf = self.f(n as f32);
+            for _ in 0..n {
+                let u = self.bounce_2d(pair);
+                pair += 1;
+                let ls = light.sample_incident(l, hit.p, u);
+                let wi = frame.local(ls.wi);
+                let reflect = (wi.z * wo.z).gt(zero);
+                let consistent = geometrically_consistent(hit.ng, wo_world, ls.wi, reflect);
+                let f = bsdf.eval(l, wo, wi);
+                let ok =
+                    (ls.valid & ls.pdf.gt(zero) & consistent & !f.is_zero() & !ls.li.is_zero())
+                        .bits()
+                        & lanes;
+                if ok == 0 {
+                    continue;
                 }
-                l
+                let finite = ls.dist.is_finite().bits() & ok;
+                // Finite lights: the segment to the point, stopped short of it.
+                let to = V3::select(self.mask(finite), ls.p_light - hit.p, ls.wi);
+                let origin = hit.spawn_origins(l, ok, to);
+                let dir = V3::select(self.mask(finite), ls.p_light - origin, ls.wi);
+                let t_max = L::F::select(
+                    self.mask(finite),
+                    self.f(1.0 - SHADOW_EPSILON),
+                    self.f(f32::INFINITY),
+                );
+                shadow.o = origin.to_arrays();
+                shadow.d = dir.to_arrays();
+                shadow.t_max = t_max.to_array();
+                let lit = ok & !occluded(l, self.it.accel, &shadow, ok);
+                if lit == 0 {
+                    continue;
+                }
+                let weight = if mis && !light.is_delta() {
+                    power_heuristic(nf, ls.pdf, self.f(1.0), bsdf.pdf(l, wo, wi))
+                } else {
+                    self.f(1.0)
+                };
+                let contrib = f * ls.li * (wi.z.abs() * weight / ls.pdf);
+                acc = V3::select(self.mask(lit), acc + contrib / nf, acc);
             }
         }
+        acc
     }
 
-    /// One light sample's contribution `f·Li·|cos|/pdf`, MIS-weighted when asked.
-    #[allow(clippy::too_many_arguments)]
-    fn light_sample(
-        &self,
-        si: &SurfaceInteraction,
-        frame: &Frame,
-        m: &Material,
-        wo: Vec3,
-        light: &Light,
-        n: u32,
-        s: &mut Sampler,
-    ) -> Color {
-        let Some(ls) = light.sample_li(si.p, s.next_2d()) else {
-            return Color::ZERO;
-        };
-        if ls.pdf.is_nan() || ls.pdf <= 0.0 || ls.li == Color::ZERO {
-            return Color::ZERO;
-        }
-        let wi = frame.to_local(ls.wi);
-        let wo_world = frame.to_world(wo);
-        if !geometrically_consistent(si, wo_world, ls.wi, wi.z * wo.z > 0.0) {
-            return Color::ZERO;
-        }
-        let f = m.eval(wo, wi);
-        if f == Color::ZERO {
-            return Color::ZERO;
-        }
-        if self.shadowed(si, &ls) {
-            return Color::ZERO;
-        }
-        let w = if ls.delta || self.strategy != DirectStrategy::Mis {
-            1.0
-        } else {
-            power_heuristic(n as f32, ls.pdf, 1.0, m.pdf(wo, wi))
-        };
-        f * ls.li * (wi.z.abs() * w / ls.pdf)
-    }
-
-    fn shadowed(&self, si: &SurfaceInteraction, ls: &crate::lights::LightSample) -> bool {
-        let ray = if ls.dist.is_finite() {
-            si.spawn_segment(ls.p_light, 1.0 - SHADOW_EPSILON)
-        } else {
-            si.spawn_ray(ls.wi)
-        };
-        self.accel.occluded(&ray)
-    }
-
-    /// `-H`: `l` uniform directions on the hemisphere of `wo`, counting whatever emission they find.
+    /// `-H`: `-l` uniform directions on the hemisphere of `wo`, counting whatever
+    /// emission they find.
+    #[inline(always)]
     fn direct_hemisphere(
-        &self,
-        si: &SurfaceInteraction,
-        frame: &Frame,
-        m: &Material,
-        wo: Vec3,
-        s: &mut Sampler,
-    ) -> Color {
-        let n = self.light_samples.max(1);
-        let mut l = Color::ZERO;
-        for _ in 0..n {
-            let mut wi = uniform_hemisphere(s.next_2d());
-            if wo.z < 0.0 {
-                wi.z = -wi.z;
-            }
-            let wi_world = frame.to_world(wi);
-            let f = m.eval(wo, wi);
-            if f == Color::ZERO || !geometrically_consistent(si, frame.to_world(wo), wi_world, true)
-            {
+        &mut self,
+        lanes: LaneBits,
+        hit: &Hits<L>,
+        bsdf: &BsdfLanes<L>,
+        frame: &Frame<L::F>,
+        wo: V3<L::F>,
+    ) -> V3<L::F> {
+        let l = self.l;
+        let scene = self.it.scene;
+        let n = self.it.s.light_samples;
+        let wo_world = frame.world(wo);
+        let mut acc = V3::splat(l, Vec3::ZERO);
+        let mut rays = RayPacket::default();
+        let mut found = HitPacket::default();
+        for k in 0..n {
+            let (u1, u2) = self.bounce_2d(LIGHT_PAIRS + k);
+            let mut wi = uniform_hemisphere_l(u1, u2);
+            wi.z = L::F::select(wo.z.lt(self.f(0.0)), -wi.z, wi.z);
+            let wi_world = frame.world(wi);
+            let f = bsdf.eval(l, wo, wi);
+            let consistent =
+                geometrically_consistent(hit.ng, wo_world, wi_world, self.mask(l.all()));
+            let ok = (consistent & !f.is_zero()).bits() & lanes;
+            if ok == 0 {
                 continue;
             }
-            let ray = si.spawn_ray(wi_world);
-            let le = match self.accel.intersect(&ray) {
-                Some(h) => {
-                    let hit = self.scene.interaction(&ray, &h);
-                    let light =
-                        (hit.light != NO_LIGHT).then(|| &self.scene.lights[hit.light as usize]);
-                    if light.is_some_and(|l| !l.seen_along(si.p, wi_world)) {
-                        Color::ZERO
-                    } else {
-                        self.scene.emission(&hit, -wi_world)
+            let origin = hit.spawn_origins(l, ok, wi_world);
+            rays.o = origin.to_arrays();
+            rays.d = wi_world.to_arrays();
+            rays.t_max = [f32::INFINITY; LANES];
+            rays.skip = hit.prim;
+            trace(l, self.it.accel, &rays, ok, &mut found);
+            let met = !l.u_from(found.prim).eq(l.u(NO_PRIM)).bits() & ok;
+            let mut le = V3::splat(l, Vec3::ZERO);
+            for light in &scene.lights {
+                le = le + light.le_escaped_l(l, wi_world);
+            }
+            le = V3::select(self.mask(met), V3::splat(l, Vec3::ZERO), le);
+            if met != 0 {
+                let there = scene.hits(l, met, origin, wi_world, &found);
+                let cos_out = (-wi_world).dot(there.ng);
+                let emitted = per_lane_v3(wi_world.x, |i| {
+                    if met >> i & 1 == 0 {
+                        return Vec3::ZERO;
                     }
-                }
-                None => self
-                    .scene
-                    .lights
-                    .iter()
-                    .map(|lt| lt.le_escaped(wi_world))
-                    .sum(),
-            };
-            l += f * le * (wi.z.abs() / uniform_hemisphere_pdf());
+                    match scene.lights.get(there.light[i] as usize) {
+                        Some(Light::Area(a))
+                            if a.intersect(hit.p.lane(i), wi_world.lane(i)).is_some() =>
+                        {
+                            a.emitted(cos_out.lane(i))
+                        }
+                        Some(_) => Vec3::ZERO,
+                        None => scene.materials[there.material[i] as usize].emitted(Vec3::new(
+                            0.0,
+                            0.0,
+                            cos_out.lane(i),
+                        )),
+                    }
+                });
+                le = V3::select(self.mask(met), emitted, le);
+            }
+            let contrib = f * le * (wi.z.abs() / self.f(uniform_hemisphere_pdf()));
+            acc = V3::select(self.mask(ok), acc + contrib, acc);
         }
-        l / n as f32
+        acc / self.f(n as f32)
+    }
+
+    /// Samples each lane's BSDF, checks the depth cap and the geometry, updates the
+    /// throughput, plays roulette and spawns the next rays: the lanes whose path ended.
+    #[allow(clippy::too_many_arguments)]
+    #[inline(always)]
+    fn scatter(
+        &mut self,
+        lanes: LaneBits,
+        hit: &Hits<L>,
+        bsdf: &BsdfLanes<L>,
+        frame: &Frame<L::F>,
+        wo: V3<L::F>,
+        wo_world: V3<L::F>,
+    ) -> LaneBits {
+        let l = self.l;
+        let zero = self.f(0.0);
+        let u = self.bounce_2d(BSDF_PAIR);
+        let (u_lobe, u_roulette) = self.bounce_2d(LOBE_PAIR);
+        let bs = bsdf.sample(l, wo, u_lobe, u);
+        let mut ended = lanes & !bs.valid.bits();
+        // At the depth cap only a strategy that weights the light a BSDF-sampled ray
+        // finds still traces it, or a delta lobe (whose light nothing else finds).
+        if !self.it.bsdf_rays_find_light() {
+            ended |= self.at_depth_cap(lanes) & !bsdf.delta;
+        }
+        let wi_world = frame.world(bs.wi);
+        let reflect = (bs.wi.z * wo.z).gt(zero);
+        let consistent = geometrically_consistent(hit.ng, wo_world, wi_world, reflect);
+        ended |= lanes & !consistent.bits();
+        let go = lanes & !ended;
+        let beta = self.beta * bs.weight;
+        let q = self
+            .it
+            .s
+            .roulette
+            .continue_prob_l(l, self.bounces, go, beta);
+        let play = go & q.lt(self.f(1.0)).bits();
+        let mut survive = go & !(play & u_roulette.ge(q).bits());
+        let beta = beta / q;
+        survive &= (beta.is_finite() & !beta.is_zero()).bits();
+        ended |= lanes & !survive;
+        if survive != 0 {
+            let m = self.mask(survive);
+            self.beta = V3::select(m, beta, self.beta);
+            self.prev_p = V3::select(m, hit.p, self.prev_p);
+            self.prev_pdf = L::F::select(m, bs.pdf, self.prev_pdf);
+            self.has_prev |= survive;
+            self.prev_delta = (self.prev_delta & !survive) | (bsdf.delta & survive);
+            let origin = hit.spawn_origins(l, survive, wi_world);
+            self.set_rays(
+                survive,
+                origin,
+                wi_world,
+                self.f(f32::INFINITY),
+                l.u_from(hit.prim),
+            );
+        }
+        ended
     }
 }
 
 /// Rejects directions whose side of the geometric surface contradicts the BSDF's
 /// (shading-frame) reflection/transmission choice, so shading normals cannot leak light.
-#[inline]
-fn geometrically_consistent(si: &SurfaceInteraction, wo: Vec3, wi: Vec3, reflect: bool) -> bool {
-    let a = wo.dot(si.ng);
-    let b = wi.dot(si.ng);
-    if reflect {
-        a * b > 0.0
+#[inline(always)]
+pub(super) fn geometrically_consistent<F: Real>(
+    ng: V3<F>,
+    wo: V3<F>,
+    wi: V3<F>,
+    reflect: F::M,
+) -> F::M {
+    let ab = wo.dot(ng) * wi.dot(ng);
+    let zero = ab.splat_as(0.0);
+    (reflect & ab.gt(zero)) | (!reflect & ab.lt(zero))
+}
+
+/// The nearest hits of the rays in `lanes` (one ray, or a packet).
+#[inline(always)]
+pub(super) fn trace<L: Lanes>(
+    _: L,
+    accel: &dyn Accel,
+    rays: &RayPacket,
+    lanes: LaneBits,
+    hits: &mut HitPacket,
+) {
+    if L::WIDTH == 1 {
+        hits.set(0, accel.intersect(&rays.ray(0)));
     } else {
-        a * b < 0.0
+        accel.intersect_packet(rays, lanes, hits);
+    }
+}
+
+/// The lanes of `lanes` whose ray is blocked.
+#[inline(always)]
+pub(super) fn occluded<L: Lanes>(
+    _: L,
+    accel: &dyn Accel,
+    rays: &RayPacket,
+    lanes: LaneBits,
+) -> LaneBits {
+    if L::WIDTH == 1 {
+        accel.occluded(&rays.ray(0)) as LaneBits & lanes
+    } else {
+        accel.occluded_packet(rays, lanes)
     }
 }

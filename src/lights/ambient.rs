@@ -2,29 +2,29 @@
 //! `ω·Y > 0`, sampled by the cosine about world +Y, which is exact importance
 //! sampling for an upward-facing surface.
 
-use super::LightSample;
+use super::Incident;
 use crate::geometry::Frame;
-use crate::sampling::{cosine_hemisphere, cosine_hemisphere_pdf};
+use crate::lanes::{Lanes, Real, V3};
+use crate::sampling::warps::{cosine_hemisphere_l, cosine_hemisphere_pdf_l};
 use crate::Color;
-use glam::{Vec2, Vec3};
+use glam::Vec3;
 
-fn up_frame() -> Frame {
-    Frame::from_normal(Vec3::Y)
-}
-
-pub fn sample_li(radiance: Color, u: Vec2) -> Option<LightSample> {
-    let wi = up_frame().to_world(cosine_hemisphere(u)).normalize();
-    let pdf = pdf_li(wi);
-    (pdf > 0.0).then_some(LightSample {
+#[inline(always)]
+pub fn sample_incident<L: Lanes>(l: L, radiance: Color, u: (L::F, L::F)) -> Incident<L::F> {
+    let up = Frame::around(V3::splat(l, Vec3::Y));
+    let wi = up.world(cosine_hemisphere_l(u.0, u.1)).normalize();
+    let pdf = pdf_incident(wi);
+    Incident {
         wi,
-        dist: f32::INFINITY,
-        p_light: Vec3::INFINITY,
-        li: radiance,
+        dist: l.f(f32::INFINITY),
+        p_light: V3::splat(l, Vec3::INFINITY),
+        li: V3::splat(l, radiance),
         pdf,
-        delta: false,
-    })
+        valid: pdf.gt(l.f(0.0)),
+    }
 }
 
-pub fn pdf_li(wi: Vec3) -> f32 {
-    cosine_hemisphere_pdf(wi.y)
+#[inline(always)]
+pub fn pdf_incident<F: Real>(wi: V3<F>) -> F {
+    cosine_hemisphere_pdf_l(wi.y)
 }

@@ -4,9 +4,11 @@
 //! ray hitting them reads the radiance here (`emitted`).
 
 use super::emit::EmissionSample;
-use super::LightSample;
+use super::Incident;
 use crate::geometry::{offset_ray_origin, ray::gamma, Frame};
-use crate::sampling::{cosine_hemisphere, uniform_parallelogram};
+use crate::lanes::{Lanes, One, Real, V3};
+use crate::sampling::cosine_hemisphere;
+use crate::sampling::warps::uniform_parallelogram_l;
 use crate::Color;
 use glam::{Vec2, Vec3};
 use std::f32::consts::PI;
@@ -52,29 +54,33 @@ impl AreaLight {
         }
     }
 
-    /// A point uniform by area, as seen from `p`. The vector to it is computed relative to
-    /// the light (`(centre − p) + s·ex + t·ey`, the first difference exact for nearby
-    /// points however far from the origin), not as the difference of two rounded
-    /// absolute positions.
-    pub fn sample_li(&self, p: Vec3, u: Vec2) -> Option<LightSample> {
-        let local = uniform_parallelogram(u, Vec3::ZERO, self.ex, self.ey);
-        let p_light = self.centre + local;
-        let to_light = (self.centre - p) + local;
-        let dist2 = to_light.length_squared();
-        let dist = dist2.sqrt();
-        if !(dist > 0.0 && dist.is_finite()) {
-            return None;
-        }
+    /// A point uniform by area, as seen from points `p`, per lane. The vector to it
+    /// is computed relative to the light (`(centre − p) + s·ex + t·ey`, the first
+    /// difference exact for nearby points however far from the origin), not as the
+    /// difference of two rounded absolute positions.
+    #[inline(always)]
+    pub fn sample_incident<L: Lanes>(&self, l: L, p: V3<L::F>, u: (L::F, L::F)) -> Incident<L::F> {
+        let (ex, ey) = (V3::splat(l, self.ex), V3::splat(l, self.ey));
+        let local = uniform_parallelogram_l(u.0, u.1, ex, ey);
+        let centre = V3::splat(l, self.centre);
+        let to_light = (centre - p) + local;
+        let dist = to_light.length_squared().sqrt();
         let wi = to_light / dist;
-        let pdf = self.solid_angle_pdf(wi, dist)?;
-        Some(LightSample {
+        let (pdf, facing) = self.solid_angle_pdf(l, wi, dist);
+        let lit = dist.gt(l.f(0.0)) & dist.is_finite() & facing;
+        Incident {
             wi,
             dist,
-            p_light,
-            li: self.radiance,
+            p_light: centre + local,
+            li: V3::splat(l, self.radiance),
             pdf,
-            delta: false,
-        })
+            valid: lit
+                & l.mask(if self.radiance == Color::ZERO {
+                    0
+                } else {
+                    l.all()
+                }),
+        }
     }
 
     /// Emitted light leaving the surface (`Light::sample_le`): a point uniform by area
@@ -82,7 +88,8 @@ impl AreaLight {
     /// `β = L·cos/(pdf_pos·pdf_dir) = L·π·area`. The ray's origin is moved off the
     /// surface by the point's rounding error; `on_surface` keeps the point itself.
     pub fn sample_le(&self, u_pos: Vec2, u_dir: Vec2) -> EmissionSample {
-        let p = self.centre + uniform_parallelogram(u_pos, Vec3::ZERO, self.ex, self.ey);
+        let (ex, ey) = (self.ex.into(), self.ey.into());
+        let p = self.centre + uniform_parallelogram_l(u_pos.x, u_pos.y, ex, ey).vec3();
         let dir = Frame::from_normal(self.normal)
             .to_world(cosine_hemisphere(u_dir))
             .normalize();
@@ -96,50 +103,63 @@ impl AreaLight {
         }
     }
 
-    /// The density of `sample_li`: found by intersecting the ray `(p, wi)`.
+    /// The density of `sample_incident` at `wi` from `p`, per lane: found by
+    /// intersecting the ray `(p, wi)`.
+    #[inline(always)]
+    pub fn pdf_incident<L: Lanes>(&self, l: L, p: V3<L::F>, wi: V3<L::F>) -> L::F {
+        let (met, dist) = self.intersect_l(l, p, wi);
+        let (pdf, ok) = self.solid_angle_pdf(l, wi, dist);
+        L::F::select(met & ok, pdf, l.f(0.0))
+    }
+
+    /// `pdf_incident` for one path.
     pub fn pdf_li(&self, p: Vec3, wi: Vec3) -> f32 {
-        self.intersect(p, wi)
-            .and_then(|dist| self.solid_angle_pdf(wi, dist))
-            .unwrap_or(0.0)
+        self.pdf_incident(One, p.into(), wi.into())
     }
 
-    /// Distance along unit `wi` from `p` to the emitting front of the light, if
-    /// the ray hits it there (rays reaching the back see nothing emitted).
+    /// Distance along unit `wi` from `p` to the emitting front of the light, if the
+    /// ray hits it there (rays reaching the back see nothing emitted).
     pub fn intersect(&self, p: Vec3, wi: Vec3) -> Option<f32> {
-        let denom = wi.dot(self.normal);
-        if denom.is_nan() || denom >= 0.0 {
-            return None;
-        }
-        let to_centre = self.centre - p;
-        let dist = to_centre.dot(self.normal) / denom;
-        if !(dist > 0.0 && dist.is_finite()) {
-            return None;
-        }
-        // The hit relative to the centre, without rounding it to an absolute position.
-        let (s, t) = self.plane_coords(dist * wi - to_centre)?;
-        (s.abs() <= 0.5 && t.abs() <= 0.5).then_some(dist)
+        let (met, dist) = self.intersect_l(One, p.into(), wi.into());
+        met.then_some(dist)
     }
 
-    /// `(s, t)` with `d = s·ex + t·ey` for `d` (relative to the centre) in the light's
-    /// plane (dual basis, so sheared edges work too).
-    fn plane_coords(&self, d: Vec3) -> Option<(f32, f32)> {
+    /// `intersect` per lane: the lanes that meet the front, and the distance.
+    #[inline(always)]
+    pub fn intersect_l<L: Lanes>(&self, l: L, p: V3<L::F>, wi: V3<L::F>) -> (L::M, L::F) {
+        let normal = V3::splat(l, self.normal);
+        let denom = wi.dot(normal);
+        let to_centre = V3::splat(l, self.centre) - p;
+        let dist = to_centre.dot(normal) / denom;
+        let met = denom.lt(l.f(0.0)) & dist.gt(l.f(0.0)) & dist.is_finite();
         let m = self.ex.cross(self.ey);
         let m2 = m.length_squared();
         if m2.is_nan() || m2 <= 0.0 {
-            return None;
+            return (l.mask(0), dist);
         }
-        Some((d.cross(self.ey).dot(m) / m2, self.ex.cross(d).dot(m) / m2))
+        // The hit relative to the centre, in the dual basis (sheared edges work too),
+        // without rounding it to an absolute position.
+        let (ex, ey, mv, m2v) = (
+            V3::splat(l, self.ex),
+            V3::splat(l, self.ey),
+            V3::splat(l, m),
+            l.f(m2),
+        );
+        let d = wi * dist - to_centre;
+        let s = d.cross(ey).dot(mv) / m2v;
+        let t = ex.cross(d).dot(mv) / m2v;
+        let half = l.f(0.5);
+        (met & s.abs().le(half) & t.abs().le(half), dist)
     }
 
-    /// Area density `1/area` converted to solid angle: `dist²/(area·cos θl)`;
-    /// `None` from behind or for a degenerate light.
-    fn solid_angle_pdf(&self, wi: Vec3, dist: f32) -> Option<f32> {
-        let cos_light = -wi.dot(self.normal);
+    /// Area density `1/area` converted to solid angle: `dist²/(area·cos θl)`, and the
+    /// lanes where it is defined (the front of a non-degenerate light).
+    #[inline(always)]
+    fn solid_angle_pdf<L: Lanes>(&self, l: L, wi: V3<L::F>, dist: L::F) -> (L::F, L::M) {
+        let cos_light = -wi.dot(V3::splat(l, self.normal));
         let area = self.area();
-        if !(cos_light > 0.0 && area > 0.0) {
-            return None;
-        }
-        let pdf = dist * dist / (area * cos_light);
-        (pdf.is_finite() && pdf > 0.0).then_some(pdf)
+        let pdf = dist * dist / (l.f(area) * cos_light);
+        let ok = cos_light.gt(l.f(0.0)) & pdf.is_finite() & pdf.gt(l.f(0.0));
+        (pdf, ok & l.mask(if area > 0.0 { l.all() } else { 0 }))
     }
 }

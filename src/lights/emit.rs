@@ -44,6 +44,7 @@ impl Light {
                 dir: uniform_sphere(u_dir),
                 beta: intensity / uniform_sphere_pdf(),
             },
+            Light::Spot(s) => s.sample_le(u_dir)?,
             Light::Directional {
                 direction,
                 irradiance,
@@ -81,7 +82,7 @@ fn disk_emission(
     let frame = Frame::from_normal(dir);
     let d = concentric_disk(u) * r;
     EmissionSample {
-        origin: c - 1.01 * r * dir + frame.s * d.x + frame.t * d.y,
+        origin: c - 1.01 * r * dir + frame.s.vec3() * d.x + frame.t.vec3() * d.y,
         on_surface: None,
         dir,
         beta: value * (PI * r * r * dir_weight),

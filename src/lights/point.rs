@@ -1,23 +1,28 @@
 //! Isotropic point light: a delta in position, irradiance falls off as 1/d².
 
-use super::LightSample;
+use super::Incident;
+use crate::lanes::{Lanes, Real, V3};
 use crate::Color;
 use glam::Vec3;
 
-pub fn sample_li(position: Vec3, intensity: Color, p: Vec3) -> Option<LightSample> {
+#[inline(always)]
+pub fn sample_incident<L: Lanes>(
+    l: L,
+    position: Vec3,
+    intensity: Color,
+    p: V3<L::F>,
+) -> Incident<L::F> {
+    let position = V3::splat(l, position);
     let to_light = position - p;
     let dist2 = to_light.length_squared();
     let dist = dist2.sqrt();
-    if !(dist > 0.0 && dist.is_finite()) {
-        return None;
-    }
-    let li = intensity / dist2;
-    crate::color::is_finite(li).then_some(LightSample {
+    let li = V3::splat(l, intensity) / dist2;
+    Incident {
         wi: to_light / dist,
         dist,
         p_light: position,
         li,
-        pdf: 1.0,
-        delta: true,
-    })
+        pdf: l.f(1.0),
+        valid: dist.gt(l.f(0.0)) & dist.is_finite() & li.is_finite(),
+    }
 }

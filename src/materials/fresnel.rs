@@ -1,37 +1,48 @@
 //! Exact unpolarized Fresnel reflectance (spec §6): dielectric for glass, complex
 //! index for conductors. Never Schlick: the spec asks for the exact terms.
 
+use crate::lanes::{clamp, Real};
 use crate::Color;
 
 /// Reflectance of a smooth dielectric interface for light arriving at
 /// `cos_theta_i = |cos θi| ∈ [0, 1]` from the side of index `eta_i` toward
-/// `eta_t`. Returns 1 under total internal reflection.
-pub fn dielectric(cos_theta_i: f32, eta_i: f32, eta_t: f32) -> f32 {
-    let cos_i = cos_theta_i.clamp(0.0, 1.0);
-    let Some(cos_t) = refracted_cos(cos_i, eta_i / eta_t) else {
-        return 1.0;
-    };
+/// `eta_t`. 1 under total internal reflection.
+#[inline(always)]
+pub fn dielectric<F: Real>(cos_theta_i: F, eta_i: F, eta_t: F) -> F {
+    let cos_i = clamp(
+        cos_theta_i,
+        cos_theta_i.splat_as(0.0),
+        cos_theta_i.splat_as(1.0),
+    );
+    let (cos_t, refracts) = refracted_cos(cos_i, eta_i / eta_t);
     let rs_den = eta_i * cos_i + eta_t * cos_t;
     let rp_den = eta_t * cos_i + eta_i * cos_t;
-    if rs_den <= 0.0 || rp_den <= 0.0 {
-        // Grazing incidence on a degenerate interface: everything reflects.
-        return 1.0;
-    }
     let rs = (eta_i * cos_i - eta_t * cos_t) / rs_den;
     let rp = (eta_t * cos_i - eta_i * cos_t) / rp_den;
-    (0.5 * (rs * rs + rp * rp)).clamp(0.0, 1.0)
+    let r = clamp(
+        cos_theta_i.splat_as(0.5) * (rs * rs + rp * rp),
+        cos_theta_i.splat_as(0.0),
+        cos_theta_i.splat_as(1.0),
+    );
+    // Grazing incidence on a degenerate interface: everything reflects.
+    let ok = refracts & rs_den.gt(cos_theta_i.splat_as(0.0)) & rp_den.gt(cos_theta_i.splat_as(0.0));
+    F::select(ok, r, cos_theta_i.splat_as(1.0))
 }
 
-/// `cos θt` from Snell's law with relative index `eta_ratio = ηi/ηt`,
-/// or `None` under total internal reflection.
-pub fn refracted_cos(cos_theta_i: f32, eta_ratio: f32) -> Option<f32> {
-    let sin2_i = (1.0 - cos_theta_i * cos_theta_i).max(0.0);
+/// `cos θt` from Snell's law with relative index `eta_ratio = ηi/ηt`, and the lanes
+/// where it exists (not under total internal reflection).
+#[inline(always)]
+pub fn refracted_cos<F: Real>(cos_theta_i: F, eta_ratio: F) -> (F, F::M) {
+    let sin2_i =
+        (cos_theta_i.splat_as(1.0) - cos_theta_i * cos_theta_i).max(cos_theta_i.splat_as(0.0));
     let sin2_t = eta_ratio * eta_ratio * sin2_i;
-    if sin2_t >= 1.0 {
-        None
-    } else {
-        Some((1.0 - sin2_t).sqrt())
-    }
+    let ok = sin2_t.lt(cos_theta_i.splat_as(1.0));
+    (
+        (cos_theta_i.splat_as(1.0) - sin2_t)
+            .max(cos_theta_i.splat_as(0.0))
+            .sqrt(),
+        ok,
+    )
 }
 
 /// Reflectance of a conductor with complex index `eta + i·k` (per channel) at
@@ -46,22 +57,20 @@ pub fn conductor(cos_theta: f32, eta: Color, k: Color) -> Color {
 pub struct ConductorIor {
     pub eta: Color,
     pub k: Color,
-    /// Per channel: `η² − k²` and `4η²k²`, in f64 as the formula needs them.
-    terms: [(f64, f64); 3],
 }
 
 impl ConductorIor {
     pub fn new(eta: Color, k: Color) -> Self {
-        let terms = [0, 1, 2].map(|i| {
-            let (eta, k) = (eta[i] as f64, k[i] as f64);
-            (eta * eta - k * k, 4.0 * eta * eta * k * k)
-        });
-        ConductorIor { eta, k, terms }
+        ConductorIor { eta, k }
     }
 
     /// Reflectance at `cos_theta = |cos θ|`.
     pub fn reflectance(&self, cos_theta: f32) -> Color {
-        let [r, g, b] = self.terms.map(|t| conductor_channel(cos_theta, t));
+        // Per channel `η² − k²` and `4η²k²`, in f64 as the formula needs them.
+        let [r, g, b] = [0, 1, 2].map(|i| {
+            let (eta, k) = (self.eta[i] as f64, self.k[i] as f64);
+            conductor_channel(cos_theta, (eta * eta - k * k, 4.0 * eta * eta * k * k))
+        });
         Color::new(r, g, b)
     }
 }

@@ -4,23 +4,42 @@
 //! back face the frame is mirrored (z of both directions flipped).
 
 use super::fresnel::ConductorIor;
-use super::BsdfSample;
-use crate::sampling::{beckmann_d, beckmann_normal, beckmann_normal_pdf};
+use super::{gather_f, BsdfFlags, BsdfSample, Scatter};
+use crate::lanes::math::{exp, ln, sin_cos_turns};
+use crate::lanes::{per_lane, per_lane_v3, Lanes, Real, V3};
 use crate::Color;
-use glam::{Vec2, Vec3};
+use std::f32::consts::PI;
 
 /// Below this roughness the Beckmann lobe is narrower than f32 can resolve
 /// (α² underflows D's exponent), so α is clamped: a near-mirror remains a valid,
 /// finite glossy lobe rather than turning into a delta.
 pub const MIN_ALPHA: f32 = 1e-3;
 
-/// A rough conductor's parameters, built once when the material is made (the loader):
-/// α clamped, the Fresnel terms of its complex index precomputed.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct Conductor {
+/// A rough conductor's parameters: α (clamped when made) and the complex index with
+/// its Fresnel terms precomputed, one per lane.
+#[derive(Clone, Copy)]
+pub struct Conductor<F: Real = f32> {
     /// Beckmann roughness, at least [`MIN_ALPHA`] (a non-finite α is taken as 1).
-    pub alpha: f32,
-    pub ior: ConductorIor,
+    pub alpha: F,
+    /// Each lane's index. The Fresnel term and Λ are evaluated lane by lane in f64,
+    /// where their closed forms cancel badly in f32.
+    pub ior: F::Array<ConductorIor>,
+}
+
+impl std::fmt::Debug for Conductor {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(
+            f,
+            "Conductor {{ alpha: {}, ior: {:?} }}",
+            self.alpha, self.ior[0]
+        )
+    }
+}
+
+impl PartialEq for Conductor {
+    fn eq(&self, o: &Self) -> bool {
+        self.alpha == o.alpha && self.ior == o.ior
+    }
 }
 
 impl Conductor {
@@ -28,85 +47,108 @@ impl Conductor {
         let alpha = if alpha.is_finite() { alpha } else { 1.0 };
         Conductor {
             alpha: alpha.max(MIN_ALPHA),
-            ior: ConductorIor::new(eta, k),
+            ior: [ConductorIor::new(eta, k)],
         }
     }
 
     /// The real part of the complex index, per channel.
     pub fn eta(&self) -> Color {
-        self.ior.eta
+        self.ior[0].eta
     }
 
     /// The imaginary part (absorption) of the complex index, per channel.
     pub fn k(&self) -> Color {
-        self.ior.k
+        self.ior[0].k
+    }
+}
+
+impl<F: Real> Scatter<F> for Conductor<F> {
+    type One = Conductor;
+    const FLAGS: BsdfFlags = BsdfFlags::GLOSSY;
+
+    #[inline(always)]
+    fn gather<L: Lanes<F = F>>(l: L, each: &F::Array<Conductor>) -> Self {
+        Conductor {
+            alpha: gather_f(l, each, |m| m.alpha),
+            ior: F::array(|i| each[i].ior[0]),
+        }
     }
 
-    pub fn eval(&self, wo: Vec3, wi: Vec3) -> Color {
-        let Some((wo, wi, h)) = upper_pair(wo, wi) else {
-            return Color::ZERO;
-        };
+    fn describe(c: &Conductor) -> String {
+        let v = crate::color::compact;
+        format!(
+            "microfacet: alpha {}, eta {}, k {}",
+            c.alpha,
+            v(c.eta()),
+            v(c.k())
+        )
+    }
+
+    #[inline(always)]
+    fn eval(&self, wo: V3<F>, wi: V3<F>) -> V3<F> {
+        let (wo, wi, h, ok) = upper_pair(wo, wi);
         let d = beckmann_d(h, self.alpha);
         let g = self.g1(wo, h) * self.g1(wi, h);
-        let f = self.ior.reflectance(wi.dot(h).abs());
-        let value = f * (d * g / (4.0 * wi.z * wo.z));
-        if crate::color::is_finite(value) {
-            value
-        } else {
-            Color::ZERO
-        }
+        let f = self.fresnel(wi.dot(h).abs());
+        let value = f * (d * g / (wo.x.splat_as(4.0) * wi.z * wo.z));
+        let zero = wo.x.splat_as(0.0);
+        V3::select(ok & value.is_finite(), value, V3::new(zero, zero, zero))
     }
 
-    pub fn pdf(&self, wo: Vec3, wi: Vec3) -> f32 {
-        let Some((wo, _, h)) = upper_pair(wo, wi) else {
-            return 0.0;
-        };
-        reflected_pdf(beckmann_normal_pdf(h, self.alpha), wo.dot(h))
+    #[inline(always)]
+    fn pdf(&self, wo: V3<F>, wi: V3<F>) -> F {
+        let (wo, _, h, ok) = upper_pair(wo, wi);
+        let pdf = reflected_pdf(beckmann_normal_pdf(h, self.alpha), wo.dot(h));
+        F::select(ok, pdf, wo.x.splat_as(0.0))
     }
 
-    pub fn sample(&self, wo: Vec3, u: Vec2) -> Option<BsdfSample> {
-        if wo.z == 0.0 {
-            return None;
-        }
-        let flip = wo.z < 0.0;
+    #[inline(always)]
+    fn sample(&self, wo: V3<F>, _u_lobe: F, u: (F, F)) -> BsdfSample<F> {
+        let flip = wo.z.lt(wo.z.splat_as(0.0));
         let wo_up = mirror_z(wo, flip);
         let h = beckmann_normal(u, self.alpha);
         let wo_dot_h = wo_up.dot(h);
-        if wo_dot_h <= 0.0 {
-            return None;
-        }
-        let wi_up = (2.0 * wo_dot_h * h - wo_up).normalize();
-        if wi_up.z <= 0.0 {
-            // Reflected below the surface: that mass is lost (pdf() is 0 there).
-            return None;
-        }
+        let wi_up = (h * (wo.z.splat_as(2.0) * wo_dot_h) - wo_up).normalize();
+        // Reflected below the surface: that mass is lost (pdf() is 0 there).
         let wi = mirror_z(wi_up, flip);
         let pdf = self.pdf(wo, wi);
-        if !(pdf > 0.0 && pdf.is_finite()) {
-            return None;
-        }
         let weight = self.eval(wo, wi) * (wi.z.abs() / pdf);
-        crate::color::is_finite(weight).then_some(BsdfSample {
+        BsdfSample {
             wi,
             weight,
             pdf,
-            delta: false,
-        })
+            valid: !wo.z.eq(wo.z.splat_as(0.0))
+                & wo_dot_h.gt(wo.z.splat_as(0.0))
+                & wi_up.z.gt(wo.z.splat_as(0.0))
+                & pdf.gt(wo.z.splat_as(0.0))
+                & pdf.is_finite()
+                & weight.is_finite(),
+        }
+    }
+}
+
+impl<F: Real> Conductor<F> {
+    /// Smith masking of one direction; 0 when `w` sees the back of the microfacet.
+    #[inline(always)]
+    fn g1(&self, w: V3<F>, h: V3<F>) -> F {
+        let (cos, alpha) = (w.z.to_array(), self.alpha.to_array());
+        let lambda = per_lane(w.z, |i| beckmann_lambda(cos[i], alpha[i]));
+        let g = w.z.splat_as(1.0) / (w.z.splat_as(1.0) + lambda);
+        F::select((w.dot(h) * w.z).le(w.z.splat_as(0.0)), w.z.splat_as(0.0), g)
     }
 
-    /// Smith masking of one direction; 0 when `w` sees the back of the microfacet.
-    pub fn g1(&self, w: Vec3, h: Vec3) -> f32 {
-        if w.dot(h) * w.z <= 0.0 {
-            return 0.0;
-        }
-        1.0 / (1.0 + beckmann_lambda(w, self.alpha))
+    /// Each lane's conductor reflectance at `|cos θ|`.
+    #[inline(always)]
+    fn fresnel(&self, cos_theta: F) -> V3<F> {
+        let cos = cos_theta.to_array();
+        per_lane_v3(cos_theta, |i| self.ior[i].reflectance(cos[i]))
     }
 }
 
 /// `Λ(w) = (erf(a) − 1)/2 + exp(−a²)/(2a√π)`, `a = 1/(α·tan θ)`. Written with
 /// `erfc(a) = 1 − erf(a)`, the same function without the cancellation for large a.
-pub fn beckmann_lambda(w: Vec3, alpha: f32) -> f32 {
-    let cos = w.z.abs() as f64;
+pub fn beckmann_lambda(cos_theta: f32, alpha: f32) -> f32 {
+    let cos = cos_theta.abs() as f64;
     let sin = (1.0 - cos * cos).max(0.0).sqrt();
     if sin == 0.0 {
         return 0.0;
@@ -120,37 +162,62 @@ pub fn beckmann_lambda(w: Vec3, alpha: f32) -> f32 {
     lambda.max(0.0) as f32
 }
 
+/// Beckmann distribution of microfacet normals,
+/// `D(h) = exp(−tan²θh/α²) / (π·α²·cos⁴θh)`, 0 below the surface.
+#[inline(always)]
+pub fn beckmann_d<F: Real>(h: V3<F>, alpha: F) -> F {
+    let cos2 = h.z * h.z;
+    let tan2 = (alpha.splat_as(1.0) - cos2).max(alpha.splat_as(0.0)) / cos2;
+    let alpha2 = alpha * alpha;
+    let d = exp(-tan2 / alpha2) / (alpha.splat_as(PI) * alpha2 * cos2 * cos2);
+    let ok = h.z.gt(alpha.splat_as(0.0)) & cos2.gt(alpha.splat_as(0.0)) & d.is_finite();
+    F::select(ok, d, alpha.splat_as(0.0))
+}
+
+/// Microfacet normal drawn with density `D(h)·cos θh` (projected-area normalised,
+/// so it integrates to 1): `tan²θ = −α²·ln(1−u)`.
+#[inline(always)]
+pub fn beckmann_normal<F: Real>(u: (F, F), alpha: F) -> V3<F> {
+    let tan2 = -(alpha * alpha) * ln(alpha.splat_as(1.0) - u.0);
+    let cos_theta = alpha.splat_as(1.0) / (alpha.splat_as(1.0) + tan2).sqrt();
+    let sin_theta = (alpha.splat_as(1.0) - cos_theta * cos_theta)
+        .max(alpha.splat_as(0.0))
+        .sqrt();
+    let (sin_phi, cos_phi) = sin_cos_turns(u.1);
+    V3::new(sin_theta * cos_phi, sin_theta * sin_phi, cos_theta)
+}
+
+#[inline(always)]
+pub fn beckmann_normal_pdf<F: Real>(h: V3<F>, alpha: F) -> F {
+    beckmann_d(h, alpha) * h.z.max(alpha.splat_as(0.0))
+}
+
 /// Both directions moved to the upper hemisphere (mirroring the frame on the back
-/// face) with their half vector, or `None` when they are not strictly on one side.
-fn upper_pair(wo: Vec3, wi: Vec3) -> Option<(Vec3, Vec3, Vec3)> {
-    if wo.z * wi.z <= 0.0 {
-        return None;
-    }
-    let flip = wo.z < 0.0;
+/// face) with their half vector; the lanes where they are strictly on one side and
+/// the half vector exists.
+#[inline(always)]
+fn upper_pair<F: Real>(wo: V3<F>, wi: V3<F>) -> (V3<F>, V3<F>, V3<F>, F::M) {
+    let zero = wo.z.splat_as(0.0);
+    let one_side = (wo.z * wi.z).gt(zero);
+    let flip = wo.z.lt(zero);
     let (wo, wi) = (mirror_z(wo, flip), mirror_z(wi, flip));
-    let h = (wo + wi).try_normalize()?;
-    Some((wo, wi, h))
+    let sum = wo + wi;
+    // glam's `try_normalize`: 1/|sum| finite and positive.
+    let rcp = zero.splat_as(1.0) / sum.length();
+    let h = sum * rcp;
+    (wo, wi, h, one_side & rcp.is_finite() & rcp.gt(zero))
 }
 
 /// Density of the reflected direction given the half-vector density:
 /// the Jacobian of `wi = reflect(wo, h)` is `1/(4·|wo·h|)`.
-fn reflected_pdf(pdf_h: f32, wo_dot_h: f32) -> f32 {
-    if wo_dot_h <= 0.0 {
-        return 0.0;
-    }
-    let pdf = pdf_h / (4.0 * wo_dot_h);
-    if pdf.is_finite() {
-        pdf
-    } else {
-        0.0
-    }
+#[inline(always)]
+fn reflected_pdf<F: Real>(pdf_h: F, wo_dot_h: F) -> F {
+    let zero = wo_dot_h.splat_as(0.0);
+    let pdf = pdf_h / (wo_dot_h.splat_as(4.0) * wo_dot_h);
+    F::select(wo_dot_h.gt(zero) & pdf.is_finite(), pdf, zero)
 }
 
-#[inline]
-fn mirror_z(w: Vec3, flip: bool) -> Vec3 {
-    if flip {
-        Vec3::new(w.x, w.y, -w.z)
-    } else {
-        w
-    }
+#[inline(always)]
+fn mirror_z<F: Real>(w: V3<F>, flip: F::M) -> V3<F> {
+    V3::new(w.x, w.y, F::select(flip, -w.z, w.z))
 }

@@ -1,19 +1,30 @@
-//! Materials (BSDFs) of spec §6. Each is a small self-contained unit whose
-//! `eval`, `sample` and `pdf` agree; directions are in the local shading frame
-//! (+z = shading normal), `wo` toward the eye, `wi` toward the light.
+//! Materials (spec §6): a BSDF and, optionally, emission. Each BSDF kind is a small
+//! unit, in its own file, whose `eval`, `sample` and `pdf` agree; it is written once
+//! over the lane type (`Scatter<F>`), so one path and sixteen run the same code.
+//! Directions are in the local shading frame (+z = shading normal), `wo` toward the
+//! eye, `wi` toward the light.
+//!
+//! Adding a BSDF kind: write its file (its parameters as a struct generic over the
+//! float type, implementing [`Scatter`]) and add one line to the `bsdfs!` list
+//! below. Every integrator reaches BSDFs only through [`Bsdf`] and [`BsdfLanes`],
+//! which the list generates, so nothing else needs to know the kind exists; a kind
+//! that does not implement all of `Scatter` does not compile.
 
 pub mod fresnel;
 pub mod lambertian;
 pub mod microfacet;
 pub mod specular;
 
+use crate::lanes::{LaneBits, LaneMask, Lanes, Real, LANES, V3};
 use crate::Color;
 use glam::{Vec2, Vec3};
+pub use lambertian::Lambertian;
 pub use microfacet::Conductor;
+pub use specular::{Glass, Mirror, Refraction};
 use std::fmt;
 
-/// What kind of scattering (and emission) a material has, as pbrt-v4's `BxDFFlags`:
-/// the integrators and the scene ask these instead of matching on variants.
+/// What kind of scattering a BSDF has, as pbrt-v4's `BxDFFlags`: the integrators ask
+/// these instead of matching on kinds.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub struct BsdfFlags {
     /// Every lobe is a delta distribution: light sampling is pointless there.
@@ -22,138 +33,396 @@ pub struct BsdfFlags {
     pub glossy: bool,
     /// A broad non-delta lobe.
     pub diffuse: bool,
-    /// The surface emits light itself.
-    pub emissive: bool,
 }
 
 impl BsdfFlags {
-    /// Nothing is scattered.
-    pub fn is_black(&self) -> bool {
-        !(self.delta || self.glossy || self.diffuse)
+    pub const NONE: BsdfFlags = BsdfFlags {
+        delta: false,
+        glossy: false,
+        diffuse: false,
+    };
+    pub const DELTA: BsdfFlags = BsdfFlags {
+        delta: true,
+        ..Self::NONE
+    };
+    pub const GLOSSY: BsdfFlags = BsdfFlags {
+        glossy: true,
+        ..Self::NONE
+    };
+    pub const DIFFUSE: BsdfFlags = BsdfFlags {
+        diffuse: true,
+        ..Self::NONE
+    };
+
+    /// Whether anything is scattered.
+    pub fn scatters(&self) -> bool {
+        self.delta || self.glossy || self.diffuse
     }
 }
 
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub enum Material {
-    Lambertian {
-        albedo: Color,
-    },
-    Mirror {
-        reflectance: Color,
-    },
-    /// Smooth dielectric: index `ior` on the back (−z) side, 1 on the front.
-    Glass {
-        ior: f32,
-        reflectance: Color,
-        transmittance: Color,
-    },
-    /// Glass without its reflection.
-    Refraction {
-        ior: f32,
-        transmittance: Color,
-    },
-    /// Rough conductor: Beckmann NDF, separable Smith G, exact conductor Fresnel.
-    /// Its parameters are built once, by `Conductor::new`, when the material is made.
-    Microfacet(Conductor),
-    /// Emits `radiance` from the front side; reflects nothing.
-    Emission {
-        radiance: Color,
-    },
-    /// Absorbs everything and emits nothing itself: the surface of an area light,
-    /// whose radiance the light gives (`AreaLight::emitted`).
-    Black,
+/// A direction drawn by `Scatter::sample`, per lane.
+#[derive(Clone, Copy, Debug)]
+pub struct BsdfSample<F: Real> {
+    /// Local incident direction (unit).
+    pub wi: V3<F>,
+    /// The estimator weight `f·|cos θi| / pdf`; for a delta lobe, the lobe's factor
+    /// (e.g. `F·R` for glass reflection) divided by the probability of choosing it.
+    pub weight: V3<F>,
+    /// Solid-angle pdf of `wi`; for a delta lobe, the probability of choosing that lobe.
+    pub pdf: F,
+    /// Lanes that drew a direction (the rest scatter nothing: zero density, total
+    /// internal reflection of `Refraction`, invalid parameters).
+    pub valid: F::M,
 }
 
-impl Default for Material {
-    fn default() -> Self {
-        Material::Lambertian {
-            albedo: Color::splat(0.5),
+/// One BSDF kind, over a lane type `F`: its parameters (one value per lane) and its
+/// scattering. `eval` and `pdf` default to zero, as for delta lobes.
+pub trait Scatter<F: Real>: Copy {
+    /// The parameters for one path (`Self` at `f32`).
+    type One: Copy + fmt::Debug + PartialEq;
+    const FLAGS: BsdfFlags;
+    /// The lanes' parameters from each lane's own (`each[i]` for lane `i`).
+    fn gather<L: Lanes<F = F>>(l: L, each: &F::Array<Self::One>) -> Self;
+    /// `f(wo, wi)` without the cosine.
+    #[inline(always)]
+    fn eval(&self, wo: V3<F>, _wi: V3<F>) -> V3<F> {
+        let zero = wo.x.splat_as(0.0);
+        V3::new(zero, zero, zero)
+    }
+    /// Solid-angle density with which `sample` returns `wi`.
+    #[inline(always)]
+    fn pdf(&self, wo: V3<F>, _wi: V3<F>) -> F {
+        wo.x.splat_as(0.0)
+    }
+    /// Draws `wi` given `wo`: `u_lobe` chooses a lobe, `u` the direction.
+    fn sample(&self, wo: V3<F>, u_lobe: F, u: (F, F)) -> BsdfSample<F>;
+    /// The kind and its parameters, for `ember info`: `lambertian: albedo (0.5, 0.5, 0.5)`.
+    fn describe(one: &Self::One) -> String;
+    /// The factor by which radiance (not importance) is scaled along `wo ← wi`:
+    /// `(ηi/ηt)²` across a refracting interface, else 1 (for adjoint transport).
+    #[inline(always)]
+    fn radiance_scale(&self, wo: V3<F>, _wi: V3<F>) -> F {
+        wo.x.splat_as(1.0)
+    }
+}
+
+/// Scatters nothing: the surface of an area light (whose light gives its radiance),
+/// and pure emitters.
+#[derive(Clone, Copy, Debug, PartialEq, Default)]
+pub struct NonScattering<F = f32> {
+    lanes: std::marker::PhantomData<F>,
+}
+
+impl<F: Real> Scatter<F> for NonScattering<F> {
+    type One = NonScattering;
+    const FLAGS: BsdfFlags = BsdfFlags::NONE;
+    #[inline(always)]
+    fn gather<L: Lanes<F = F>>(_: L, _: &F::Array<NonScattering>) -> Self {
+        NonScattering {
+            lanes: std::marker::PhantomData,
+        }
+    }
+    fn describe(_: &NonScattering) -> String {
+        "non-scattering".into()
+    }
+    #[inline(always)]
+    fn sample(&self, wo: V3<F>, _: F, _: (F, F)) -> BsdfSample<F> {
+        let zero = wo.x.splat_as(0.0);
+        BsdfSample {
+            wi: wo,
+            weight: V3::new(zero, zero, zero),
+            pdf: zero,
+            valid: zero.lt(zero),
         }
     }
 }
 
-/// A direction drawn by `Material::sample`.
+/// Each lane's value of a colour parameter.
+#[inline(always)]
+pub fn gather_v3<L: Lanes, T: Copy>(
+    l: L,
+    each: &<L::F as Real>::Array<T>,
+    f: impl Fn(&T) -> V3<f32>,
+) -> V3<L::F> {
+    let mut a = [[0.0f32; LANES]; 3];
+    for i in 0..L::WIDTH {
+        let v = f(&each[i]);
+        (a[0][i], a[1][i], a[2][i]) = (v.x, v.y, v.z);
+    }
+    V3::from_arrays(l, &a)
+}
+
+/// Each lane's value of a scalar parameter.
+#[inline(always)]
+pub fn gather_f<L: Lanes, T: Copy>(
+    l: L,
+    each: &<L::F as Real>::Array<T>,
+    f: impl Fn(&T) -> f32,
+) -> L::F {
+    let mut a = [0.0f32; LANES];
+    for (i, v) in a.iter_mut().enumerate().take(L::WIDTH) {
+        *v = f(&each[i]);
+    }
+    l.f_from(a)
+}
+
+/// Generates [`Bsdf`] (one path's BSDF, one variant per kind) and [`BsdfLanes`] (the
+/// BSDFs of sixteen lanes, each kind present gathered once) from the list of kinds.
+macro_rules! bsdfs {
+    ($($(#[$doc:meta])* $kind:ident($ty:ident) = $name:literal,)*) => {
+        /// A BSDF: one of the kinds.
+        #[derive(Clone, Copy, Debug, PartialEq)]
+        pub enum Bsdf {
+            $($(#[$doc])* $kind($ty),)*
+        }
+
+        /// The kinds, numbered.
+        #[derive(Clone, Copy, Debug, PartialEq, Eq)]
+        #[allow(clippy::enum_variant_names)]
+        enum Kind { $($kind,)* }
+
+        const KINDS: usize = [$(Kind::$kind,)*].len();
+
+        impl Bsdf {
+            fn kind(&self) -> Kind {
+                match self { $(Bsdf::$kind(_) => Kind::$kind,)* }
+            }
+
+            /// What kind of scattering this BSDF has.
+            pub fn flags(&self) -> BsdfFlags {
+                match self { $(Bsdf::$kind(_) => <$ty as Scatter<f32>>::FLAGS,)* }
+            }
+
+            /// The kind's name, as the loader and `ember info` say it.
+            pub fn name(&self) -> &'static str {
+                match self { $(Bsdf::$kind(_) => $name,)* }
+            }
+
+            /// The kind and its parameters.
+            pub fn describe(&self) -> String {
+                match self { $(Bsdf::$kind(b) => <$ty as Scatter<f32>>::describe(b),)* }
+            }
+        }
+
+        /// The BSDFs of a set of lanes: each kind present, gathered once, with its lanes.
+        #[allow(non_snake_case)]
+        pub struct BsdfLanes<L: Lanes> {
+            $($kind: Option<($ty<L::F>, L::M)>,)*
+            /// Lanes whose BSDF is a delta distribution, and that scatter at all.
+            pub delta: LaneBits,
+            pub scattering: LaneBits,
+            pub glossy: LaneBits,
+        }
+
+        impl<L: Lanes> BsdfLanes<L> {
+            /// The BSDF of each lane in `lanes`, `bsdf(i)` for lane `i`.
+            #[inline(always)]
+            pub fn gather(l: L, lanes: LaneBits, bsdf: impl Fn(usize) -> Bsdf) -> Self {
+                let mut of_kind = [0 as LaneBits; KINDS];
+                let mut first = [usize::MAX; KINDS];
+                let all = <L::F as Real>::array(|i| {
+                    if lanes >> i & 1 == 0 {
+                        return None;
+                    }
+                    let b = bsdf(i);
+                    let k = b.kind() as usize;
+                    of_kind[k] |= 1 << i;
+                    if first[k] == usize::MAX {
+                        first[k] = i;
+                    }
+                    Some(b)
+                });
+                let (mut delta, mut scattering, mut glossy) = (0, 0, 0);
+                $(#[allow(non_snake_case)] let $kind = {
+                    let k = Kind::$kind as usize;
+                    (of_kind[k] != 0).then(|| {
+                        let Some(Bsdf::$kind(fill)) = all[first[k]] else { unreachable!() };
+                        let each = <L::F as Real>::array(|i| match all[i] {
+                            Some(Bsdf::$kind(b)) => b,
+                            _ => fill,
+                        });
+                        let flags = <$ty as Scatter<f32>>::FLAGS;
+                        if flags.delta { delta |= of_kind[k]; }
+                        if flags.glossy { glossy |= of_kind[k]; }
+                        if flags.scatters() { scattering |= of_kind[k]; }
+                        (<$ty<L::F> as Scatter<L::F>>::gather(l, &each), l.mask(of_kind[k]))
+                    })
+                };)*
+                BsdfLanes { $($kind,)* delta, scattering, glossy }
+            }
+
+            /// `f(wo, wi)` of each lane's BSDF.
+            #[inline(always)]
+            pub fn eval(&self, l: L, wo: V3<L::F>, wi: V3<L::F>) -> V3<L::F> {
+                let mut f = V3::splat(l, Vec3::ZERO);
+                $(if let Some((b, m)) = &self.$kind {
+                    f = V3::select(*m, b.eval(wo, wi), f);
+                })*
+                f
+            }
+
+            /// The solid-angle pdf of `wi` for each lane's BSDF.
+            #[inline(always)]
+            pub fn pdf(&self, l: L, wo: V3<L::F>, wi: V3<L::F>) -> L::F {
+                let mut p = l.f(0.0);
+                $(if let Some((b, m)) = &self.$kind {
+                    p = L::F::select(*m, b.pdf(wo, wi), p);
+                })*
+                p
+            }
+
+            /// A direction drawn from each lane's BSDF.
+            #[inline(always)]
+            pub fn sample(&self, l: L, wo: V3<L::F>, u_lobe: L::F, u: (L::F, L::F)) -> BsdfSample<L::F> {
+                let zero = l.f(0.0);
+                let mut s = BsdfSample {
+                    wi: wo,
+                    weight: V3::splat(l, Vec3::ZERO),
+                    pdf: zero,
+                    valid: l.mask(0),
+                };
+                $(if let Some((b, m)) = &self.$kind {
+                    let t = b.sample(wo, u_lobe, u);
+                    s = BsdfSample {
+                        wi: V3::select(*m, t.wi, s.wi),
+                        weight: V3::select(*m, t.weight, s.weight),
+                        pdf: L::F::select(*m, t.pdf, s.pdf),
+                        valid: (*m & t.valid) | (!*m & s.valid),
+                    };
+                })*
+                s
+            }
+
+            /// Each lane's radiance scale along `wo ← wi` (`Scatter::radiance_scale`).
+            #[inline(always)]
+            pub fn radiance_scale(&self, l: L, wo: V3<L::F>, wi: V3<L::F>) -> L::F {
+                let mut k = l.f(1.0);
+                $(if let Some((b, m)) = &self.$kind {
+                    k = L::F::select(*m, b.radiance_scale(wo, wi), k);
+                })*
+                k
+            }
+        }
+    };
+}
+
+bsdfs! {
+    /// Two-sided diffuse reflection.
+    Lambertian(Lambertian) = "lambertian",
+    /// Perfect specular reflection.
+    Mirror(Mirror) = "mirror",
+    /// Smooth dielectric: index `ior` on the back (−z) side, 1 on the front.
+    Glass(Glass) = "glass",
+    /// Glass without its reflection.
+    Refraction(Refraction) = "refraction",
+    /// Rough conductor: Beckmann NDF, separable Smith G, exact conductor Fresnel.
+    Microfacet(Conductor) = "microfacet",
+    /// Scatters nothing (light surfaces, pure emitters).
+    NonScattering(NonScattering) = "non-scattering",
+}
+
+/// A surface's material: how it scatters and what it emits itself.
 #[derive(Clone, Copy, Debug, PartialEq)]
-pub struct BsdfSample {
-    /// Local incident direction (unit).
+pub struct Material {
+    pub bsdf: Bsdf,
+    /// Radiance emitted from the front side (both sides when `two_sided`), in
+    /// addition to what is scattered. Area lights' surfaces take theirs from the light.
+    pub emission: Color,
+    pub two_sided: bool,
+}
+
+impl Default for Material {
+    fn default() -> Self {
+        Material::lambertian(Color::splat(0.5))
+    }
+}
+
+impl From<Bsdf> for Material {
+    fn from(bsdf: Bsdf) -> Self {
+        Material {
+            bsdf,
+            emission: Color::ZERO,
+            two_sided: false,
+        }
+    }
+}
+
+/// A direction drawn by [`Material::sample`] (one path).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ScatterSample {
     pub wi: Vec3,
-    /// The estimator weight `f·|cos θi| / pdf`; for a delta lobe, the lobe's factor
-    /// (e.g. `F·R` for glass reflection) divided by the probability of choosing it.
     pub weight: Color,
-    /// Solid-angle pdf of `wi`; for a delta lobe, the probability of choosing that lobe.
     pub pdf: f32,
     /// True when `wi` came from a delta (specular) lobe.
     pub delta: bool,
 }
 
 impl Material {
-    /// `f(wo, wi)` without the cosine; zero for delta materials.
-    pub fn eval(&self, wo: Vec3, wi: Vec3) -> Color {
-        match *self {
-            Material::Lambertian { albedo } => lambertian::eval(albedo, wo, wi),
-            Material::Microfacet(c) => c.eval(wo, wi),
-            _ => Color::ZERO,
+    pub fn lambertian(albedo: Color) -> Self {
+        Bsdf::Lambertian(Lambertian {
+            albedo: albedo.into(),
+        })
+        .into()
+    }
+
+    pub fn mirror(reflectance: Color) -> Self {
+        Bsdf::Mirror(Mirror {
+            reflectance: reflectance.into(),
+        })
+        .into()
+    }
+
+    pub fn glass(ior: f32, reflectance: Color, transmittance: Color) -> Self {
+        Bsdf::Glass(Glass {
+            ior,
+            reflectance: reflectance.into(),
+            transmittance: transmittance.into(),
+        })
+        .into()
+    }
+
+    pub fn refraction(ior: f32, transmittance: Color) -> Self {
+        Bsdf::Refraction(Refraction {
+            ior,
+            transmittance: transmittance.into(),
+        })
+        .into()
+    }
+
+    pub fn microfacet(alpha: f32, eta: Color, k: Color) -> Self {
+        Bsdf::Microfacet(Conductor::new(alpha, eta, k)).into()
+    }
+
+    /// Emits `radiance` from its front side and scatters nothing (the course's
+    /// `<emission>` material).
+    pub fn emitter(radiance: Color) -> Self {
+        Material {
+            emission: radiance,
+            ..Bsdf::NonScattering(NonScattering::default()).into()
         }
     }
 
-    /// Solid-angle density with which `sample` returns `wi`; zero for delta lobes.
-    pub fn pdf(&self, wo: Vec3, wi: Vec3) -> f32 {
-        match *self {
-            Material::Lambertian { .. } => lambertian::pdf(wo, wi),
-            Material::Microfacet(c) => c.pdf(wo, wi),
-            _ => 0.0,
+    /// The surface of an area light: scatters nothing, and its radiance is the light's.
+    pub fn light_surface() -> Self {
+        Bsdf::NonScattering(NonScattering::default()).into()
+    }
+
+    /// This material also emitting `radiance` (from both sides when `two_sided`).
+    pub fn with_emission(self, radiance: Color, two_sided: bool) -> Self {
+        Material {
+            emission: radiance,
+            two_sided,
+            ..self
         }
     }
 
-    /// Draws `wi` given `wo`. `u_lobe` chooses a lobe, `u` the direction.
-    /// `None` when nothing scatters (zero density, total internal reflection
-    /// of `Refraction`, emitters, invalid parameters).
-    pub fn sample(&self, wo: Vec3, u_lobe: f32, u: Vec2) -> Option<BsdfSample> {
-        if !wo.is_finite() {
-            return None;
-        }
-        match *self {
-            Material::Lambertian { albedo } => lambertian::sample(albedo, wo, u),
-            Material::Mirror { reflectance } => specular::sample_mirror(reflectance, wo),
-            Material::Glass {
-                ior,
-                reflectance,
-                transmittance,
-            } => valid_ior(ior).and_then(|ior| {
-                specular::sample_glass(ior, reflectance, transmittance, wo, u_lobe)
-            }),
-            Material::Refraction { ior, transmittance } => {
-                valid_ior(ior).and_then(|ior| specular::sample_refraction(ior, transmittance, wo))
-            }
-            Material::Microfacet(c) => c.sample(wo, u),
-            Material::Emission { .. } | Material::Black => None,
-        }
+    /// Whether the material emits light itself.
+    pub fn emits(&self) -> bool {
+        self.emission != Color::ZERO
     }
 
-    /// What kind of scattering and emission this material has.
     pub fn flags(&self) -> BsdfFlags {
-        let none = BsdfFlags::default();
-        match self {
-            Material::Lambertian { .. } => BsdfFlags {
-                diffuse: true,
-                ..none
-            },
-            Material::Mirror { .. } | Material::Glass { .. } | Material::Refraction { .. } => {
-                BsdfFlags {
-                    delta: true,
-                    ..none
-                }
-            }
-            Material::Microfacet(_) => BsdfFlags {
-                glossy: true,
-                ..none
-            },
-            Material::Emission { .. } => BsdfFlags {
-                emissive: true,
-                ..none
-            },
-            Material::Black => none,
-        }
+        self.bsdf.flags()
     }
 
     /// True when every lobe is a delta distribution (mirror, glass, refraction):
@@ -162,67 +431,82 @@ impl Material {
         self.flags().delta
     }
 
-    /// True when the material scatters no light at all (emitters, light surfaces).
-    pub fn is_black(&self) -> bool {
-        self.flags().is_black()
+    /// Whether the material scatters light at all.
+    pub fn scatters(&self) -> bool {
+        self.flags().scatters()
     }
 
-    /// Radiance emitted toward local direction `wo` (front side only).
+    /// Radiance emitted toward local direction `wo`.
     pub fn emitted(&self, wo: Vec3) -> Color {
-        match self {
-            Material::Emission { radiance } if wo.z > 0.0 => *radiance,
-            _ => Color::ZERO,
+        if wo.z > 0.0 || (self.two_sided && wo.z < 0.0) {
+            self.emission
+        } else {
+            Color::ZERO
         }
     }
-}
 
-impl Material {
+    /// The BSDF for one path.
+    fn one(&self) -> BsdfLanes<crate::lanes::One> {
+        BsdfLanes::gather(crate::lanes::One, 1, |_| self.bsdf)
+    }
+
+    /// `f(wo, wi)` without the cosine; zero for delta materials.
+    pub fn eval(&self, wo: Vec3, wi: Vec3) -> Color {
+        self.one()
+            .eval(crate::lanes::One, wo.into(), wi.into())
+            .vec3()
+    }
+
+    /// Solid-angle density with which `sample` returns `wi`; zero for delta lobes.
+    pub fn pdf(&self, wo: Vec3, wi: Vec3) -> f32 {
+        self.one().pdf(crate::lanes::One, wo.into(), wi.into())
+    }
+
+    /// Draws `wi` given `wo`. `u_lobe` chooses a lobe, `u` the direction. `None` when
+    /// nothing scatters.
+    pub fn sample(&self, wo: Vec3, u_lobe: f32, u: Vec2) -> Option<ScatterSample> {
+        let s = self
+            .one()
+            .sample(crate::lanes::One, wo.into(), u_lobe, (u.x, u.y));
+        s.valid.any().then(|| ScatterSample {
+            wi: s.wi.vec3(),
+            weight: s.weight.vec3(),
+            pdf: s.pdf,
+            delta: self.is_delta(),
+        })
+    }
+
+    /// The factor by which radiance is scaled along `wo ← wi` (`Scatter::radiance_scale`).
+    pub fn radiance_scale(&self, wo: Vec3, wi: Vec3) -> f32 {
+        self.one()
+            .radiance_scale(crate::lanes::One, wo.into(), wi.into())
+    }
+
     /// The kind and every parameter, for `ember info`: `lambertian: albedo (0.5, 0.5, 0.5)`.
     pub fn describe(&self) -> String {
-        use crate::color::compact as v;
-        match *self {
-            Material::Lambertian { albedo } => format!("{self}: albedo {}", v(albedo)),
-            Material::Mirror { reflectance } => format!("{self}: reflectance {}", v(reflectance)),
-            Material::Glass {
-                ior,
-                reflectance,
-                transmittance,
-            } => format!(
-                "{self}: ior {ior}, reflectance {}, transmittance {}",
-                v(reflectance),
-                v(transmittance)
-            ),
-            Material::Refraction { ior, transmittance } => {
-                format!("{self}: ior {ior}, transmittance {}", v(transmittance))
+        let v = crate::color::compact;
+        match (self.bsdf, self.emits()) {
+            (Bsdf::NonScattering(_), true) => format!("{self}: radiance {}", v(self.emission)),
+            (Bsdf::NonScattering(_), false) => "non-scattering (an area light's surface)".into(),
+            (b, false) => b.describe(),
+            (b, true) => {
+                let sides = if self.two_sided {
+                    "both sides"
+                } else {
+                    "front"
+                };
+                format!("{}; emits {} ({sides})", b.describe(), v(self.emission))
             }
-            Material::Microfacet(c) => format!(
-                "{self}: alpha {}, eta {}, k {}",
-                c.alpha,
-                v(c.eta()),
-                v(c.k())
-            ),
-            Material::Emission { radiance } => format!("{self}: radiance {}", v(radiance)),
-            Material::Black => format!("{self} (an area light's surface)"),
         }
     }
-}
-
-/// A dielectric index must be positive and finite for Snell's law to mean anything.
-fn valid_ior(ior: f32) -> Option<f32> {
-    (ior > 0.0 && ior.is_finite()).then_some(ior)
 }
 
 /// The material's kind, as the loader and `ember info` name it.
 impl fmt::Display for Material {
     fn fmt(&self, f: &mut fmt::Formatter) -> fmt::Result {
-        f.write_str(match self {
-            Material::Lambertian { .. } => "lambertian",
-            Material::Mirror { .. } => "mirror",
-            Material::Glass { .. } => "glass",
-            Material::Refraction { .. } => "refraction",
-            Material::Microfacet(_) => "microfacet",
-            Material::Emission { .. } => "emission",
-            Material::Black => "black",
-        })
+        match self.bsdf {
+            Bsdf::NonScattering(_) if self.emits() => f.write_str("emission"),
+            b => f.write_str(b.name()),
+        }
     }
 }

@@ -1,105 +1,199 @@
 //! Smooth (delta) interfaces: mirror, glass and refraction. The index η lies on
 //! the back (−z) side and 1 on the front, as spec §6 says.
 
-use super::{fresnel, BsdfSample};
-use crate::color::luminance;
-use crate::Color;
-use glam::Vec3;
+use super::{fresnel, gather_f, gather_v3, BsdfFlags, BsdfSample, Scatter};
+use crate::color::{compact, luminance_l};
+use crate::lanes::{Lanes, Real, V3};
 
 /// Mirror direction of `wo` about the local normal +z.
-#[inline]
-pub fn reflect(wo: Vec3) -> Vec3 {
-    Vec3::new(-wo.x, -wo.y, wo.z)
+#[inline(always)]
+pub fn reflect<F: Real>(wo: V3<F>) -> V3<F> {
+    V3::new(-wo.x, -wo.y, wo.z)
 }
 
 /// Indices `(ηi, ηt)` on the side of `wo` and on the other side.
-#[inline]
-pub fn indices(wo: Vec3, ior: f32) -> (f32, f32) {
-    if wo.z >= 0.0 {
-        (1.0, ior)
-    } else {
-        (ior, 1.0)
-    }
+#[inline(always)]
+pub fn indices<F: Real>(wo: V3<F>, ior: F) -> (F, F) {
+    let front = wo.z.ge(wo.z.splat_as(0.0));
+    let one = ior.splat_as(1.0);
+    (F::select(front, one, ior), F::select(front, ior, one))
 }
 
-/// Refracted direction of `wo` through the interface (Snell's law), or `None`
-/// under total internal reflection.
-pub fn refract(wo: Vec3, eta_i: f32, eta_t: f32) -> Option<Vec3> {
+/// Refracted direction of `wo` through the interface (Snell's law), and the lanes
+/// where it exists (not under total internal reflection).
+#[inline(always)]
+pub fn refract<F: Real>(wo: V3<F>, eta_i: F, eta_t: F) -> (V3<F>, F::M) {
     let eta_ratio = eta_i / eta_t;
     let cos_i = wo.z.abs();
-    let cos_t = fresnel::refracted_cos(cos_i, eta_ratio)?;
+    let (cos_t, ok) = fresnel::refracted_cos(cos_i, eta_ratio);
     // Tangential part scales by ηi/ηt and flips, the normal part moves to the other side.
-    let wi = Vec3::new(-eta_ratio * wo.x, -eta_ratio * wo.y, -cos_t.copysign(wo.z));
-    Some(wi.normalize())
+    let wi = V3::new(-eta_ratio * wo.x, -eta_ratio * wo.y, -cos_t.copysign(wo.z));
+    (wi.normalize(), ok)
 }
 
-pub fn sample_mirror(reflectance: Color, wo: Vec3) -> Option<BsdfSample> {
-    Some(BsdfSample {
-        wi: reflect(wo),
-        weight: reflectance,
-        pdf: 1.0,
-        delta: true,
-    })
+/// A dielectric index must be positive and finite for Snell's law to mean anything.
+#[inline(always)]
+fn valid_ior<F: Real>(ior: F) -> F::M {
+    ior.gt(ior.splat_as(0.0)) & ior.is_finite()
 }
 
-/// Picks reflection with probability `F·lum(R) / (F·lum(R) + (1−F)·lum(T))`,
-/// i.e. proportional to each lobe's contribution (this is F when R and T are
-/// alike), so a lobe that carries nothing is never chosen. The weight is the
-/// lobe's factor divided by that probability.
-pub fn sample_glass(
-    ior: f32,
-    reflectance: Color,
-    transmittance: Color,
-    wo: Vec3,
-    u_lobe: f32,
-) -> Option<BsdfSample> {
-    let (eta_i, eta_t) = indices(wo, ior);
-    let f = fresnel::dielectric(wo.z.abs(), eta_i, eta_t);
-    let refracted = if f < 1.0 {
-        refract(wo, eta_i, eta_t)
-    } else {
-        None
-    };
-    let Some(wt) = refracted else {
-        // Total internal reflection: F = 1, reflection is the only lobe.
-        return sample_mirror(reflectance, wo);
-    };
-    let p_reflect_unnorm = f * luminance(reflectance).max(0.0);
-    let p_refract_unnorm = (1.0 - f) * luminance(transmittance).max(0.0);
-    let total = p_reflect_unnorm + p_refract_unnorm;
-    if total.is_nan() || total <= 0.0 {
-        return None;
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Mirror<F = f32> {
+    pub reflectance: V3<F>,
+}
+
+impl<F: Real> Scatter<F> for Mirror<F> {
+    type One = Mirror;
+    const FLAGS: BsdfFlags = BsdfFlags::DELTA;
+
+    #[inline(always)]
+    fn gather<L: Lanes<F = F>>(l: L, each: &F::Array<Mirror>) -> Self {
+        Mirror {
+            reflectance: gather_v3(l, each, |m| m.reflectance),
+        }
     }
-    let p_reflect = p_reflect_unnorm / total;
-    if u_lobe < p_reflect {
-        Some(BsdfSample {
+
+    fn describe(m: &Mirror) -> String {
+        format!("mirror: reflectance {}", compact(m.reflectance.vec3()))
+    }
+
+    #[inline(always)]
+    fn sample(&self, wo: V3<F>, _u_lobe: F, _u: (F, F)) -> BsdfSample<F> {
+        BsdfSample {
             wi: reflect(wo),
-            weight: reflectance * (f / p_reflect),
-            pdf: p_reflect,
-            delta: true,
-        })
-    } else {
-        let p_refract = 1.0 - p_reflect;
-        let scale = (eta_i / eta_t) * (eta_i / eta_t);
-        Some(BsdfSample {
-            wi: wt,
-            weight: transmittance * ((1.0 - f) * scale / p_refract),
-            pdf: p_refract,
-            delta: true,
-        })
+            weight: self.reflectance,
+            pdf: wo.z.splat_as(1.0),
+            valid: wo.is_finite(),
+        }
     }
 }
 
-/// Transmission only, without a Fresnel factor (spec: `T·(ηi/ηt)²`); total
-/// internal reflection ends the path.
-pub fn sample_refraction(ior: f32, transmittance: Color, wo: Vec3) -> Option<BsdfSample> {
+/// Smooth dielectric: reflection and refraction, weighted by the exact Fresnel term.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Glass<F = f32> {
+    pub ior: F,
+    pub reflectance: V3<F>,
+    pub transmittance: V3<F>,
+}
+
+impl<F: Real> Scatter<F> for Glass<F> {
+    type One = Glass;
+    const FLAGS: BsdfFlags = BsdfFlags::DELTA;
+
+    #[inline(always)]
+    fn gather<L: Lanes<F = F>>(l: L, each: &F::Array<Glass>) -> Self {
+        Glass {
+            ior: gather_f(l, each, |m| m.ior),
+            reflectance: gather_v3(l, each, |m| m.reflectance),
+            transmittance: gather_v3(l, each, |m| m.transmittance),
+        }
+    }
+
+    fn describe(m: &Glass) -> String {
+        format!(
+            "glass: ior {}, reflectance {}, transmittance {}",
+            m.ior,
+            compact(m.reflectance.vec3()),
+            compact(m.transmittance.vec3())
+        )
+    }
+
+    /// Picks reflection with probability `F·lum(R) / (F·lum(R) + (1−F)·lum(T))`,
+    /// i.e. proportional to each lobe's contribution (this is F when R and T are
+    /// alike), so a lobe that carries nothing is never chosen. The weight is the
+    /// lobe's factor divided by that probability. Under total internal reflection
+    /// reflection is the only lobe.
+    #[inline(always)]
+    fn sample(&self, wo: V3<F>, u_lobe: F, _u: (F, F)) -> BsdfSample<F> {
+        let (eta_i, eta_t) = indices(wo, self.ior);
+        let f = fresnel::dielectric(wo.z.abs(), eta_i, eta_t);
+        let (wt, refracts) = refract(wo, eta_i, eta_t);
+        let tir = !(f.lt(wo.z.splat_as(1.0)) & refracts);
+        let p_reflect_unnorm = f * luminance_l(self.reflectance).max(wo.z.splat_as(0.0));
+        let p_refract_unnorm =
+            (wo.z.splat_as(1.0) - f) * luminance_l(self.transmittance).max(wo.z.splat_as(0.0));
+        let total = p_reflect_unnorm + p_refract_unnorm;
+        let p_reflect = p_reflect_unnorm / total;
+        let reflects = tir | u_lobe.lt(p_reflect);
+        let p_refract = wo.z.splat_as(1.0) - p_reflect;
+        let scale = (eta_i / eta_t) * (eta_i / eta_t);
+        let w_reflect = self.reflectance * (f / p_reflect);
+        let w_refract = self.transmittance * ((wo.z.splat_as(1.0) - f) * scale / p_refract);
+        BsdfSample {
+            wi: V3::select(reflects, reflect(wo), wt),
+            weight: V3::select(
+                tir,
+                self.reflectance,
+                V3::select(reflects, w_reflect, w_refract),
+            ),
+            pdf: F::select(
+                tir,
+                wo.z.splat_as(1.0),
+                F::select(reflects, p_reflect, p_refract),
+            ),
+            valid: valid_ior(self.ior) & wo.is_finite() & (tir | total.gt(wo.z.splat_as(0.0))),
+        }
+    }
+
+    /// Refraction compresses radiance by `(ηi/ηt)²`; importance is not compressed.
+    #[inline(always)]
+    fn radiance_scale(&self, wo: V3<F>, wi: V3<F>) -> F {
+        transmission_scale(self.ior, wo, wi)
+    }
+}
+
+/// Glass without its reflection: transmission only, without a Fresnel factor (spec:
+/// `T·(ηi/ηt)²`); total internal reflection ends the path.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Refraction<F = f32> {
+    pub ior: F,
+    pub transmittance: V3<F>,
+}
+
+impl<F: Real> Scatter<F> for Refraction<F> {
+    type One = Refraction;
+    const FLAGS: BsdfFlags = BsdfFlags::DELTA;
+
+    #[inline(always)]
+    fn gather<L: Lanes<F = F>>(l: L, each: &F::Array<Refraction>) -> Self {
+        Refraction {
+            ior: gather_f(l, each, |m| m.ior),
+            transmittance: gather_v3(l, each, |m| m.transmittance),
+        }
+    }
+
+    fn describe(m: &Refraction) -> String {
+        let t = compact(m.transmittance.vec3());
+        format!("refraction: ior {}, transmittance {t}", m.ior)
+    }
+
+    #[inline(always)]
+    fn sample(&self, wo: V3<F>, _u_lobe: F, _u: (F, F)) -> BsdfSample<F> {
+        let (eta_i, eta_t) = indices(wo, self.ior);
+        let (wi, refracts) = refract(wo, eta_i, eta_t);
+        let scale = (eta_i / eta_t) * (eta_i / eta_t);
+        BsdfSample {
+            wi,
+            weight: self.transmittance * scale,
+            pdf: wo.z.splat_as(1.0),
+            valid: valid_ior(self.ior) & wo.is_finite() & refracts,
+        }
+    }
+
+    #[inline(always)]
+    fn radiance_scale(&self, wo: V3<F>, wi: V3<F>) -> F {
+        transmission_scale(self.ior, wo, wi)
+    }
+}
+
+/// `(ηi/ηt)²` for a transmission from `wo`'s side to `wi`'s, 1 for a reflection.
+#[inline(always)]
+fn transmission_scale<F: Real>(ior: F, wo: V3<F>, wi: V3<F>) -> F {
     let (eta_i, eta_t) = indices(wo, ior);
-    let wi = refract(wo, eta_i, eta_t)?;
-    let scale = (eta_i / eta_t) * (eta_i / eta_t);
-    Some(BsdfSample {
-        wi,
-        weight: transmittance * scale,
-        pdf: 1.0,
-        delta: true,
-    })
+    let transmitted = (wo.z * wi.z).lt(wo.z.splat_as(0.0));
+    F::select(
+        transmitted,
+        (eta_i / eta_t) * (eta_i / eta_t),
+        wo.z.splat_as(1.0),
+    )
 }

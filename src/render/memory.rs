@@ -2,14 +2,14 @@
 //! front, so the peak is known before rendering: [`render_bytes`] estimates it and
 //! [`available_bytes`] says what the machine (and its cgroup limit) leaves free.
 
-use super::PixelResult;
+use super::adaptive::PixelStats;
 use crate::Color;
 
 /// Bytes per pixel that live through a render and its write-out: the tile results,
 /// the image and its sample counts, the encoder's or heat map's copy, and with
 /// passes the film's sums and counts and each pass's image.
 fn bytes_per_pixel(in_passes: bool) -> u64 {
-    let result = std::mem::size_of::<PixelResult>() as u64;
+    let result = std::mem::size_of::<PixelStats>() as u64;
     let image = (std::mem::size_of::<Color>() + std::mem::size_of::<u32>()) as u64;
     let single = result + image + image;
     match in_passes {
@@ -22,8 +22,8 @@ fn bytes_per_pixel(in_passes: bool) -> u64 {
 /// the scene and its acceleration structure (already in memory when this is asked).
 pub fn render_bytes(width: u32, height: u32, in_passes: bool) -> u64 {
     // Tiles at the right and bottom edges keep whole-tile slots.
-    let padded = (width.div_ceil(super::TILE) * super::TILE) as u64
-        * (height.div_ceil(super::TILE) * super::TILE) as u64;
+    let tile = super::pixels::TILE;
+    let padded = (width.div_ceil(tile) * tile) as u64 * (height.div_ceil(tile) * tile) as u64;
     padded * bytes_per_pixel(in_passes)
 }
 

@@ -40,7 +40,111 @@ impl LoadError {
     }
 }
 
-/// Loads a scene file; messages name the file as `path` displays.
+/// Where a scene's images are read from: files beside the `.dae`, or the
+/// entries of a `.zae` archive.
+pub(crate) trait Resources {
+    /// The bytes of the image `uri` names (as `<init_from>` writes it), and the name
+    /// to show for it; else why not, in a few words.
+    fn read(&self, uri: &str) -> Result<(String, Vec<u8>), String>;
+}
+
+/// Images beside the scene file (relative URIs are relative to its folder).
+struct Folder(std::path::PathBuf);
+
+impl Resources for Folder {
+    fn read(&self, uri: &str) -> Result<(String, Vec<u8>), String> {
+        let rel = uri_path(uri);
+        let path = self.0.join(&rel);
+        match std::fs::read(&path) {
+            Ok(bytes) => Ok((path.display().to_string(), bytes)),
+            Err(e) => {
+                // An absolute path from the author's machine: try the file's name here.
+                let name = rel.rsplit('/').next().unwrap_or(&rel);
+                let beside = self.0.join(name);
+                match std::fs::read(&beside) {
+                    Ok(bytes) if name != rel => Ok((beside.display().to_string(), bytes)),
+                    _ => Err(format!("cannot read {}: {e}", path.display())),
+                }
+            }
+        }
+    }
+}
+
+/// A `.zae`: its entries by name, and the folder of its root `.dae` inside it.
+struct Archive {
+    entries: std::collections::HashMap<String, Vec<u8>>,
+    dir: String,
+}
+
+impl Resources for Archive {
+    fn read(&self, uri: &str) -> Result<(String, Vec<u8>), String> {
+        let rel = uri_path(uri);
+        let joined = normalize(&format!("{}{rel}", self.dir));
+        let name = rel.rsplit('/').next().unwrap_or(&rel).to_string();
+        let found = self
+            .entries
+            .get(&joined)
+            .map(|b| (joined.clone(), b))
+            .or_else(|| {
+                self.entries
+                    .iter()
+                    .find(|(k, _)| k.rsplit('/').next() == Some(name.as_str()))
+                    .map(|(k, b)| (k.clone(), b))
+            });
+        found
+            .map(|(k, b)| (k, b.clone()))
+            .ok_or_else(|| format!("no entry \"{joined}\" in the archive"))
+    }
+}
+
+/// A URI of `<init_from>` as a relative or absolute path with `/` separators:
+/// `file://` dropped, `%XX` escapes decoded, backslashes turned around.
+fn uri_path(uri: &str) -> String {
+    let s = uri.trim();
+    let s = s
+        .strip_prefix("file://")
+        .or_else(|| s.strip_prefix("file:"))
+        .unwrap_or(s);
+    // file:///C:/x: the drive letter follows the third slash.
+    let s = match s.as_bytes() {
+        [b'/', _, b':', ..] => &s[1..],
+        _ => s,
+    };
+    let mut bytes = Vec::with_capacity(s.len());
+    let b = s.as_bytes();
+    let mut i = 0;
+    while i < b.len() {
+        let hex = |c: u8| (c as char).to_digit(16);
+        if b[i] == b'%' && i + 2 < b.len() {
+            if let (Some(h), Some(l)) = (hex(b[i + 1]), hex(b[i + 2])) {
+                bytes.push((h * 16 + l) as u8);
+                i += 3;
+                continue;
+            }
+        }
+        bytes.push(b[i]);
+        i += 1;
+    }
+    String::from_utf8_lossy(&bytes).replace('\\', "/")
+}
+
+/// `a/./b/../c` → `a/c`, for names inside an archive.
+fn normalize(path: &str) -> String {
+    let mut parts: Vec<&str> = Vec::new();
+    for p in path.split('/') {
+        match p {
+            "" | "." => {}
+            ".." => {
+                parts.pop();
+            }
+            _ => parts.push(p),
+        }
+    }
+    parts.join("/")
+}
+
+/// Loads a scene file (`.dae`, or a `.zae` archive); messages name the file as
+/// `path` displays.
 pub fn load(path: &Path) -> Result<Scene, LoadError> {
     let file = path.display().to_string();
     let io = |source| LoadError::Io {
@@ -55,18 +159,125 @@ pub fn load(path: &Path) -> Result<Scene, LoadError> {
         ));
     }
     let bytes = std::fs::read(path).map_err(io)?;
-    let text = String::from_utf8(bytes).map_err(|e| {
-        let at = e.utf8_error().valid_up_to();
-        LoadError::invalid(
-            &file,
-            format!("not a text file (invalid UTF-8 at byte {at})"),
-        )
-    })?;
-    parse(&text, &file)
+    if bytes.starts_with(b"PK\x03\x04") {
+        return load_zae(&file, &bytes);
+    }
+    let text = decode_text(&file, bytes)?;
+    let dir = path.parent().map(Path::to_path_buf).unwrap_or_default();
+    parse_with(&text, &file, &Folder(dir))
 }
 
-/// Parses COLLADA text; `file_label` prefixes every message.
+/// The text of an XML file: UTF-8 (a byte-order mark is dropped), or UTF-16 of
+/// either byte order, which the XML standard allows when a byte-order mark says so.
+fn decode_text(file: &str, bytes: Vec<u8>) -> Result<String, LoadError> {
+    let utf16 = |big: bool| {
+        let units: Vec<u16> = bytes[2..]
+            .chunks_exact(2)
+            .map(|c| {
+                if big {
+                    u16::from_be_bytes([c[0], c[1]])
+                } else {
+                    u16::from_le_bytes([c[0], c[1]])
+                }
+            })
+            .collect();
+        String::from_utf16(&units).map_err(|_| {
+            LoadError::invalid(
+                file,
+                "not a text file (invalid UTF-16 after its byte-order mark)",
+            )
+        })
+    };
+    match bytes.as_slice() {
+        [0xFF, 0xFE, ..] => utf16(false),
+        [0xFE, 0xFF, ..] => utf16(true),
+        [0xEF, 0xBB, 0xBF, rest @ ..] => utf8(file, rest.to_vec()),
+        _ => utf8(file, bytes),
+    }
+}
+
+fn utf8(file: &str, bytes: Vec<u8>) -> Result<String, LoadError> {
+    String::from_utf8(bytes).map_err(|e| {
+        let at = e.utf8_error().valid_up_to();
+        LoadError::invalid(
+            file,
+            format!("not a text file (invalid UTF-8 at byte {at})"),
+        )
+    })
+}
+
+/// Entries larger than this are not unpacked from a `.zae`.
+const MAX_ENTRY_BYTES: u64 = 1 << 30;
+
+/// A `.zae`: a zip archive whose `manifest.xml` names the root `.dae`
+/// (`<dae_root>`); without a manifest, its only `.dae`.
+fn load_zae(file: &str, bytes: &[u8]) -> Result<Scene, LoadError> {
+    let bad = |what: String| LoadError::invalid(file, what);
+    let mut zip = zip::ZipArchive::new(std::io::Cursor::new(bytes))
+        .map_err(|e| bad(format!("not a readable .zae (zip) archive: {e}")))?;
+    let mut entries = std::collections::HashMap::new();
+    let mut total = 0u64;
+    for i in 0..zip.len() {
+        let mut entry = zip
+            .by_index(i)
+            .map_err(|e| bad(format!("archive entry {i}: {e}")))?;
+        if entry.is_dir() {
+            continue;
+        }
+        total += entry.size();
+        if entry.size() > MAX_ENTRY_BYTES || total > MAX_FILE_BYTES {
+            return Err(bad(format!(
+                "archive entry \"{}\" is too large",
+                entry.name()
+            )));
+        }
+        let mut data = Vec::with_capacity(entry.size() as usize);
+        std::io::Read::read_to_end(&mut entry, &mut data)
+            .map_err(|e| bad(format!("archive entry \"{}\": {e}", entry.name())))?;
+        entries.insert(normalize(entry.name()), data);
+    }
+    let root = match entries.get("manifest.xml") {
+        Some(m) => {
+            let text = decode_text(&format!("{file}/manifest.xml"), m.clone())?;
+            let doc = roxmltree::Document::parse(&text)
+                .map_err(|e| bad(format!("manifest.xml: not well-formed XML: {e}")))?;
+            let root = doc
+                .descendants()
+                .find(|n| n.has_tag_name("dae_root"))
+                .and_then(|n| n.text())
+                .ok_or_else(|| bad("manifest.xml: <dae_root>: missing".into()))?;
+            normalize(&uri_path(root.split('#').next().unwrap_or(root)))
+        }
+        None => {
+            let mut daes = entries
+                .keys()
+                .filter(|k| k.to_ascii_lowercase().ends_with(".dae"));
+            match (daes.next(), daes.next()) {
+                (Some(d), None) => d.clone(),
+                _ => return Err(bad("no manifest.xml and not exactly one .dae".into())),
+            }
+        }
+    };
+    let label = format!("{file}/{root}");
+    let bytes = entries
+        .get(&root)
+        .cloned()
+        .ok_or_else(|| bad(format!("manifest.xml: <dae_root>: no entry \"{root}\"")))?;
+    let text = decode_text(&label, bytes)?;
+    let dir = match root.rfind('/') {
+        Some(k) => root[..=k].to_string(),
+        None => String::new(),
+    };
+    parse_with(&text, &label, &Archive { entries, dir })
+}
+
+/// Parses COLLADA text; `file_label` prefixes every message. Images are read
+/// relative to the current directory.
 pub fn parse(text: &str, file_label: &str) -> Result<Scene, LoadError> {
+    parse_with(text, file_label, &Folder(std::path::PathBuf::new()))
+}
+
+fn parse_with(text: &str, file_label: &str, resources: &dyn Resources) -> Result<Scene, LoadError> {
     if text.trim().is_empty() {
         return Err(LoadError::invalid(file_label, "file is empty"));
     }
@@ -98,5 +309,5 @@ pub fn parse(text: &str, file_label: &str) -> Result<Scene, LoadError> {
             ),
         ));
     }
-    builder::build(file_label, &doc)
+    builder::build(file_label, &doc, resources)
 }

@@ -2,12 +2,19 @@
 //! lights and one camera. No scene graph survives loading.
 
 pub mod collada;
+mod interaction;
 
-use crate::geometry::{offset_ray_origin, ray::gamma, sphere::sphere_spawn_origin, Aabb, Ray};
+pub use interaction::Hits;
+
+use crate::geometry::{ray::gamma, Aabb, Ray};
+use crate::lanes::rays::HitPacket;
+use crate::lanes::{One, V3};
 use crate::lights::{AreaLight, Light};
-use crate::materials::Material;
+use crate::materials::{Bsdf, Material};
+use crate::texture::Texture;
 use crate::Color;
 use glam::{Vec2, Vec3};
+use std::sync::Arc;
 
 /// Marker for "no light" in `Triangle::light`.
 pub const NO_LIGHT: u32 = u32::MAX;
@@ -30,7 +37,8 @@ pub struct Sphere {
     pub material: u32,
 }
 
-/// What the file says about the view; the eye itself comes from the scene bounds (spec §4).
+/// What the file says about the view. The eye comes from the scene bounds (spec §4), or,
+/// for files other tools wrote, from the camera node (`placement`, issue 26).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct CameraDesc {
     /// Unit forward direction `F`.
@@ -41,6 +49,22 @@ pub struct CameraDesc {
     pub tan_half_x: Option<f32>,
     /// `tan(yfov/2)` as given or derived from the file, if known.
     pub tan_half_y: Option<f32>,
+    /// The camera node's world position, when the file has a camera.
+    pub position: Option<Vec3>,
+    /// Where the eye goes: the course's rule or the file's own position.
+    pub placement: Placement,
+}
+
+/// Where the camera's eye is put.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum Placement {
+    /// The course's rule (spec §4): `centre − 1.5·diagonal·F` of the scene bounds,
+    /// whatever the file says.
+    #[default]
+    Course,
+    /// The camera node's own position (`CameraDesc::position`), as the file's author
+    /// put it; the course's rule where the file has no camera.
+    File,
 }
 
 impl Default for CameraDesc {
@@ -51,6 +75,8 @@ impl Default for CameraDesc {
             up: Vec3::Y,
             tan_half_x: Some((49.13434f32.to_radians() * 0.5).tan()),
             tan_half_y: None,
+            position: None,
+            placement: Placement::Course,
         }
     }
 }
@@ -85,11 +111,18 @@ pub struct Scene {
     /// The file's name of each material (parallel to `materials`; may be shorter for
     /// scenes built in code).
     pub material_names: Vec<String>,
-    /// Two-sided emission attached to primitives on top of their material, found only by
-    /// BSDF sampling: the emitting, reflecting walls of the analytic furnace. Test builds
-    /// only (feature `testing`); the loader has no such thing.
-    #[cfg(feature = "testing")]
-    pub surface_emission: Vec<(PrimId, Color)>,
+    /// Which camera placement the loader chose and why, for `ember info`.
+    pub placement_reason: String,
+    /// Texture coordinates, indexed by `triangle_uvs`.
+    pub uvs: Vec<Vec2>,
+    /// Each triangle's corner texture coordinates (indices into `uvs`), parallel to
+    /// `triangles`; shorter when later triangles (area-light quads) have none. Only
+    /// triangles of textured materials carry them.
+    pub triangle_uvs: Vec<Option<[u32; 3]>>,
+    pub textures: Vec<Arc<Texture>>,
+    /// The diffuse texture of each material (index into `textures`), parallel to
+    /// `materials`; may be shorter (no texture).
+    pub material_textures: Vec<Option<u32>>,
 }
 
 /// A primitive id: triangles first, then spheres.
@@ -117,6 +150,8 @@ pub struct SurfaceInteraction {
     pub ng: Vec3,
     /// Unit shading normal, on the same side as `ng`.
     pub ns: Vec3,
+    /// Texture coordinates: interpolated from the triangle's corners where it has
+    /// them (`Scene::triangle_uvs`), else the barycentrics `(b1, b2)`.
     pub uv: Vec2,
     pub prim: PrimId,
     pub material: u32,
@@ -124,6 +159,8 @@ pub struct SurfaceInteraction {
     /// The sphere `(centre, radius)` the point lies on, if it is a sphere's: rays leave
     /// it from within an ulp of `p` (`sphere_spawn_origin`), not by the error bound.
     pub sphere: Option<(Vec3, f32)>,
+    /// The triangle's corners (unused for spheres).
+    pub corners: [Vec3; 3],
 }
 
 impl SurfaceInteraction {
@@ -138,12 +175,9 @@ impl SurfaceInteraction {
         }
     }
 
-    /// Where a ray leaving this point toward `w` starts: off the surface by the error
-    /// bound, or for a sphere just on `w`'s side of it.
+    /// Where a ray leaving this point toward `w` starts (`Hits::spawn_origins`).
     fn spawn_origin(&self, w: Vec3) -> Vec3 {
-        self.sphere
-            .and_then(|(c, r)| sphere_spawn_origin(self.p, self.ng, w.dot(self.ng) > 0.0, c, r))
-            .unwrap_or_else(|| offset_ray_origin(self.p, self.p_error, self.ng, w))
+        self.hits().spawn_origins(One, 1, w.into()).vec3()
     }
 
     /// The segment from this point towards `target`, `o + t·(target − o)` for
@@ -154,6 +188,47 @@ impl SurfaceInteraction {
         Ray {
             skip: self.prim,
             ..Ray::segment(o, target - o, t_end)
+        }
+    }
+
+    /// This point as the one lane of a [`Hits`].
+    fn hits(&self) -> Hits<One> {
+        let lane = |v: u32| {
+            let mut a = [0; crate::lanes::LANES];
+            a[0] = v;
+            a
+        };
+        let (centre, radius) = self.sphere.unwrap_or((Vec3::ZERO, 0.0));
+        Hits {
+            p: self.p.into(),
+            p_error: self.p_error.into(),
+            ng: self.ng.into(),
+            ns: self.ns.into(),
+            uv: (self.uv.x, self.uv.y),
+            prim: lane(self.prim),
+            material: lane(self.material),
+            light: lane(self.light),
+            triangles: self.sphere.is_none() as u32,
+            corners: self.corners.map(V3::from),
+            centre: centre.into(),
+            radius,
+        }
+    }
+
+    /// The one lane of `h`, hit at `t`.
+    fn from_hits(h: &Hits<One>, t: f32) -> Self {
+        SurfaceInteraction {
+            t,
+            p: h.p.vec3(),
+            p_error: h.p_error.vec3(),
+            ng: h.ng.vec3(),
+            ns: h.ns.vec3(),
+            uv: Vec2::new(h.uv.0, h.uv.1),
+            prim: h.prim[0],
+            material: h.material[0],
+            light: h.light[0],
+            sphere: (h.triangles & 1 == 0).then(|| (h.centre.vec3(), h.radius)),
+            corners: h.corners.map(V3::vec3),
         }
     }
 }
@@ -198,7 +273,7 @@ impl Scene {
     /// (no bounds change: spec §4 leaves light quads out). Returns the light's index.
     pub fn add_area_light(&mut self, light: AreaLight) -> u32 {
         let index = self.lights.len() as u32;
-        let material = self.black_material();
+        let material = self.light_surface_material();
         self.lights.push(Light::Area(light));
         for tri in light.quad() {
             let base = self.positions.len() as u32;
@@ -253,15 +328,19 @@ impl Scene {
     }
 
     /// The index of the material of light surfaces, added on first use.
-    fn black_material(&mut self) -> u32 {
-        match self.materials.iter().position(|m| *m == Material::Black) {
+    fn light_surface_material(&mut self) -> u32 {
+        match self
+            .materials
+            .iter()
+            .position(|m| *m == Material::light_surface())
+        {
             Some(i) => i as u32,
             None => {
                 // Keep the names aligned when the loader keeps them.
                 if self.material_names.len() == self.materials.len() {
                     self.material_names.push("(area light surface)".into());
                 }
-                self.materials.push(Material::Black);
+                self.materials.push(Material::light_surface());
                 (self.materials.len() - 1) as u32
             }
         }
@@ -271,41 +350,66 @@ impl Scene {
     /// light when the surface is an area light's, else from the material.
     pub fn emission(&self, si: &SurfaceInteraction, wo: Vec3) -> Color {
         let cos_out = wo.dot(si.ng);
-        let le = match self.lights.get(si.light as usize) {
+        match self.lights.get(si.light as usize) {
             Some(Light::Area(a)) => a.emitted(cos_out),
             _ => self.materials[si.material as usize].emitted(Vec3::new(0.0, 0.0, cos_out)),
-        };
-        #[cfg(feature = "testing")]
-        if !self.surface_emission.is_empty() {
-            return le + self.attached_emission(si.prim);
         }
-        le
     }
 
-    /// The test-only emission attached to `prim`.
-    #[cfg(feature = "testing")]
-    fn attached_emission(&self, prim: PrimId) -> Color {
-        self.surface_emission
-            .iter()
-            .filter(|(p, _)| *p == prim)
-            .map(|(_, c)| *c)
-            .sum()
-    }
-
-    /// Emitters that no `Light` represents (emission materials outside area lights, and
-    /// in tests attached surface emission): only BSDF sampling can find them.
+    /// Emitters that no `Light` represents (emissive materials outside area lights):
+    /// only BSDF sampling can find them.
     pub fn has_unsampled_emitters(&self) -> bool {
-        #[cfg(feature = "testing")]
-        if !self.surface_emission.is_empty() {
-            return true;
-        }
+        let emits = |m: u32| self.materials[m as usize].emits();
         self.triangles
             .iter()
-            .any(|t| t.light == NO_LIGHT && self.materials[t.material as usize].flags().emissive)
-            || self
-                .spheres
-                .iter()
-                .any(|s| self.materials[s.material as usize].flags().emissive)
+            .any(|t| t.light == NO_LIGHT && emits(t.material))
+            || self.spheres.iter().any(|s| emits(s.material))
+    }
+
+    /// The texture coordinates at barycentrics `(b0, b1, b2)` of triangle `i`, or, for a
+    /// triangle without them, `(b1, b2)`.
+    #[inline]
+    pub(crate) fn texcoord(&self, i: usize, b0: f32, b1: f32, b2: f32) -> Vec2 {
+        match self.triangle_uvs.get(i).copied().flatten() {
+            Some([a, b, c]) => {
+                let uv = |k: u32| self.uvs[k as usize];
+                b0 * uv(a) + b1 * uv(b) + b2 * uv(c)
+            }
+            None => Vec2::new(b1, b2),
+        }
+    }
+
+    /// The BSDF of `material` at texture coordinates `uv`: a Lambertian material with
+    /// a diffuse texture has its albedo times the texture's colour there. The one
+    /// place shading reads textures (per lane, by the transport).
+    #[inline]
+    pub fn bsdf_at(&self, material: u32, uv: Vec2) -> Bsdf {
+        let bsdf = self.materials[material as usize].bsdf;
+        let texture = self
+            .material_textures
+            .get(material as usize)
+            .copied()
+            .flatten();
+        match (bsdf, texture) {
+            (Bsdf::Lambertian(mut b), Some(t)) => {
+                b.albedo = (b.albedo.vec3() * self.textures[t as usize].eval(uv)).into();
+                Bsdf::Lambertian(b)
+            }
+            _ => bsdf,
+        }
+    }
+
+    /// The material at a hit, its texture applied.
+    pub fn material_at(&self, si: &SurfaceInteraction) -> Material {
+        Material {
+            bsdf: self.bsdf_at(si.material, si.uv),
+            ..self.materials[si.material as usize]
+        }
+    }
+
+    /// Whether any material has a texture.
+    pub fn has_textures(&self) -> bool {
+        !self.textures.is_empty() && self.material_textures.iter().any(Option::is_some)
     }
 
     pub fn num_prims(&self) -> usize {
@@ -341,163 +445,23 @@ impl Scene {
         ]
     }
 
-    /// Full surface interaction of a primitive hit along `ray`. Points come from
-    /// barycentrics (triangles) or are projected onto the sphere, so their error
-    /// scales with the scene's magnitudes, not with `t`.
+    /// Full surface interaction of a primitive hit along `ray` ([`Scene::hits`] for
+    /// one path).
     pub fn interaction(&self, ray: &Ray, h: &PrimHit) -> SurfaceInteraction {
-        let i = h.prim as usize;
-        if i < self.triangles.len() {
-            self.triangle_interaction(i, h)
-        } else {
-            self.sphere_interaction(ray, i - self.triangles.len(), h)
-        }
+        let mut hp = HitPacket::default();
+        hp.set(0, Some(*h));
+        let hits = self.hits(One, 1, ray.o.into(), ray.d.into(), &hp);
+        SurfaceInteraction::from_hits(&hits, h.t)
     }
 
-    /// The axes on which triangle `i`'s three corners have the same coordinate.
-    fn exact_axes(&self, i: usize) -> glam::BVec3 {
-        let [p0, p1, p2] = self.triangle_positions(i);
-        p0.cmpeq(p1) & p0.cmpeq(p2)
-    }
-
-    fn triangle_interaction(&self, i: usize, h: &PrimHit) -> SurfaceInteraction {
-        let tri = &self.triangles[i];
-        let [p0, p1, p2] = self.triangle_positions(i);
-        let b0 = 1.0 - h.b1 - h.b2;
-        // Relative to corner 0: `p0 + b1·e1 + b2·e2` lies on the triangle's plane for any
-        // barycentrics, so its error is the rounding of the edge terms (small, like the
-        // triangle) plus one rounding of the sum (≤ γ₁|p|). The absolute form
-        // `b0·p0 + b1·p1 + b2·p2` carries γ₇·|p|: 7 ulps of the coordinates, which every
-        // spawned ray is offset by (4e-3 at 1e4; stability case 5).
-        let (e1, e2) = (p1 - p0, p2 - p0);
-        let local = h.b1 * e1 + h.b2 * e2;
-        let p = p0 + local;
-        let p_error = gamma(2) * p.abs() + gamma(4) * ((h.b1 * e1).abs() + (h.b2 * e2).abs());
-        let p = into_triangle(p, p0, local, [p0, p1, p2], [b0, h.b1, h.b2]);
-        // On an axis where the three corners agree (a wall, floor or ceiling), both edge
-        // terms are exact zeros and `p` is corner 0's own coordinate: no error there, so
-        // rays leave such a plane from on it, as they do from a plane through 0. Else a
-        // floor at 1e5 sends them ~2e-2 up, inside a ball resting on it (case 5).
-        let p_error = Vec3::select(self.exact_axes(i), Vec3::ZERO, p_error);
-        let mut ng = (p1 - p0).cross(p2 - p0).normalize_or_zero();
-        let mut ns = ng;
-        if let Some(n) = tri.n {
-            let [n0, n1, n2] = n.map(|k| self.normals[k as usize]);
-            // The loader already oriented ng toward the corner-normal sum; interpolate.
-            let interp = (b0 * n0 + h.b1 * n1 + h.b2 * n2).normalize_or_zero();
-            if (n0 + n1 + n2).dot(ng) < 0.0 {
-                ng = -ng;
-            }
-            if interp != Vec3::ZERO {
-                ns = interp;
-            }
-        }
-        if ns.dot(ng) < 0.0 {
-            // Shading normals are kept on the front side so BSDF sides agree with ng.
-            ns = -ns;
-        }
-        SurfaceInteraction {
-            t: h.t,
-            p,
-            p_error,
-            ng,
-            ns,
-            uv: Vec2::new(h.b1, h.b2),
-            prim: h.prim,
-            material: tri.material,
-            light: tri.light,
-            sphere: None,
-        }
-    }
-
-    fn sphere_interaction(&self, ray: &Ray, si: usize, h: &PrimHit) -> SurfaceInteraction {
-        let s = &self.spheres[si];
-        // Relative to the centre: `o − centre` is exact for nearby points however far
-        // from the origin, where the absolute `o + t·d` would round to the f32 grid there
-        // (4e-3 at 1e5, a normal 1e-2 rad off on a ball of radius 0.4).
-        let raw = (ray.o - s.centre) + h.t * ray.d;
-        let n = raw.normalize_or_zero();
-        let n = if n == Vec3::ZERO { Vec3::Y } else { n };
-        let p = s.centre + s.radius * n;
-        // `p = centre ⊕ r·n`: one rounding of the sum (≤ γ₁|p|) plus the error of `r·n`
-        // (normalisation and product, ≤ γ₄·r); the centre itself is exact. Rays leave
-        // from within an ulp of `p` (`sphere_spawn_origin`), not offset by this bound,
-        // which is 2–3 cm at 1e5: more than a resting ball's gap to the floor over ~10 cm.
-        let p_error = gamma(2) * p.abs() + Vec3::splat(gamma(4) * s.radius);
-        SurfaceInteraction {
-            t: h.t,
-            p,
-            p_error,
-            ng: n,
-            ns: n,
-            uv: Vec2::ZERO,
-            prim: h.prim,
-            material: s.material,
-            light: NO_LIGHT,
-            sphere: Some((s.centre, s.radius)),
-        }
-    }
-
-    /// Barycentrics `b1, b2` of `q`, a point in triangle `i`'s plane (dual basis), if it
-    /// lies in the triangle.
-    fn barycentrics(&self, i: usize, q: Vec3) -> Option<[f32; 2]> {
-        let [p0, p1, p2] = self.triangle_positions(i);
-        let (e1, e2, d) = (p1 - p0, p2 - p0, q - p0);
-        let m = e1.cross(e2);
-        let m2 = m.length_squared();
-        let (b1, b2) = (d.cross(e2).dot(m) / m2, e1.cross(d).dot(m) / m2);
-        (b1 >= 0.0 && b2 >= 0.0 && b1 + b2 <= 1.0).then_some([b1, b2])
-    }
-
-    /// `si` (found by a ray spawned from surface point `from` in unit direction `w`) moved
-    /// onto the line `from + s·w` itself, on the same primitive.
-    ///
-    /// A spawned ray starts off its surface by the point's rounding error, on a parallel
-    /// line (`offset_ray_origin`): what it finds is seen from that displaced origin, a
-    /// little closer than from `from` (~2 ulps of the coordinates: 2e-2 at 1e5). At
-    /// every bounce that biases toward nearer, brighter light: a mirror's reflection, a
-    /// caustic, a light's inverse square (stability case 5). The traced ray decides
-    /// which primitive is hit, robustly; where on it is solved here, relative to `from`:
-    /// the line meets the plane of the hit (a sphere's tangent plane, O(δ²/r) off the
-    /// sphere), and a sphere's normal is taken again there. Grazing hits (|cos| < 0.05)
-    /// and points outside the hit triangle (the two lines straddle an edge) are left as
-    /// found.
+    /// `si` (found by a ray spawned from surface point `from` in unit direction `w`)
+    /// moved onto the line `from + s·w` itself ([`Hits::on_line`] for one path).
     pub fn on_line(&self, si: &SurfaceInteraction, from: Vec3, w: Vec3) -> SurfaceInteraction {
-        let cos = w.dot(si.ng);
-        if cos.abs() < 0.05 {
-            return *si;
+        let hits = si.hits().on_line(One, 1, from.into(), w.into());
+        SurfaceInteraction {
+            uv: si.uv,
+            ..SurfaceInteraction::from_hits(&hits, si.t)
         }
-        let s = (si.p - from).dot(si.ng) / cos;
-        if !(s > 0.0 && s.is_finite()) {
-            return *si;
-        }
-        let p = from + s * w;
-        let i = si.prim as usize;
-        let mut out = *si;
-        // The found point's error (the plane's), plus the rounding of `from + s·w`.
-        let mut p_error = si.p_error + gamma(1) * p.abs() + gamma(5) * (s * w).abs();
-        let mut p = p;
-        if i < self.triangles.len() {
-            let Some([b1, b2]) = self.barycentrics(i, p) else {
-                return *si;
-            };
-            let corners = self.triangle_positions(i);
-            p = into_triangle(p, from, s * w, corners, [1.0 - b1 - b2, b1, b2]);
-            // On an axis where the corners agree the plane's coordinate is exact: keep it.
-            let exact = self.exact_axes(i);
-            p = Vec3::select(exact, si.p, p);
-            p_error = Vec3::select(exact, Vec3::ZERO, p_error);
-        } else {
-            // Relative to the centre, as in `sphere_interaction`.
-            let sp = &self.spheres[i - self.triangles.len()];
-            let n = ((from - sp.centre) + s * w).normalize_or_zero();
-            if n.dot(si.ng) <= 0.0 {
-                return *si;
-            }
-            (out.ng, out.ns) = (n, n);
-        }
-        out.p_error = p_error;
-        out.p = p;
-        out
     }
 }
 
@@ -515,7 +479,7 @@ mod tests {
                 Vec3::new(o + 1.0, o, o - 1.0),
                 Vec3::new(o + 1.0, o, o + 1.0),
             ],
-            materials: vec![Material::Black],
+            materials: vec![Material::light_surface()],
             ..Default::default()
         };
         s.triangles.push(Triangle {
@@ -537,13 +501,14 @@ mod tests {
             b2,
         };
         // x = 1e5 + 1 − 1e-3 exactly: to nearest that is the edge itself, on the wall.
-        let near = s.triangle_interaction(0, &hit(0.4995, 0.5));
+        let ray = Ray::new(Vec3::new(1e5, 1e5 + 1.0, 1e5), Vec3::NEG_Y);
+        let near = s.interaction(&ray, &hit(0.4995, 0.5));
         assert!(near.p.x < 1e5 + 1.0, "{}", near.p);
         assert_eq!(near.p.y, 1e5);
         assert!(1e5 + 1.0 - near.p.x <= 2.0 * 7.8125e-3, "{}", near.p);
         // Away from the edges the point is rounded to nearest, as it was.
         let [p0, p1, p2] = s.triangle_positions(0);
-        let mid = s.triangle_interaction(0, &hit(0.3, 0.3));
+        let mid = s.interaction(&ray, &hit(0.3, 0.3));
         assert_eq!(mid.p, p0 + (0.3 * (p1 - p0) + 0.3 * (p2 - p0)));
     }
 }

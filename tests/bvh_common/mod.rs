@@ -7,7 +7,7 @@ use ember::accel::{Accel, BruteForce, Bvh, BvhBuilder};
 use ember::geometry::sphere::{intersect_sphere, intersect_sphere_leaving};
 use ember::geometry::triangle::intersect_triangle;
 use ember::geometry::{Aabb, Ray};
-use ember::sampling::{uniform_sphere, Sampler};
+use ember::sampling::{uniform_sphere, Rng};
 use ember::scene::{PrimHit, Scene, Sphere, Triangle, NO_LIGHT};
 use glam::{DVec3, Vec3};
 
@@ -188,10 +188,10 @@ pub fn axis_direction(k: usize) -> Vec3 {
 /// A random ray for `bounds`: origins inside (and on the faces of) the bounds or
 /// outside them, directions uniform, axis-aligned, or aimed at a given point;
 /// mostly unbounded, sometimes a finite `[t_min, t_max]`.
-pub fn random_ray(rng: &mut Sampler, bounds: &Aabb, targets: &[Vec3]) -> Ray {
+pub fn random_ray(rng: &mut Rng, bounds: &Aabb, targets: &[Vec3]) -> Ray {
     let size = bounds.diagonal().max(Vec3::splat(1e-3));
     let lerp = |u: Vec3| bounds.min + u * size;
-    let u3 = |rng: &mut Sampler| Vec3::new(rng.next_f32(), rng.next_f32(), rng.next_f32());
+    let u3 = |rng: &mut Rng| Vec3::new(rng.next_f32(), rng.next_f32(), rng.next_f32());
     let o = match (rng.next_f32() * 4.0) as u32 {
         0 => lerp(u3(rng)),
         // On a face: origin coordinates equal to a box bound.
@@ -269,7 +269,7 @@ pub fn scene_bounds(scene: &Scene) -> Aabb {
 }
 
 /// Up to 4096 corners, edge midpoints and sphere points to aim rays at.
-pub fn sample_targets(scene: &Scene, rng: &mut Sampler) -> Vec<Vec3> {
+pub fn sample_targets(scene: &Scene, rng: &mut Rng) -> Vec<Vec3> {
     let ntri = scene.triangles.len();
     let mut t = Vec::new();
     for s in &scene.spheres {

@@ -71,10 +71,7 @@ impl HalfRenders {
 
 /// A uniformly random point of a uniformly chosen triangle of `scene` (which must
 /// have one), and that triangle's index: three numbers drawn from `rng`.
-pub fn random_triangle_point(
-    scene: &Scene,
-    rng: &mut ember::sampling::Sampler,
-) -> (glam::Vec3, u32) {
+pub fn random_triangle_point(scene: &Scene, rng: &mut ember::sampling::Rng) -> (glam::Vec3, u32) {
     let ntri = scene.triangles.len();
     let i = ((rng.next_f32() * ntri as f32) as usize).min(ntri - 1);
     let [a, b, c] = scene.triangle_positions(i);

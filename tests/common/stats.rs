@@ -1,7 +1,7 @@
 //! Statistics shared by the BSDF and light tests: a pbrt-v4 style chi-square
 //! goodness-of-fit test of a direction sampler against its pdf, and mean/σ.
 
-use ember::sampling::Sampler;
+use ember::sampling::Rng;
 use glam::Vec3;
 use std::f64::consts::PI;
 
@@ -44,9 +44,9 @@ fn bin_of(w: Vec3) -> Option<usize> {
 pub fn histogram(
     n: usize,
     seed: u64,
-    mut sample: impl FnMut(&mut Sampler) -> Option<Vec3>,
+    mut sample: impl FnMut(&mut Rng) -> Option<Vec3>,
 ) -> (Vec<f64>, f64) {
-    let mut sampler = Sampler::from_seed(seed);
+    let mut sampler = Rng::from_seed(seed);
     let mut counts = vec![0.0; THETA_BINS * PHI_BINS];
     let mut lost = 0.0;
     for _ in 0..n {
@@ -131,7 +131,7 @@ fn adaptive_simpson(
 pub fn chi2_p_value(
     n: usize,
     seed: u64,
-    sample: impl FnMut(&mut Sampler) -> Option<Vec3>,
+    sample: impl FnMut(&mut Rng) -> Option<Vec3>,
     pdf: &dyn Fn(Vec3) -> f64,
 ) -> Result<f64, String> {
     let (mut observed, lost) = histogram(n, seed, sample);

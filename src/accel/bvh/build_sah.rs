@@ -379,12 +379,12 @@ fn best_boundary(bins: &[Bin]) -> Option<(f32, usize)> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::sampling::Sampler;
+    use crate::sampling::Rng;
     use glam::Vec3;
 
     #[test]
     fn parallel_binning_matches_serial_at_any_thread_count() {
-        let mut rng = Sampler::from_seed(3);
+        let mut rng = Rng::from_seed(3);
         let mut point = || Vec3::new(rng.next_f32(), rng.next_f32(), rng.next_f32()) * 2.0 - 1.0;
         let prims: Vec<BuildPrim> = (0..50_000)
             .map(|id| {

@@ -134,10 +134,10 @@ impl Accel for Bvh {
     fn intersect_packet(
         &self,
         rays: &crate::accel::RayPacket,
-        active: crate::simd::LaneBits,
+        active: crate::lanes::LaneBits,
         hits: &mut crate::accel::HitPacket,
     ) {
-        crate::simd::dispatch(packet::IntersectPacket {
+        crate::lanes::dispatch(packet::IntersectPacket {
             bvh: self,
             rays,
             active,
@@ -148,9 +148,9 @@ impl Accel for Bvh {
     fn occluded_packet(
         &self,
         rays: &crate::accel::RayPacket,
-        active: crate::simd::LaneBits,
-    ) -> crate::simd::LaneBits {
-        crate::simd::dispatch(packet::OccludedPacket {
+        active: crate::lanes::LaneBits,
+    ) -> crate::lanes::LaneBits {
+        crate::lanes::dispatch(packet::OccludedPacket {
             bvh: self,
             rays,
             active,

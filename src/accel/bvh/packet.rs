@@ -10,10 +10,10 @@
 use super::wide::Avx2Boxes;
 use super::wide::{ChildRef, ScalarBoxes, EXIT_SLACK, WIDTH};
 use super::Bvh;
-use crate::accel::packet::{HitPacket, PacketHits, PacketRays, RayPacket};
 use crate::accel::TraversalStats;
 use crate::geometry::Ray;
-use crate::simd::{F32s, LaneBits, Mask, Simd, SimdTask};
+use crate::lanes::rays::{HitPacket, PacketHits, PacketRays, RayPacket};
+use crate::lanes::{F32s, LaneBits, Mask, Simd, SimdTask};
 use std::mem::MaybeUninit;
 
 /// Rays left in a packet at or below which the rest is traced ray by ray. Measured

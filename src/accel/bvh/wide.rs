@@ -23,10 +23,10 @@
 //! more than the bytes save once a level less has cut the misses. (At 8 wide
 //! they had won on the 1M mesh.)
 
-use crate::accel::packet::PacketRays;
 use crate::geometry::ray::gamma;
 use crate::geometry::{Aabb, Ray};
-use crate::simd::{F32s, LaneBits, Simd};
+use crate::lanes::rays::PacketRays;
+use crate::lanes::{F32s, LaneBits, Simd};
 
 /// Children per node.
 pub(crate) const WIDTH: usize = 16;
@@ -330,7 +330,7 @@ pub(crate) fn simd_available() -> bool {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::sampling::Sampler;
+    use crate::sampling::Rng;
     use glam::Vec3;
 
     fn node_with(boxes: &[Aabb]) -> WideNode {
@@ -418,7 +418,7 @@ mod tests {
     /// Random boxes against random, axis-aligned, face-grazing and corner rays.
     #[test]
     fn simd_box_test_matches_scalar_on_random_and_adversarial_rays() {
-        let mut rng = Sampler::from_seed(5);
+        let mut rng = Rng::from_seed(5);
         let mut v = || Vec3::new(rng.next_f32(), rng.next_f32(), rng.next_f32()) * 4.0 - 2.0;
         for _ in 0..2000 {
             let boxes: Vec<Aabb> = (0..WIDTH)

@@ -46,12 +46,8 @@ pub fn sun_sky_map() -> Image {
 /// A grey floor and a white diffuse sphere under `env`.
 pub fn sun_sky_scene(env: EnvironmentMap) -> Scene {
     let mut b = SceneBuilder::default();
-    let grey = b.material(Material::Lambertian {
-        albedo: Color::splat(0.5),
-    });
-    let white = b.material(Material::Lambertian {
-        albedo: Color::splat(0.8),
-    });
+    let grey = b.material(Material::lambertian(Color::splat(0.5)));
+    let white = b.material(Material::lambertian(Color::splat(0.8)));
     b.quad(
         Vec3::new(-4.0, 0.0, -4.0),
         Vec3::new(0.0, 0.0, 8.0),
@@ -64,6 +60,7 @@ pub fn sun_sky_scene(env: EnvironmentMap) -> Scene {
         up: Vec3::Y,
         tan_half_x: Some(0.6),
         tan_half_y: None,
+        ..CameraDesc::default()
     });
     scene.set_environment(Arc::new(env));
     scene

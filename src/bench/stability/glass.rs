@@ -32,9 +32,7 @@ pub fn caustic(b: &Budget) -> Result<CausticCase> {
     let mut opaque = glass.clone();
     for m in &mut opaque.materials {
         if m.is_delta() {
-            *m = Material::Lambertian {
-                albedo: Color::ZERO,
-            };
+            *m = Material::lambertian(Color::ZERO);
         }
     }
     let base = RenderSettings {

@@ -8,7 +8,7 @@ use super::Row;
 use crate::color::luminance;
 use crate::integrators::{DirectStrategy, Roulette};
 use crate::lights::{AreaLight, Light};
-use crate::materials::Material;
+use crate::materials::Bsdf;
 use crate::names::Named;
 use crate::render::{RenderJob, RenderSettings};
 use crate::scene::Scene;
@@ -144,10 +144,10 @@ fn point_light_image_mean(setup: &RenderJob) -> Result<f64> {
                     continue;
                 };
                 let si = setup.scene.interaction(&ray, &hit);
-                let Material::Lambertian { albedo } = setup.scene.materials[si.material as usize]
-                else {
+                let Bsdf::Lambertian(b) = setup.scene.materials[si.material as usize].bsdf else {
                     continue;
                 };
+                let albedo = b.albedo.vec3();
                 let to = position - si.p;
                 let cos = (to.normalize().dot(si.ng)).abs();
                 let lo = albedo / std::f32::consts::PI * intensity * cos / to.length_squared();

@@ -12,7 +12,7 @@ pub mod robust;
 pub mod sampling;
 pub mod scenes;
 
-use super::chart::{write_chart, ChartSpec, Series};
+use super::chart::{write_category_chart, ChartSpec, Series};
 use super::table::Table;
 use super::{create_out_dir, write_text, Report};
 use crate::names::Named;
@@ -155,11 +155,13 @@ impl StabilityReport {
         format!("{}\n{}", t.to_markdown(), does.to_markdown())
     }
 
-    /// Relative per-pixel noise (noise / mean) of each direct-lighting strategy, x = the
-    /// number of the scenario among those rows (cases 1–3, in report order).
+    /// Relative per-pixel noise (noise / mean) of each direct-lighting strategy in each
+    /// case of the table that compares them (cases 1–3, named as the table names them):
+    /// the series' points are `(index of the case, noise / mean)`; a method whose
+    /// image is black (it cannot see the light) has no point there.
     pub fn strategy_noise_series(&self) -> (Vec<Series>, Vec<String>) {
         let names: Vec<&str> = lights::STRATEGIES.iter().map(|s| s.name()).collect();
-        let mut scenarios: Vec<String> = Vec::new();
+        let mut cases: Vec<String> = Vec::new();
         let mut out: Vec<Series> = names
             .iter()
             .map(|n| Series {
@@ -172,11 +174,11 @@ impl StabilityReport {
             .iter()
             .filter(|r| names.contains(&r.method.as_str()))
         {
-            if !scenarios.contains(&r.case) {
-                scenarios.push(r.case.clone());
+            if !cases.contains(&r.case) {
+                cases.push(r.case.clone());
             }
             if r.noise > 0.0 && r.mean > 0.0 {
-                let x = scenarios.len() as f64;
+                let x = (cases.len() - 1) as f64;
                 let k = names
                     .iter()
                     .position(|n| *n == r.method)
@@ -184,32 +186,20 @@ impl StabilityReport {
                 out[k].points.push((x, r.noise / r.mean));
             }
         }
-        (out, scenarios)
+        (out, cases)
     }
 
-    /// The noise chart `<stem>.{png,svg}`.
+    /// The noise chart `<stem>.{png,svg}`: one slot per case, labelled as in the table.
     fn write_chart(&self, stem: &Path) -> Result<()> {
-        let (series, scenarios) = self.strategy_noise_series();
-        let labels: Vec<String> = scenarios
-            .iter()
-            .enumerate()
-            .map(|(i, c)| {
-                format!(
-                    "{}: {}",
-                    i + 1,
-                    c.split_once(' ').map_or(c.as_str(), |p| p.1)
-                )
-            })
-            .collect();
-        let x_label = format!("scenario ({})", labels.join(", "));
+        let (series, cases) = self.strategy_noise_series();
         let spec = ChartSpec {
             title: "Direct-lighting strategies where they fail: relative noise per pixel",
-            x_label: &x_label,
+            x_label: "case of the table (no marker: the strategy's image is black, it cannot reach the light)",
             y_label: "per-pixel noise / mean (equal spp)",
             log_x: false,
             log_y: true,
         };
-        write_chart(stem, &spec, &series)
+        write_category_chart(stem, &spec, &cases, &series)
     }
 }
 
@@ -271,15 +261,15 @@ mod tests {
             .ends_with("\"a \"\"quoted\"\" note\""));
         let md = r.to_markdown();
         assert!(md.contains("| 2 small | hemisphere |") && md.contains("what ember does"));
-        let (series, scenarios) = r.strategy_noise_series();
-        assert_eq!(scenarios, vec!["2 small".to_string()]);
+        let (series, cases) = r.strategy_noise_series();
+        assert_eq!(cases, vec!["2 small".to_string()]);
         assert_eq!(
             series
                 .iter()
                 .find(|s| s.name == "hemisphere")
                 .unwrap()
                 .points,
-            vec![(1.0, 0.8)]
+            vec![(0.0, 0.8)]
         );
         let dir = tempfile::tempdir().unwrap();
         let files = r.write(&dir.path().join("out")).unwrap();

@@ -12,7 +12,7 @@ use crate::camera::Camera;
 use crate::geometry::Ray;
 use crate::integrators::{DirectStrategy, Roulette};
 use crate::render::{RenderJob, RenderSettings, Shading};
-use crate::sampling::Sampler;
+use crate::sampling::Rng;
 use crate::scene::Scene;
 use crate::Vec3;
 use anyhow::Result;
@@ -144,7 +144,7 @@ fn surface_pixels(setup: &RenderJob) -> Vec<usize> {
                 let r = cam.generate_ray(x, y, glam::Vec2::new(u, v));
                 setup.accel.intersect(&r).is_none_or(|h| {
                     let si = setup.scene.interaction(&r, &h);
-                    setup.scene.materials[si.material as usize].is_black()
+                    !setup.scene.materials[si.material as usize].scatters()
                 })
             })
     };
@@ -447,7 +447,7 @@ fn grid_job(b: &Budget, kind: AccelKind) -> Result<RenderJob> {
 /// of a grid line (they run along an edge's line), from outside and above the grid.
 fn grid_queries(setup: &RenderJob, c: &mut GridCase, seed: u64) {
     let step = 2.0 * GRID_HALF / GRID_CELLS as f32;
-    let mut sampler = Sampler::from_seed(seed);
+    let mut sampler = Rng::from_seed(seed);
     let mut targets = Vec::new();
     for j in 1..GRID_CELLS {
         for i in 1..GRID_CELLS {

@@ -45,6 +45,7 @@ pub fn transformed(scene: &Scene, scale: f32, offset: Vec3) -> Scene {
                 a.ey *= scale;
             }
             Light::Point { position, .. } => *position = map(*position),
+            Light::Spot(spot) => spot.position = map(spot.position),
             Light::Directional { .. } | Light::Ambient { .. } | Light::Environment(_) => {}
         }
     }
@@ -151,11 +152,7 @@ pub const GLASS_IOR: f32 = 1.5;
 /// through the slab, at near-normal incidence.
 pub fn slab_in_front_of_light(radiance: f32) -> Scene {
     let mut b = SceneBuilder::default();
-    let glass = b.material(Material::Glass {
-        ior: GLASS_IOR,
-        reflectance: Color::ONE,
-        transmittance: Color::ONE,
-    });
+    let glass = b.material(Material::glass(GLASS_IOR, Color::ONE, Color::ONE));
     b.cuboid(Vec3::new(-1.5, -1.5, 1.0), Vec3::new(1.5, 1.5, 1.2), glass);
     b.area_light(
         Vec3::new(0.0, 0.0, 2.0),
@@ -168,6 +165,7 @@ pub fn slab_in_front_of_light(radiance: f32) -> Scene {
         up: Vec3::Y,
         tan_half_x: Some(0.05),
         tan_half_y: None,
+        ..CameraDesc::default()
     })
 }
 
@@ -180,9 +178,7 @@ pub const GRID_HALF: f32 = 4.0;
 /// y = 0, `|x|, |z| ≤ GRID_HALF`, under an ambient sky of radiance 1.
 pub fn grid_plane() -> Scene {
     let mut b = SceneBuilder::default();
-    let m = b.material(Material::Lambertian {
-        albedo: Color::splat(0.5),
-    });
+    let m = b.material(Material::lambertian(Color::splat(0.5)));
     let n = GRID_CELLS;
     let step = 2.0 * GRID_HALF / n as f32;
     let corner = |i: u32, j: u32| {
@@ -225,6 +221,7 @@ pub fn grid_plane() -> Scene {
         up: Vec3::Y,
         tan_half_x: Some(0.4),
         tan_half_y: None,
+        ..CameraDesc::default()
     })
 }
 
@@ -233,17 +230,9 @@ pub fn grid_plane() -> Scene {
 /// 1e-7 wide, a triangle with a corner at 1e-30 from another, and a zero-area light.
 pub fn degenerate_room() -> Scene {
     let mut b = SceneBuilder::default();
-    let grey = b.material(Material::Lambertian {
-        albedo: Color::splat(0.6),
-    });
-    let mirror = b.material(Material::Mirror {
-        reflectance: Color::splat(0.9),
-    });
-    let glass = b.material(Material::Glass {
-        ior: GLASS_IOR,
-        reflectance: Color::ONE,
-        transmittance: Color::ONE,
-    });
+    let grey = b.material(Material::lambertian(Color::splat(0.6)));
+    let mirror = b.material(Material::mirror(Color::splat(0.9)));
+    let glass = b.material(Material::glass(GLASS_IOR, Color::ONE, Color::ONE));
     let (lo, hi) = (Vec3::splat(-1.0), Vec3::splat(1.0));
     let d = hi - lo;
     let (x, y, z) = (
@@ -295,5 +284,6 @@ pub fn degenerate_room() -> Scene {
         up: Vec3::Y,
         tan_half_x: Some(0.5),
         tan_half_y: None,
+        ..CameraDesc::default()
     })
 }

@@ -1,20 +1,22 @@
 //! Walks the visual scene and flattens its instances into a `Scene`.
 
-use super::camera::read_camera;
-use super::effects::read_material;
+use super::camera::{course_placement, read_camera};
+use super::effects::{read_material, TextureRef};
 use super::lights::read_light;
 use super::mesh::{parse_mesh, LocalMesh};
-use super::transform::{linear, local_matrix, normal_matrix, point, up_axis_matrix};
+use super::transform::{linear, local_matrix, matrix, normal_matrix, point, up_axis_matrix};
 use super::xml::{child, children, extension_technique, path, Ctx};
-use super::LoadError;
+use super::{LoadError, Resources};
 use crate::geometry::Aabb;
 use crate::lights::Light;
 use crate::materials::Material;
-use crate::scene::{CameraDesc, MeshInstance, Scene, Sphere, Triangle, NO_LIGHT};
-use glam::{DMat4, DVec3, Vec3};
+use crate::scene::{CameraDesc, MeshInstance, Placement, Scene, Sphere, Triangle, NO_LIGHT};
+use crate::texture::Texture;
+use glam::{DMat4, DVec3, Vec2, Vec3};
 use roxmltree::{Document, Node, NodeId};
 use std::collections::HashMap;
 use std::rc::Rc;
+use std::sync::Arc;
 
 /// Deepest `<node>` nesting accepted; real scenes use one or two levels.
 const MAX_NODE_DEPTH: usize = 256;
@@ -22,20 +24,40 @@ const MAX_NODE_DEPTH: usize = 256;
 /// times cannot exhaust memory.
 const MAX_TRIANGLES: usize = 1 << 24;
 const MAX_VERTICES: usize = 1 << 24;
+/// Cap on nodes visited, so that nodes instancing each other many times over
+/// (`<instance_node>`) cannot make the walk run for ever.
+const MAX_NODE_VISITS: usize = 1 << 22;
+/// Controllers a `<skin>` or `<morph>` may chain through before reaching a geometry.
+const MAX_CONTROLLER_CHAIN: usize = 16;
 
-pub(crate) fn build(file: &str, doc: &Document) -> Result<Scene, LoadError> {
+pub(crate) fn build(
+    file: &str,
+    doc: &Document,
+    resources: &dyn Resources,
+) -> Result<Scene, LoadError> {
     let mut ctx = Ctx::new(file, doc);
+    let (placement, placement_reason) = course_placement(doc);
+    ctx.course_file = placement == Placement::Course;
     let up = up_axis_matrix(&mut ctx, doc);
     let mut b = Builder {
         ctx,
         scene: Scene::default(),
         meshes: HashMap::new(),
         materials: HashMap::new(),
+        texcoords: HashMap::new(),
+        images: HashMap::new(),
         default_material: None,
         camera: None,
+        placement,
+        up,
+        resources,
     };
+    b.scene.placement_reason = placement_reason;
     if let Some(vs) = b.visual_scene(doc.root_element())? {
         b.walk(vs, up)?;
+    }
+    if b.scene.meshes.is_empty() && b.scene.spheres.is_empty() {
+        b.place_uninstanced_geometry(doc.root_element())?;
     }
     Ok(b.finish(doc.root_element()))
 }
@@ -51,21 +73,30 @@ enum Pending<'a, 'i> {
     Instance {
         node: Node<'a, 'i>,
         world: DMat4,
+        depth: usize,
     },
 }
 
-struct Builder<'a, 'i> {
+struct Builder<'a, 'i, 'r> {
     ctx: Ctx<'a, 'i>,
     scene: Scene,
     /// Meshes already read, by `<geometry>`, for geometry instanced more than once.
     meshes: HashMap<NodeId, Rc<LocalMesh<'a>>>,
     /// `Scene::materials` index of each `<material>` read.
     materials: HashMap<NodeId, u32>,
+    /// The `texcoord` semantic of each textured material's texture, by material index.
+    texcoords: HashMap<u32, Option<&'a str>>,
+    /// `Scene::textures` index of each image read, by `<image>` and wrap modes.
+    images: HashMap<(NodeId, [u8; 2]), u32>,
     default_material: Option<u32>,
     camera: Option<CameraDesc>,
+    placement: Placement,
+    /// `U`, the up-axis conversion (skinned meshes are placed by it alone).
+    up: DMat4,
+    resources: &'r dyn Resources,
 }
 
-impl<'a, 'i> Builder<'a, 'i> {
+impl<'a, 'i> Builder<'a, 'i, '_> {
     /// `scene/instance_visual_scene@url`, else the first visual scene (with a warning).
     fn visual_scene(&mut self, root: Node<'a, 'i>) -> Result<Option<Node<'a, 'i>>, LoadError> {
         if let Some(ivs) = path(root, &["scene", "instance_visual_scene"]) {
@@ -85,6 +116,7 @@ impl<'a, 'i> Builder<'a, 'i> {
     fn walk(&mut self, visual_scene: Node<'a, 'i>, up: DMat4) -> Result<(), LoadError> {
         let mut stack = Vec::new();
         push_children(&mut stack, visual_scene, up, 0);
+        let mut visits = 0usize;
         while let Some(item) = stack.pop() {
             match item {
                 Pending::Node {
@@ -93,13 +125,41 @@ impl<'a, 'i> Builder<'a, 'i> {
                     depth,
                 } => {
                     if depth > MAX_NODE_DEPTH {
-                        let msg = format!("nodes are nested deeper than {MAX_NODE_DEPTH} levels");
+                        let msg = format!(
+                            "nodes are nested (or instance each other) deeper than \
+                             {MAX_NODE_DEPTH} levels"
+                        );
+                        return Err(self.ctx.err(node, msg));
+                    }
+                    visits += 1;
+                    if visits > MAX_NODE_VISITS {
+                        let msg = format!("more than {MAX_NODE_VISITS} node instances");
                         return Err(self.ctx.err(node, msg));
                     }
                     let world = parent * local_matrix(&mut self.ctx, node)?;
                     push_children(&mut stack, node, world, depth);
                 }
-                Pending::Instance { node, world } => self.instance(node, &world)?,
+                Pending::Instance { node, world, depth } => {
+                    if node.has_tag_name("instance_node") {
+                        // The node it names is placed here, as if it were a child.
+                        let target = self.ctx.resolve_if_present(node, "url", "node")?;
+                        match target {
+                            Some(target) => stack.push(Pending::Node {
+                                node: target,
+                                parent: world,
+                                depth: depth + 1,
+                            }),
+                            None => {
+                                let url = super::xml::clip(node.attribute("url").unwrap_or(""));
+                                let msg =
+                                    format!("url=\"{url}\" names nothing in this file; skipped");
+                                self.ctx.warn(node, msg);
+                            }
+                        }
+                    } else {
+                        self.instance(node, &world)?;
+                    }
+                }
             }
         }
         Ok(())
@@ -120,10 +180,12 @@ impl<'a, 'i> Builder<'a, 'i> {
             "instance_camera" => {
                 // The last camera in document order wins (spec §4).
                 if let Some(camera) = self.optional_target(node, "camera")? {
-                    self.camera = Some(read_camera(&mut self.ctx, camera, world)?);
+                    let c = read_camera(&mut self.ctx, camera, world, self.placement)?;
+                    self.camera = Some(c);
                 }
                 Ok(())
             }
+            "instance_controller" => self.instance_controller(node),
             other => {
                 let msg = format!("<{other}> is not supported; skipped");
                 self.ctx.warn(node, msg);
@@ -145,14 +207,120 @@ impl<'a, 'i> Builder<'a, 'i> {
             let url = super::xml::clip(inst.attribute("url").unwrap_or_default());
             self.ctx.warn(
                 inst,
-                format!("url=\"{url}\" names nothing; the {tag} is skipped"),
+                format!("url=\"{url}\" names nothing in this file; the {tag} is skipped"),
             );
         }
         Ok(target)
     }
 
+    /// A file whose visual scene instances no geometry at all (some exporters write
+    /// their meshes to the library only): each `<geometry>` with a `<mesh>` is placed
+    /// once, untransformed, as assimp and other importers do, with one warning. Its
+    /// primitives' material symbols are taken as material ids where they name one.
+    fn place_uninstanced_geometry(&mut self, root: Node<'a, 'i>) -> Result<(), LoadError> {
+        let geometries: Vec<Node> = children(root, "library_geometries")
+            .flat_map(|l| children(l, "geometry"))
+            .filter(|g| child(*g, "mesh").is_some())
+            .collect();
+        let Some(&first) = geometries.first() else {
+            return Ok(());
+        };
+        let msg = format!(
+            "the visual scene instances no geometry; each of the {} meshes of \
+             <library_geometries> is placed once, untransformed",
+            geometries.len()
+        );
+        self.ctx.warn(first, msg);
+        for g in geometries {
+            let Some(mesh_node) = child(g, "mesh") else {
+                continue;
+            };
+            let mesh = parse_mesh(&mut self.ctx, mesh_node)?;
+            let mut materials = Vec::with_capacity(mesh.symbols.len());
+            for symbol in &mesh.symbols {
+                let target = symbol
+                    .and_then(|s| self.ctx.by_id(s))
+                    .filter(|m| m.has_tag_name("material"));
+                materials.push(match target {
+                    Some(m) => self.material_index(m)?,
+                    None => self.default_material(g),
+                });
+            }
+            let uv_sets: Vec<_> = materials
+                .iter()
+                .map(|&m| self.textured(m).then_some(None))
+                .collect();
+            let up = self.up;
+            self.place_mesh(g, &mesh, &materials, &uv_sets, &up)?;
+        }
+        Ok(())
+    }
+
+    fn textured(&self, material: u32) -> bool {
+        self.scene
+            .material_textures
+            .get(material as usize)
+            .is_some_and(Option::is_some)
+    }
+
+    /// A skinned (or morphed) mesh at its bind pose: the skin's `bind_shape_matrix`
+    /// applied to its source mesh. At the bind pose every joint's world matrix is the
+    /// inverse of its inverse bind matrix, so COLLADA's skinning equation leaves
+    /// `bind_shape_matrix · v` in world space: the instancing node's transform does
+    /// not enter (only the up-axis conversion does). A morph is read as its base mesh.
+    fn instance_controller(&mut self, inst: Node<'a, 'i>) -> Result<(), LoadError> {
+        let mut controller = self.ctx.resolve(inst, "url", "controller")?;
+        let mut bind_shape = DMat4::IDENTITY;
+        for _ in 0..MAX_CONTROLLER_CHAIN {
+            let Some(kind) = controller
+                .children()
+                .find(|c| c.has_tag_name("skin") || c.has_tag_name("morph"))
+            else {
+                self.ctx.warn(
+                    controller,
+                    "controller has neither <skin> nor <morph>; skipped",
+                );
+                return Ok(());
+            };
+            if let Some(m) = child(kind, "bind_shape_matrix") {
+                bind_shape = matrix(&mut self.ctx, m)? * bind_shape;
+            }
+            self.ctx.warn_once(
+                "controller",
+                inst,
+                "skinned or morphed mesh placed at its bind pose; animation is ignored",
+            );
+            let url = kind.attribute("source").unwrap_or("");
+            let target = url.strip_prefix('#').and_then(|id| self.ctx.by_id(id));
+            match target {
+                Some(t) if t.has_tag_name("geometry") => {
+                    return self.instance_geometry_node(inst, t, &(self.up * bind_shape));
+                }
+                Some(t) if t.has_tag_name("controller") => controller = t,
+                _ => {
+                    let msg = format!(
+                        "source=\"{}\" names no geometry or controller",
+                        super::xml::clip(url)
+                    );
+                    return Err(self.ctx.err(kind, msg));
+                }
+            }
+        }
+        let msg = format!("controllers chain more than {MAX_CONTROLLER_CHAIN} deep");
+        Err(self.ctx.err(inst, msg))
+    }
+
     fn instance_geometry(&mut self, inst: Node<'a, 'i>, world: &DMat4) -> Result<(), LoadError> {
         let geometry = self.ctx.resolve(inst, "url", "geometry")?;
+        self.instance_geometry_node(inst, geometry, world)
+    }
+
+    fn instance_geometry_node(
+        &mut self,
+        inst: Node<'a, 'i>,
+        geometry: Node<'a, 'i>,
+        world: &DMat4,
+    ) -> Result<(), LoadError> {
         if let Some(mesh_node) = child(geometry, "mesh") {
             let mesh = match self.meshes.get(&geometry.id()) {
                 Some(m) => Rc::clone(m),
@@ -167,7 +335,12 @@ impl<'a, 'i> Builder<'a, 'i> {
                 .iter()
                 .map(|s| self.bound_material(inst, *s))
                 .collect::<Result<Vec<_>, _>>()?;
-            return self.place_mesh(inst, &mesh, &materials, world);
+            let uv_sets = materials
+                .iter()
+                .map(|&(m, set)| self.textured(m).then_some(set))
+                .collect::<Vec<_>>();
+            let materials: Vec<u32> = materials.iter().map(|&(m, _)| m).collect();
+            return self.place_mesh(inst, &mesh, &materials, &uv_sets, world);
         }
         match extension_technique(geometry).and_then(|t| child(t, "sphere")) {
             Some(sphere) => self.place_sphere(inst, sphere, world),
@@ -182,12 +355,15 @@ impl<'a, 'i> Builder<'a, 'i> {
     }
 
     /// The material bound to `symbol` by the instance's `instance_material`s
-    /// (spec §3): the matching one, else the first, else the default.
+    /// (spec §3): the matching one, else the first, else the default; and the
+    /// TEXCOORD set its texture reads (`Some(set)` from a `<bind_vertex_input>`,
+    /// `None` for the mesh's first set). A binding whose target names nothing
+    /// falls back to the default material with a warning, as other importers do.
     fn bound_material(
         &mut self,
         inst: Node<'a, 'i>,
         symbol: Option<&str>,
-    ) -> Result<u32, LoadError> {
+    ) -> Result<(u32, Option<u32>), LoadError> {
         let bindings: Vec<Node> = path(inst, &["bind_material", "technique_common"])
             .map(|t| children(t, "instance_material").collect())
             .unwrap_or_default();
@@ -206,30 +382,124 @@ impl<'a, 'i> Builder<'a, 'i> {
             (None, first, None) => first.copied(),
             (None, None, Some(_)) => None,
         };
-        match chosen {
-            Some(b) => {
-                let material = self.ctx.resolve(b, "target", "material")?;
-                self.material_index(material)
-            }
-            None => Ok(self.default_material(inst)),
-        }
+        let Some(b) = chosen else {
+            return Ok((self.default_material(inst), None));
+        };
+        let Some(material) = self.ctx.resolve_if_present(b, "target", "material")? else {
+            let target = super::xml::clip(b.attribute("target").unwrap_or(""));
+            let msg = format!(
+                "target=\"{target}\" names nothing in this file; using the default material"
+            );
+            self.ctx.warn(b, msg);
+            return Ok((self.default_index(), None));
+        };
+        let index = self.material_index(material)?;
+        let set = match self.texcoords.get(&index) {
+            Some(Some(semantic)) => children(b, "bind_vertex_input")
+                .find(|v| {
+                    v.attribute("semantic") == Some(semantic)
+                        && v.attribute("input_semantic")
+                            .is_none_or(|s| s == "TEXCOORD")
+                })
+                .and_then(|v| v.attribute("input_set"))
+                .and_then(|s| s.trim().parse().ok()),
+            _ => None,
+        };
+        Ok((index, set))
     }
 
     fn material_index(&mut self, material: Node<'a, 'i>) -> Result<u32, LoadError> {
         if let Some(&i) = self.materials.get(&material.id()) {
             return Ok(i);
         }
-        let m = read_material(&mut self.ctx, material)?;
+        let read = read_material(&mut self.ctx, material)?;
+        let mut m = read.material;
+        let texture = match read.texture {
+            Some(t) => self.texture_index(&t)?,
+            None => None,
+        };
+        if let (None, Some(albedo)) = (texture, read.texture.and_then(|t| t.fallback)) {
+            // The image could not be read: its fallback colour stands in (warned).
+            m = Material {
+                bsdf: Material::lambertian(albedo).bsdf,
+                ..m
+            };
+        }
         let i = self.push_material(m, display_name(material));
+        if let Some(t) = texture {
+            let names = &mut self.scene.material_textures;
+            names.resize(i as usize, None);
+            names.push(Some(t));
+            self.texcoords
+                .insert(i, read.texture.and_then(|t| t.texcoord));
+        }
         self.materials.insert(material.id(), i);
         Ok(i)
     }
 
+    /// The texture of `t`'s image, loaded once per image and wrap modes. A file
+    /// that cannot be read is an error, unless the effect gives a colour to fall
+    /// back on (`TextureRef::fallback`): then a warning, and the colour alone.
+    fn texture_index(&mut self, t: &TextureRef<'a, 'i>) -> Result<Option<u32>, LoadError> {
+        let key = (t.image.id(), [t.wrap_s as u8, t.wrap_t as u8]);
+        if let Some(&i) = self.images.get(&key) {
+            return Ok(Some(i));
+        }
+        // COLLADA 1.4: <init_from>path</init_from>; 1.5: <init_from><ref>path</ref>.
+        let init = child(t.image, "init_from").map(|i| child(i, "ref").unwrap_or(i));
+        let uri = init.and_then(|n| n.text()).map(str::trim).unwrap_or("");
+        let at = init.unwrap_or(t.image);
+        if uri.is_empty() {
+            let msg = "image has no file name (<init_from>)";
+            return self.missing_texture(t, at, msg.to_string());
+        }
+        let loaded = self
+            .resources
+            .read(uri)
+            .and_then(|(name, bytes)| Texture::decode(&name, &bytes));
+        match loaded {
+            Ok(mut tex) => {
+                tex.wrap_s = t.wrap_s;
+                tex.wrap_t = t.wrap_t;
+                self.scene.textures.push(Arc::new(tex));
+                let i = (self.scene.textures.len() - 1) as u32;
+                self.images.insert(key, i);
+                Ok(Some(i))
+            }
+            Err(why) => {
+                let msg = format!("image \"{}\": {why}", super::xml::clip(uri));
+                self.missing_texture(t, at, msg)
+            }
+        }
+    }
+
+    fn missing_texture(
+        &mut self,
+        t: &TextureRef<'a, 'i>,
+        at: Node<'a, 'i>,
+        msg: String,
+    ) -> Result<Option<u32>, LoadError> {
+        if t.fallback.is_some() {
+            self.ctx
+                .warn(at, format!("{msg}; the material's colour is used instead"));
+            Ok(None)
+        } else {
+            Err(self.ctx.err(at, msg))
+        }
+    }
+
+    /// The default material for an instance that binds none (warned once per file:
+    /// exporters that write no bindings write none for every node).
     fn default_material(&mut self, inst: Node) -> u32 {
-        self.ctx.warn(
+        self.ctx.warn_once(
+            "unbound",
             inst,
             "no material bound; using the default Lambertian (albedo 0.5)",
         );
+        self.default_index()
+    }
+
+    fn default_index(&mut self) -> u32 {
         match self.default_material {
             Some(i) => i,
             None => {
@@ -254,8 +524,15 @@ impl<'a, 'i> Builder<'a, 'i> {
         inst: Node,
         mesh: &LocalMesh,
         materials: &[u32],
+        uv_sets: &[Option<Option<u32>>],
         world: &DMat4,
     ) -> Result<(), LoadError> {
+        if uv_sets.iter().any(Option::is_some) && mesh.uv_sets.is_empty() {
+            self.ctx.warn(
+                inst,
+                "a textured material is bound to a mesh without TEXCOORD; the texture is read at (0, 0)",
+            );
+        }
         let s = &mut self.scene;
         if s.positions.len() + mesh.positions.len() > MAX_VERTICES
             || s.normals.len() + mesh.normals.len() > MAX_VERTICES
@@ -265,6 +542,13 @@ impl<'a, 'i> Builder<'a, 'i> {
             return Err(self.ctx.err(inst, msg));
         }
         let (base_p, base_n) = (s.positions.len() as u32, s.normals.len() as u32);
+        let textured = uv_sets.iter().any(Option::is_some);
+        let base_uv = s.uvs.len() as u32;
+        if textured {
+            s.uvs.extend_from_slice(&mesh.uvs);
+            s.uvs.push(Vec2::ZERO);
+        }
+        let origin_uv = base_uv + mesh.uvs.len() as u32;
         let mut used: Vec<u32> = materials.to_vec();
         used.sort_unstable();
         used.dedup();
@@ -292,16 +576,25 @@ impl<'a, 'i> Builder<'a, 'i> {
                 Vec3::ZERO
             }
         }));
-        for t in &mesh.triangles {
+        for (k, t) in mesh.triangles.iter().enumerate() {
             let mut v = t.v.map(|i| i + base_p);
             let mut n = t.n.map(|n| n.map(|i| i + base_n));
+            let mut uv = uv_sets[t.group as usize].map(|set| {
+                mesh.triangle_uvs(set, k)
+                    .map_or([origin_uv; 3], |c| c.map(|i| i + base_uv))
+            });
             let [p0, p1, p2] = v.map(|i| s.positions[i as usize]);
             if let Some(nn) = n {
                 let sum: Vec3 = nn.iter().map(|&i| s.normals[i as usize]).sum();
                 if (p1 - p0).cross(p2 - p0).dot(sum) < 0.0 {
                     v.swap(1, 2);
                     n = Some([nn[0], nn[2], nn[1]]);
+                    uv = uv.map(|c| [c[0], c[2], c[1]]);
                 }
+            }
+            if uv.is_some() {
+                s.triangle_uvs.resize(s.triangles.len(), None);
+                s.triangle_uvs.push(uv);
             }
             for p in [p0, p1, p2] {
                 s.bounds.grow(p);
@@ -349,7 +642,7 @@ impl<'a, 'i> Builder<'a, 'i> {
                 format!("transformed sphere (centre {centre}, radius {radius}) is degenerate");
             return Err(self.ctx.err(inst, msg));
         }
-        let material = self.bound_material(inst, None)?;
+        let (material, _) = self.bound_material(inst, None)?;
         let s = &mut self.scene;
         s.bounds = s.bounds.union(&Aabb::new(
             centre - Vec3::splat(radius),
@@ -379,7 +672,12 @@ impl<'a, 'i> Builder<'a, 'i> {
             None => {
                 self.ctx
                     .warn(root, "no camera; using the default view down −Z");
-                CameraDesc::default()
+                // Without a camera position the course's rule places the eye whatever
+                // the placement (`ember info` says so).
+                CameraDesc {
+                    placement: self.placement,
+                    ..CameraDesc::default()
+                }
             }
         };
         self.scene.warnings = self.ctx.into_warnings();
@@ -407,9 +705,11 @@ fn push_children<'a, 'i>(
                 parent: world,
                 depth: depth + 1,
             }),
-            name if name.starts_with("instance_") => {
-                stack.push(Pending::Instance { node: c, world })
-            }
+            name if name.starts_with("instance_") => stack.push(Pending::Instance {
+                node: c,
+                world,
+                depth,
+            }),
             _ => {}
         }
     }

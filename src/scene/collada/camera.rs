@@ -1,26 +1,91 @@
-//! `<camera>` → `CameraDesc` (spec §4): view direction and field of view only.
+//! `<camera>` → `CameraDesc` (spec §4): view direction, field of view, and the
+//! camera node's position, used where the file's own placement applies.
 
-use super::transform::linear;
+use super::transform::{linear, point};
 use super::xml::{child, path, Ctx};
 use super::LoadError;
-use crate::scene::CameraDesc;
+use crate::scene::{CameraDesc, Placement};
 use glam::{DMat4, DVec3};
-use roxmltree::Node;
+use roxmltree::{Document, Node};
 
-pub(crate) fn read_camera(ctx: &mut Ctx, camera: Node, w: &DMat4) -> Result<CameraDesc, LoadError> {
-    let (forward, up) = orientation(ctx, camera, w)?;
+/// The Blender builds that wrote the course's scenes (CS184 and CMU462 sets).
+const COURSE_EXPORTERS: [&str; 2] = ["Blender 2.72", "Blender 2.74"];
+
+pub(crate) fn read_camera(
+    ctx: &mut Ctx,
+    camera: Node,
+    w: &DMat4,
+    placement: Placement,
+) -> Result<CameraDesc, LoadError> {
+    let (forward, up) = orientation(ctx, camera, w, placement)?;
     let (tan_half_x, tan_half_y) = field_of_view(ctx, camera)?;
+    let position = point(w, DVec3::ZERO).as_vec3();
     Ok(CameraDesc {
         forward,
         up,
         tan_half_x,
         tan_half_y,
+        position: position.is_finite().then_some(position),
+        placement,
     })
+}
+
+/// Whether the course wrote the file, and why that is the answer: then its camera
+/// keeps the course's placement (spec §4), else it stands where the author put it.
+/// A file is the course's when it uses the course's CGL/CMU462 extension, was
+/// written by the Blender builds that wrote every course scene, or names no
+/// authoring tool at all (hand-written, as the project's own test scenes are).
+pub(crate) fn course_placement(doc: &Document) -> (Placement, String) {
+    let extension = doc.descendants().any(|n| {
+        n.has_tag_name("technique")
+            && n.attribute("profile")
+                .is_some_and(|p| p == "CGL" || p == "CMU462")
+    });
+    if extension {
+        return (
+            Placement::Course,
+            "course placement: the file uses the course's CGL/CMU462 extension".into(),
+        );
+    }
+    let tool = child(doc.root_element(), "asset")
+        .into_iter()
+        .flat_map(|a| a.children().filter(|c| c.has_tag_name("contributor")))
+        .find_map(|c| child(c, "authoring_tool"))
+        .and_then(|t| t.text())
+        .map(str::trim)
+        .filter(|t| !t.is_empty());
+    match tool {
+        None => (
+            Placement::Course,
+            "course placement: the file names no <authoring_tool>".into(),
+        ),
+        Some(t) if COURSE_EXPORTERS.iter().any(|c| t.starts_with(c)) => (
+            Placement::Course,
+            format!(
+                "course placement: written by \"{}\", the course's exporter",
+                super::xml::clip(t)
+            ),
+        ),
+        Some(t) => (
+            Placement::File,
+            format!(
+                "the file's placement: written by \"{}\", not by the course's exporter",
+                super::xml::clip(t)
+            ),
+        ),
+    }
 }
 
 /// `F = normalize(W3·(0,0,−1))`; `U` = world +Y made orthogonal to `F`, or
 /// `W3·(0,1,0)` when `F` is parallel to +Y.
-fn orientation(ctx: &Ctx, camera: Node, w: &DMat4) -> Result<(glam::Vec3, glam::Vec3), LoadError> {
+/// Where the file's placement applies, `U` is the camera's own up `W3·(0,1,0)` made
+/// orthogonal to `F`, so a rolled camera keeps its roll.
+fn orientation(
+    ctx: &Ctx,
+    camera: Node,
+    w: &DMat4,
+    placement: Placement,
+) -> Result<(glam::Vec3, glam::Vec3), LoadError> {
     let w3 = linear(w);
     let f = w3 * DVec3::NEG_Z;
     if !f.is_finite() || f.length_squared() == 0.0 {
@@ -30,7 +95,11 @@ fn orientation(ctx: &Ctx, camera: Node, w: &DMat4) -> Result<(glam::Vec3, glam::
         ));
     }
     let f = f.normalize();
-    let up = orthogonal_part(DVec3::Y, f)
+    let own_up = (placement == Placement::File)
+        .then(|| orthogonal_part(w3 * DVec3::Y, f))
+        .flatten();
+    let up = own_up
+        .or_else(|| orthogonal_part(DVec3::Y, f))
         .or_else(|| orthogonal_part(w3 * DVec3::Y, f))
         .unwrap_or_else(|| f.any_orthonormal_vector());
     Ok((f.as_vec3(), up.as_vec3()))

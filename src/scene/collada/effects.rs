@@ -1,19 +1,45 @@
-//! `<material>` → `<effect>` → `Material` (spec §6).
+//! `<material>` → `<effect>` → `Material` (spec §6), plus what the common
+//! profile adds for files from other tools: `<emission>`, a diffuse texture, and
+//! warnings for what a Lambertian surface cannot show.
 
-use super::xml::{child, extension_technique, path, Ctx};
+use super::xml::{child, children, extension_technique, path, Ctx};
 use super::LoadError;
-use crate::materials::{Conductor, Material};
+use crate::materials::Material;
+use crate::texture::Wrap;
 use crate::Color;
 use roxmltree::Node;
 
 /// Extension elements that define a material; the last one present wins.
 const KINDS: [&str; 5] = ["emission", "mirror", "glass", "refraction", "microfacet"];
 
+/// The common profile's shading models, in the order they are looked for.
+const MODELS: [&str; 4] = ["phong", "lambert", "blinn", "constant"];
+
+/// A material as read, with the diffuse texture it names, if any.
+pub(crate) struct ReadMaterial<'a, 'i> {
+    pub material: Material,
+    pub texture: Option<TextureRef<'a, 'i>>,
+}
+
+/// A `<diffuse><texture>`: the image it samples, how, and through which coordinates.
+#[derive(Clone, Copy)]
+pub(crate) struct TextureRef<'a, 'i> {
+    pub image: Node<'a, 'i>,
+    pub wrap_s: Wrap,
+    pub wrap_t: Wrap,
+    /// The `texcoord` semantic a `<bind_vertex_input>` maps to a TEXCOORD set.
+    pub texcoord: Option<&'a str>,
+    /// The colour to use if the image cannot be read: the effect's diffuse `<color>`,
+    /// else its `<ambient>` one (3ds Max, Maya and older Blender exporters write the
+    /// base colour there when the diffuse is a texture).
+    pub fallback: Option<Color>,
+}
+
 /// Reads the material a `<material>` element names through its effect.
 pub(crate) fn read_material<'a, 'i>(
     ctx: &mut Ctx<'a, 'i>,
     material: Node<'a, 'i>,
-) -> Result<Material, LoadError> {
+) -> Result<ReadMaterial<'a, 'i>, LoadError> {
     let instance = child(material, "instance_effect")
         .ok_or_else(|| ctx.err(material, "no <instance_effect>"))?;
     let effect = ctx.resolve(instance, "url", "effect")?;
@@ -21,26 +47,203 @@ pub(crate) fn read_material<'a, 'i>(
         t.children()
             .rfind(|c| c.is_element() && KINDS.contains(&c.tag_name().name()))
     });
-    match special {
-        Some(node) => read_special(ctx, node),
-        None => Ok(Material::Lambertian {
-            albedo: diffuse_colour(ctx, effect)?,
-        }),
+    if let Some(node) = special {
+        return Ok(ReadMaterial {
+            material: read_special(ctx, node)?,
+            texture: None,
+        });
+    }
+    let Some(technique) = path(effect, &["profile_COMMON", "technique"]) else {
+        return Ok(ReadMaterial {
+            material: Material::default(),
+            texture: None,
+        });
+    };
+    let Some(model) = MODELS.iter().find_map(|m| child(technique, m)) else {
+        return Ok(ReadMaterial {
+            material: Material::default(),
+            texture: None,
+        });
+    };
+    let emitted = emission(ctx, model)?;
+    if !ctx.course_file {
+        warn_unrendered(ctx, effect, model);
+    }
+    let colour = diffuse_colour(ctx, model)?;
+    let fallback = match colour {
+        Some(c) => Some(c),
+        None => path(model, &["ambient", "color"])
+            .and_then(|c| ctx.leading::<3>(c).ok().map(Color::from)),
+    };
+    let texture = path(model, &["diffuse", "texture"])
+        .map(|t| texture_ref(ctx, effect, t, fallback))
+        .transpose()?
+        .flatten();
+    let albedo = match (colour, texture) {
+        (Some(c), _) => c,
+        // A texture alone is the albedo: it multiplies white.
+        (None, Some(_)) => Color::ONE,
+        (None, None) => Color::splat(0.5),
+    };
+    let material = Material::lambertian(albedo);
+    Ok(ReadMaterial {
+        // The front side emits, as the course's emission material does.
+        material: emitted.map_or(material, |e| material.with_emission(e, false)),
+        texture,
+    })
+}
+
+/// `<diffuse><color>`, if given.
+fn diffuse_colour(ctx: &Ctx, model: Node) -> Result<Option<Color>, LoadError> {
+    path(model, &["diffuse", "color"])
+        .map(|c| ctx.leading::<3>(c).map(Color::from))
+        .transpose()
+}
+
+/// `<emission><color>` when it is not black.
+fn emission(ctx: &mut Ctx, model: Node) -> Result<Option<Color>, LoadError> {
+    let Some(e) = child(model, "emission") else {
+        return Ok(None);
+    };
+    if child(e, "texture").is_some() {
+        ctx.warn(e, "an emission texture is not supported; ignored");
+    }
+    let c = child(e, "color")
+        .map(|c| ctx.leading::<3>(c).map(Color::from))
+        .transpose()?;
+    Ok(c.filter(|c| c.max_element() > 0.0))
+}
+
+/// One warning per material listing what a Lambertian surface cannot show:
+/// a specular highlight, reflection, transparency, bump and other texture maps.
+fn warn_unrendered(ctx: &mut Ctx, effect: Node, model: Node) {
+    let mut lost = Vec::new();
+    let colour = |name: &str| match path(model, &[name, "color"]) {
+        Some(c) => ctx
+            .leading::<3>(c)
+            .is_ok_and(|c| c.iter().any(|&v| v > 0.0)),
+        None => path(model, &[name, "texture"]).is_some(),
+    };
+    if matches!(model.tag_name().name(), "phong" | "blinn") && colour("specular") {
+        lost.push("specular colour and shininess");
+    }
+    if colour("reflective") && param_float(ctx, model, "reflectivity").unwrap_or(1.0) > 0.0 {
+        lost.push("reflection");
+    }
+    if transparent(ctx, model) {
+        lost.push("transparency");
+    }
+    let bump = effect
+        .descendants()
+        .any(|n| n.has_tag_name("bump") || n.has_tag_name("normalmap"));
+    if bump {
+        lost.push("bump map");
+    }
+    if lost.is_empty() {
+        return;
+    }
+    let msg = format!(
+        "{} not rendered; the surface is Lambertian (ember has no Phong lobe)",
+        lost.join(", ")
+    );
+    ctx.warn(model, msg);
+}
+
+/// Whether the effect lets light through: with `opaque="A_ONE"` (the default), an
+/// alpha times `<transparency>` below 1; with `RGB_ZERO`, a colour that is not black.
+fn transparent(ctx: &Ctx, model: Node) -> bool {
+    let Some(t) = child(model, "transparent") else {
+        return false;
+    };
+    let amount = param_float(ctx, model, "transparency").unwrap_or(1.0);
+    let rgb_zero = t.attribute("opaque") == Some("RGB_ZERO");
+    match (child(t, "color"), rgb_zero) {
+        (Some(c), false) => {
+            let alpha = ctx.leading::<4>(c).map_or(1.0, |c| c[3]);
+            alpha * amount < 0.999
+        }
+        (Some(c), true) => {
+            let rgb = ctx.leading::<3>(c).unwrap_or([0.0; 3]);
+            rgb.iter().any(|&v| v * amount > 0.001)
+        }
+        (None, _) => child(t, "texture").is_some(),
     }
 }
 
-/// `profile_COMMON/technique/{phong|lambert|blinn}/diffuse/color`, else 0.5 grey.
-fn diffuse_colour(ctx: &Ctx, effect: Node) -> Result<Color, LoadError> {
-    let Some(technique) = path(effect, &["profile_COMMON", "technique"]) else {
-        return Ok(Color::splat(0.5));
+/// A `<float>` parameter of the shading model (`<transparency><float>0.5</float>`),
+/// if present and readable: it only decides a warning, so an odd one is passed over.
+fn param_float(ctx: &Ctx, model: Node, name: &str) -> Option<f32> {
+    let p = child(model, name)?;
+    let f = child(p, "float")?;
+    ctx.leading::<1>(f).ok().map(|[v]| v)
+}
+
+/// Resolves `<texture texture="X">`: `X` is a `<newparam>` `<sampler2D>` (COLLADA
+/// 1.4: its `<source>` a `<surface>` newparam whose `<init_from>` names the image;
+/// 1.5: its `<instance_image>`), or, as some exporters write, an image's id.
+fn texture_ref<'a, 'i>(
+    ctx: &mut Ctx<'a, 'i>,
+    effect: Node<'a, 'i>,
+    tex: Node<'a, 'i>,
+    fallback: Option<Color>,
+) -> Result<Option<TextureRef<'a, 'i>>, LoadError> {
+    let name = tex.attribute("texture").unwrap_or("");
+    let newparam = |sid: &str| {
+        effect
+            .descendants()
+            .find(|n| n.has_tag_name("newparam") && n.attribute("sid") == Some(sid))
     };
-    let colour = ["phong", "lambert", "blinn"]
-        .iter()
-        .find_map(|model| path(technique, &[model, "diffuse", "color"]));
-    match colour {
-        Some(c) => Ok(Color::from(ctx.leading::<3>(c)?)),
-        None => Ok(Color::splat(0.5)),
+    let sampler = newparam(name).and_then(|p| child(p, "sampler2D"));
+    let image = match sampler {
+        Some(s) => sampler_image(ctx, s, &newparam),
+        None => ctx.image_by_id(name),
+    };
+    let Some(image) = image else {
+        ctx.warn(
+            tex,
+            format!(
+                "texture=\"{}\" names no sampler or image; the texture is ignored",
+                super::xml::clip(name)
+            ),
+        );
+        return Ok(None);
+    };
+    let wrap = |axis: &str| {
+        let text = sampler
+            .and_then(|s| child(s, axis))
+            .and_then(|w| w.text())
+            .map(str::trim);
+        match text {
+            Some("MIRROR") => Wrap::Mirror,
+            Some("CLAMP" | "BORDER" | "NONE" | "MIRROR_ONCE") => Wrap::Clamp,
+            _ => Wrap::Repeat,
+        }
+    };
+    Ok(Some(TextureRef {
+        image,
+        wrap_s: wrap("wrap_s"),
+        wrap_t: wrap("wrap_t"),
+        texcoord: tex.attribute("texcoord"),
+        fallback,
+    }))
+}
+
+fn sampler_image<'a, 'i>(
+    ctx: &Ctx<'a, 'i>,
+    sampler: Node<'a, 'i>,
+    newparam: &dyn Fn(&str) -> Option<Node<'a, 'i>>,
+) -> Option<Node<'a, 'i>> {
+    if let Some(inst) = child(sampler, "instance_image") {
+        return ctx.resolve_if_present(inst, "url", "image").ok().flatten();
     }
+    let source = child(sampler, "source")?.text()?.trim();
+    let surface = newparam(source).and_then(|p| child(p, "surface"));
+    let id = match surface {
+        Some(s) => children(s, "init_from").next()?.text()?.trim(),
+        // Some exporters name the image directly in <source>.
+        None => source,
+    };
+    ctx.image_by_id(id)
 }
 
 /// One of the CGL extension materials. Missing parameters take the
@@ -48,32 +251,24 @@ fn diffuse_colour(ctx: &Ctx, effect: Node) -> Result<Color, LoadError> {
 fn read_special<'a, 'i>(ctx: &mut Ctx<'a, 'i>, node: Node<'a, 'i>) -> Result<Material, LoadError> {
     let mut p = Params { ctx, node };
     let m = match node.tag_name().name() {
-        "emission" => Material::Emission {
-            radiance: p.rgb("radiance", 1.0)?,
-        },
-        "mirror" => Material::Mirror {
-            reflectance: p.rgb("reflectance", 1.0)?,
-        },
+        "emission" => Material::emitter(p.rgb("radiance", 1.0)?),
+        "mirror" => Material::mirror(p.rgb("reflectance", 1.0)?),
         "glass" => {
             p.require_smooth()?;
-            Material::Glass {
-                ior: p.positive("ior", 1.5)?,
-                reflectance: p.rgb("reflectance", 1.0)?,
-                transmittance: p.rgb("transmittance", 1.0)?,
-            }
+            let ior = p.positive("ior", 1.5)?;
+            let r = p.rgb("reflectance", 1.0)?;
+            Material::glass(ior, r, p.rgb("transmittance", 1.0)?)
         }
         "refraction" => {
             p.require_smooth()?;
-            Material::Refraction {
-                ior: p.positive("ior", 1.5)?,
-                transmittance: p.rgb("transmittance", 1.0)?,
-            }
+            let ior = p.positive("ior", 1.5)?;
+            Material::refraction(ior, p.rgb("transmittance", 1.0)?)
         }
-        _ => Material::Microfacet(Conductor::new(
-            p.positive("alpha", 0.5)?,
-            p.rgb("eta", 1.0)?,
-            p.rgb("k", 0.0)?,
-        )),
+        _ => {
+            let alpha = p.positive("alpha", 0.5)?;
+            let eta = p.rgb("eta", 1.0)?;
+            Material::microfacet(alpha, eta, p.rgb("k", 0.0)?)
+        }
     };
     Ok(m)
 }

@@ -3,12 +3,12 @@
 use super::transform::{linear, point};
 use super::xml::{child, extension_technique, Ctx};
 use super::LoadError;
-use crate::lights::{AreaLight, Light};
+use crate::lights::{AreaLight, Light, SpotLight};
 use crate::Color;
 use glam::{DMat4, DVec3, Vec3};
 use roxmltree::Node;
 
-const TYPES: [&str; 4] = ["area", "point", "directional", "ambient"];
+const TYPES: [&str; 5] = ["area", "point", "directional", "ambient", "spot"];
 
 /// The light placed by world matrix `w`, or `None` (with a warning) for an
 /// unsupported or degenerate one.
@@ -40,6 +40,25 @@ pub(crate) fn read_light(
             position: finite(ctx, kind, point(w, DVec3::ZERO))?,
             intensity: c,
         },
+        "spot" => {
+            let axis = linear(w) * DVec3::NEG_Z;
+            if axis.length_squared() == 0.0 {
+                return Err(ctx.err(kind, "the node transform has no −Z direction"));
+            }
+            let angle = ctx.child_scalar(kind, "falloff_angle")?.unwrap_or(180.0);
+            let exponent = ctx.child_scalar(kind, "falloff_exponent")?.unwrap_or(0.0);
+            if angle <= 0.0 || exponent < 0.0 {
+                let msg = format!("falloff_angle {angle} must be positive and falloff_exponent {exponent} not negative");
+                return Err(ctx.err(kind, msg));
+            }
+            Light::Spot(SpotLight::new(
+                finite(ctx, kind, point(w, DVec3::ZERO))?,
+                finite(ctx, kind, axis.normalize())?,
+                c,
+                angle,
+                exponent,
+            ))
+        }
         "directional" => {
             let t = linear(w) * DVec3::NEG_Z;
             if t.length_squared() == 0.0 {

@@ -3,7 +3,7 @@
 
 use super::xml::{child, children, Ctx};
 use super::LoadError;
-use glam::Vec3;
+use glam::{Vec2, Vec3};
 use roxmltree::Node;
 use std::collections::HashMap;
 
@@ -19,21 +19,61 @@ pub(crate) struct LocalTriangle {
     pub group: u32,
 }
 
+/// One TEXCOORD set of a mesh: per triangle, its corners' indices into
+/// `LocalMesh::uvs` (`None` for triangles of primitives without this set).
+#[derive(Debug)]
+pub(crate) struct UvSet {
+    /// The inputs' `set` attribute (0 when absent).
+    pub set: u32,
+    pub corners: Vec<Option<[u32; 3]>>,
+}
+
 /// One `<geometry>`'s mesh before instancing.
 #[derive(Default, Debug)]
 pub(crate) struct LocalMesh<'a> {
     pub positions: Vec<Vec3>,
     pub normals: Vec<Vec3>,
+    pub uvs: Vec<Vec2>,
     pub triangles: Vec<LocalTriangle>,
+    pub uv_sets: Vec<UvSet>,
     /// Material symbol of each primitive element, in file order.
     pub symbols: Vec<Option<&'a str>>,
 }
 
-/// Where each `<source>` already read landed in the local position/normal lists.
+impl LocalMesh<'_> {
+    /// The texture coordinates set `set` gives triangle `i`, else those of the first set.
+    pub fn triangle_uvs(&self, set: Option<u32>, i: usize) -> Option<[u32; 3]> {
+        let chosen = set
+            .and_then(|s| self.uv_sets.iter().find(|u| u.set == s))
+            .or(self.uv_sets.first())?;
+        chosen.corners.get(i).copied().flatten()
+    }
+
+    fn push_triangle(&mut self, t: LocalTriangle, uvs: &[(u32, [u32; 3])]) {
+        let i = self.triangles.len();
+        self.triangles.push(t);
+        for &(set, _) in uvs {
+            if !self.uv_sets.iter().any(|u| u.set == set) {
+                self.uv_sets.push(UvSet {
+                    set,
+                    corners: Vec::new(),
+                });
+            }
+        }
+        for u in &mut self.uv_sets {
+            u.corners.resize(i, None);
+            u.corners
+                .push(uvs.iter().find(|(s, _)| *s == u.set).map(|&(_, c)| c));
+        }
+    }
+}
+
+/// Where each `<source>` already read landed in the local position/normal/uv lists.
 #[derive(Default)]
 struct SourceBases {
     positions: HashMap<roxmltree::NodeId, (u32, u32)>,
     normals: HashMap<roxmltree::NodeId, (u32, u32)>,
+    uvs: HashMap<roxmltree::NodeId, (u32, u32)>,
 }
 
 /// How one corner of a primitive is read from its `<p>` indices.
@@ -44,7 +84,12 @@ struct Layout {
     positions: (u32, u32),
     /// Offset in the corner, base and count of the normals.
     normals: Option<(usize, (u32, u32))>,
+    /// Set, offset in the corner, base and count of each TEXCOORD input.
+    uvs: Vec<(u32, usize, (u32, u32))>,
 }
+
+/// The primitive elements that make triangles.
+const SURFACES: [&str; 5] = ["triangles", "polylist", "polygons", "tristrips", "trifans"];
 
 pub(crate) fn parse_mesh<'a, 'i>(
     ctx: &mut Ctx<'a, 'i>,
@@ -54,21 +99,37 @@ pub(crate) fn parse_mesh<'a, 'i>(
     let mut bases = SourceBases::default();
     for prim in mesh_node.children().filter(Node::is_element) {
         let kind = prim.tag_name().name();
-        match kind {
-            "triangles" | "polylist" | "polygons" => {}
-            "lines" | "linestrips" | "tristrips" | "trifans" => {
-                ctx.warn(prim, format!("<{kind}> is not supported; skipped"));
-                continue;
-            }
-            _ => continue,
+        if matches!(kind, "lines" | "linestrips") {
+            ctx.warn_once(
+                "lines",
+                prim,
+                "<lines> and <linestrips> have no area and are not rendered; skipped",
+            );
+            continue;
+        }
+        if !SURFACES.contains(&kind) {
+            continue;
         }
         let layout = read_layout(ctx, prim, &mut mesh, &mut bases)?;
         let group = mesh.symbols.len() as u32;
         mesh.symbols.push(prim.attribute("material"));
+        let mut out = Emitter {
+            layout: &layout,
+            group,
+            mesh: &mut mesh,
+            bad_uv: false,
+        };
         match kind {
-            "triangles" => read_triangles(ctx, prim, &layout, group, &mut mesh)?,
-            "polylist" => read_polylist(ctx, prim, &layout, group, &mut mesh)?,
-            _ => read_polygons(ctx, prim, &layout, group, &mut mesh)?,
+            "triangles" => read_triangles(ctx, prim, &mut out)?,
+            "polylist" => read_polylist(ctx, prim, &mut out)?,
+            "polygons" => read_polygons(ctx, prim, &mut out)?,
+            _ => read_strips(ctx, prim, kind == "tristrips", &mut out)?,
+        }
+        if out.bad_uv {
+            ctx.warn(
+                prim,
+                "a TEXCOORD index is out of range; those triangles have no texture coordinates",
+            );
         }
     }
     Ok(mesh)
@@ -84,6 +145,7 @@ fn read_layout<'a, 'i>(
     let mut stride = 0u64;
     let mut vertex = None;
     let mut normal = None;
+    let mut texcoords = Vec::new();
     for input in children(prim, "input") {
         let offset = ctx
             .uint_attr(input, "offset")?
@@ -95,6 +157,7 @@ fn read_layout<'a, 'i>(
         match input.attribute("semantic") {
             Some("VERTEX") if vertex.is_none() => vertex = Some((input, offset as usize)),
             Some("NORMAL") if normal.is_none() => normal = Some((input, offset as usize)),
+            Some("TEXCOORD") => texcoords.push((input, offset as usize)),
             _ => {}
         }
     }
@@ -106,6 +169,8 @@ fn read_layout<'a, 'i>(
         match input.attribute("semantic") {
             Some("POSITION") if pos_input.is_none() => pos_input = Some(input),
             Some("NORMAL") if vertex_normals.is_none() => vertex_normals = Some(input),
+            // A TEXCOORD inside <vertices> shares VERTEX's index.
+            Some("TEXCOORD") => texcoords.push((input, vertex_offset)),
             _ => {}
         }
     }
@@ -126,34 +191,126 @@ fn read_layout<'a, 'i>(
         }
         None => None,
     };
+    let uvs = read_texcoords(ctx, &texcoords, mesh, bases);
     Ok(Layout {
         stride: stride as usize,
         vertex_offset,
         positions,
         normals,
+        uvs,
     })
 }
 
-/// Appends a `<source>`'s 3-vectors to `out` once; returns their base and count.
+/// The TEXCOORD inputs' sets. Texture coordinates only matter to textures, so a
+/// source that cannot be read loses them with a warning rather than the mesh.
+fn read_texcoords(
+    ctx: &mut Ctx,
+    inputs: &[(Node, usize)],
+    mesh: &mut LocalMesh,
+    bases: &mut SourceBases,
+) -> Vec<(u32, usize, (u32, u32))> {
+    let mut out = Vec::new();
+    for (k, &(input, offset)) in inputs.iter().enumerate() {
+        let set = match ctx.uint_attr(input, "set") {
+            Ok(Some(s)) => s.min(u32::MAX as u64) as u32,
+            _ => k as u32,
+        };
+        if out.iter().any(|&(s, _, _)| s == set) {
+            continue;
+        }
+        let range = ctx
+            .resolve(input, "source", "source")
+            .and_then(|src| load_uv_source(ctx, src, &mut mesh.uvs, &mut bases.uvs));
+        match range {
+            Ok(range) => out.push((set, offset, range)),
+            Err(e) => {
+                let why = e.to_string();
+                let why = why.strip_prefix(&format!("{}: ", ctx.file)).unwrap_or(&why);
+                ctx.warn(input, format!("texture coordinates ignored: {why}"));
+            }
+        }
+    }
+    out
+}
+
+/// Appends a `<source>`'s 3-vectors to `out` once (2-vectors get z = 0); returns
+/// their base and count.
 fn load_source(
     ctx: &Ctx,
     source: Node,
     out: &mut Vec<Vec3>,
     bases: &mut HashMap<roxmltree::NodeId, (u32, u32)>,
 ) -> Result<(u32, u32), LoadError> {
+    let flat = accessor_params(source) == Some(2);
+    load_source_as(ctx, source, out, bases, 3, |c| {
+        // Two-component positions (2D meshes) lie in the z = 0 plane.
+        Vec3::new(c[0], c[1], if flat || c.len() == 2 { 0.0 } else { c[2] })
+    })
+}
+
+/// Appends a `<source>`'s texture coordinates (its first two components) to `out` once.
+fn load_uv_source(
+    ctx: &Ctx,
+    source: Node,
+    out: &mut Vec<Vec2>,
+    bases: &mut HashMap<roxmltree::NodeId, (u32, u32)>,
+) -> Result<(u32, u32), LoadError> {
+    load_source_as(ctx, source, out, bases, 2, |c| Vec2::new(c[0], c[1]))
+}
+
+/// Appends a `<source>`'s elements (at least two components each; `default_stride`
+/// without an accessor), made by `make`, to `out` once; returns their base and count.
+fn load_source_as<T>(
+    ctx: &Ctx,
+    source: Node,
+    out: &mut Vec<T>,
+    bases: &mut HashMap<roxmltree::NodeId, (u32, u32)>,
+    default_stride: u64,
+    make: impl Fn(&[f32]) -> T,
+) -> Result<(u32, u32), LoadError> {
     if let Some(&range) = bases.get(&source.id()) {
         return Ok(range);
     }
+    let (values, stride, count) = source_values(ctx, source, 2, default_stride)?;
+    let base = out.len();
+    out.extend(values.chunks_exact(stride).take(count).map(make));
+    let range = (base as u32, count as u32);
+    bases.insert(source.id(), range);
+    Ok(range)
+}
+
+/// How many `<param>`s a source's accessor names, if it names any.
+fn accessor_params(source: Node) -> Option<usize> {
+    let accessor = child(source, "technique_common").and_then(|t| child(t, "accessor"))?;
+    let n = children(accessor, "param").count();
+    (n > 0).then_some(n)
+}
+
+/// A `<source>`'s numbers, its accessor's stride (at least `dims`; `default_stride`
+/// without an accessor) and element count.
+fn source_values(
+    ctx: &Ctx,
+    source: Node,
+    dims: u64,
+    default_stride: u64,
+) -> Result<(Vec<f32>, usize, usize), LoadError> {
     let array = child(source, "float_array").ok_or_else(|| ctx.err(source, "no <float_array>"))?;
     let values = float_array(ctx, array)?;
     let accessor = child(source, "technique_common").and_then(|t| child(t, "accessor"));
+    if values.is_empty() {
+        // An empty source (exporters write them for empty meshes) has no stride to check.
+        return Ok((values, dims as usize, 0));
+    }
     let stride = match accessor {
         Some(a) => ctx.uint_attr(a, "stride")?.unwrap_or(1),
-        None => 3,
+        None => default_stride,
     };
-    if stride < 3 {
+    if stride < dims {
         let at = accessor.unwrap_or(source);
-        return Err(ctx.err(at, format!("stride {stride} is too small for 3D vectors")));
+        return Err(ctx.err(
+            at,
+            format!("stride {stride} is too small for {dims}-component values"),
+        ));
     }
     let available = values.len() as u64 / stride;
     let count = match accessor
@@ -172,48 +329,134 @@ fn load_source(
         Some(c) => c,
         None => available,
     };
-    let base = out.len();
-    if base as u64 + count > u32::MAX as u64 / 2 {
+    if count > u32::MAX as u64 / 2 {
         return Err(ctx.err(source, "too many vertices"));
     }
-    let stride = stride as usize;
-    out.extend(
-        values
-            .chunks_exact(stride)
-            .take(count as usize)
-            .map(|c| Vec3::new(c[0], c[1], c[2])),
-    );
-    let range = (base as u32, count as u32);
-    bases.insert(source.id(), range);
-    Ok(range)
+    Ok((values, stride as usize, count as usize))
 }
 
-/// The numbers of a `<float_array>`, which must match its `count`.
+/// The numbers of a `<float_array>`. Fewer than its `count` is an error; more is read
+/// with a warning (the accessors say which are used).
 fn float_array(ctx: &Ctx, array: Node) -> Result<Vec<f32>, LoadError> {
     let values = ctx.numbers::<f32>(array)?;
     if let Some(count) = ctx.uint_attr(array, "count")? {
-        if count != values.len() as u64 {
+        if count > values.len() as u64 {
             return Err(ctx.err(
                 array,
                 format!("count is {count} but {} numbers are present", values.len()),
             ));
         }
+        if count < values.len() as u64 {
+            ctx.note(
+                array,
+                format!(
+                    "count is {count} but {} numbers are present; the extra ones are not read",
+                    values.len()
+                ),
+            );
+            let mut values = values;
+            values.truncate(count as usize);
+            return Ok(values);
+        }
     }
     Ok(values)
 }
 
-fn read_triangles(
-    ctx: &Ctx,
-    prim: Node,
-    layout: &Layout,
+/// Where a primitive's triangles go: its layout, material group and mesh.
+struct Emitter<'l, 'm, 'a> {
+    layout: &'l Layout,
     group: u32,
-    mesh: &mut LocalMesh,
-) -> Result<(), LoadError> {
+    mesh: &'m mut LocalMesh<'a>,
+    /// A TEXCOORD index was out of range (those triangles get no coordinates).
+    bad_uv: bool,
+}
+
+impl Emitter<'_, '_, '_> {
+    /// Appends the triangle of corners `c` (each a slice of `stride` indices).
+    fn triangle(
+        &mut self,
+        ctx: &Ctx,
+        p: Node,
+        face: usize,
+        c: [&[u32]; 3],
+    ) -> Result<(), LoadError> {
+        let l = self.layout;
+        let index = |corner: &[u32], offset: usize, (base, n): (u32, u32), what: &str| {
+            let i = corner[offset];
+            if i < n {
+                Ok(base + i)
+            } else {
+                Err(ctx.err(
+                    p,
+                    format!("face {face}: {what} index {i} is out of range (only {n} available)"),
+                ))
+            }
+        };
+        let mut v = [0; 3];
+        for k in 0..3 {
+            v[k] = index(c[k], l.vertex_offset, l.positions, "position")?;
+        }
+        let n = match l.normals {
+            Some((off, range)) => {
+                let mut n = [0; 3];
+                for k in 0..3 {
+                    n[k] = index(c[k], off, range, "normal")?;
+                }
+                Some(n)
+            }
+            None => None,
+        };
+        let mut uvs = Vec::with_capacity(l.uvs.len());
+        for &(set, off, (base, count)) in &l.uvs {
+            let idx = c.map(|corner| corner[off]);
+            if idx.iter().all(|&i| i < count) {
+                uvs.push((set, idx.map(|i| base + i)));
+            } else {
+                self.bad_uv = true;
+            }
+        }
+        let t = LocalTriangle {
+            v,
+            n,
+            group: self.group,
+        };
+        self.mesh.push_triangle(t, &uvs);
+        Ok(())
+    }
+
+    /// Triangulates one polygon from its corners' indices: a convex one as the fan
+    /// `(c0, ci, ci+1)`, a concave one (SketchUp and CAD exporters write them) by ear
+    /// clipping, so no triangle covers a notch. Both give `k − 2` triangles.
+    fn polygon(
+        &mut self,
+        ctx: &Ctx,
+        p: Node,
+        face: usize,
+        indices: &[u32],
+    ) -> Result<(), LoadError> {
+        let s = self.layout.stride;
+        if indices.len() / s > 3 && is_concave(&self.mesh.positions, self.layout, indices) {
+            let (corners, tris) =
+                triangulate_with_holes(&self.mesh.positions, self.layout, &[indices]);
+            for t in tris {
+                self.triangle(ctx, p, face, t.map(|k| corners[k]))?;
+            }
+            return Ok(());
+        }
+        let corner = |k: usize| &indices[k * s..(k + 1) * s];
+        for i in 1..indices.len() / s - 1 {
+            self.triangle(ctx, p, face, [corner(0), corner(i), corner(i + 1)])?;
+        }
+        Ok(())
+    }
+}
+
+fn read_triangles(ctx: &Ctx, prim: Node, out: &mut Emitter) -> Result<(), LoadError> {
     let Some(p) = child(prim, "p") else {
         return Ok(()); // A primitive without <p> has no faces.
     };
     let indices = ctx.numbers::<u32>(p)?;
-    let per_face = 3 * layout.stride;
+    let per_face = 3 * out.layout.stride;
     if indices.len() % per_face != 0 {
         return Err(ctx.err(
             p,
@@ -225,18 +468,13 @@ fn read_triangles(
     }
     check_count(ctx, prim, indices.len() / per_face)?;
     for (face, corners) in indices.chunks_exact(per_face).enumerate() {
-        emit_polygon(ctx, p, face, corners, layout, group, mesh)?;
+        out.polygon(ctx, p, face, corners)?;
     }
     Ok(())
 }
 
-fn read_polylist(
-    ctx: &Ctx,
-    prim: Node,
-    layout: &Layout,
-    group: u32,
-    mesh: &mut LocalMesh,
-) -> Result<(), LoadError> {
+fn read_polylist(ctx: &Ctx, prim: Node, out: &mut Emitter) -> Result<(), LoadError> {
+    let stride = out.layout.stride;
     let vcount_node = child(prim, "vcount");
     let p = child(prim, "p");
     let (vcounts, indices) = match (vcount_node, p) {
@@ -248,67 +486,112 @@ fn read_polylist(
     let (vc, p) = (vcount_node.unwrap_or(prim), p.unwrap_or(prim));
     check_count(ctx, prim, vcounts.len())?;
     let corners: u64 = vcounts.iter().map(|&k| k as u64).sum();
-    let needed = corners.saturating_mul(layout.stride as u64);
+    let needed = corners.saturating_mul(stride as u64);
     if needed != indices.len() as u64 {
         return Err(ctx.err(
             vc,
             format!(
-                "vcount sums to {corners} corners × {} indices each = {needed}, but <p> has {} indices",
-                layout.stride,
+                "vcount sums to {corners} corners × {stride} indices each = {needed}, but <p> has {} indices",
                 indices.len()
             ),
         ));
     }
     let mut start = 0;
     for (face, &k) in vcounts.iter().enumerate() {
-        let len = k as usize * layout.stride;
+        let len = k as usize * stride;
         if k < 3 {
             return Err(ctx.err(
                 vc,
                 format!("entry {face} is {k}; a polygon needs at least 3 corners"),
             ));
         }
-        emit_polygon(
-            ctx,
-            p,
-            face,
-            &indices[start..start + len],
-            layout,
-            group,
-            mesh,
-        )?;
+        out.polygon(ctx, p, face, &indices[start..start + len])?;
         start += len;
     }
     Ok(())
 }
 
-fn read_polygons(
-    ctx: &mut Ctx,
-    prim: Node,
-    layout: &Layout,
-    group: u32,
-    mesh: &mut LocalMesh,
-) -> Result<(), LoadError> {
-    if child(prim, "ph").is_some() {
-        ctx.warn(
-            prim,
-            "polygons with holes (<ph>) are not supported; skipped",
-        );
+/// The indices of one `<p>` (or `<h>`) holding a polygon of 3 or more corners.
+fn polygon_indices(ctx: &Ctx, p: Node, stride: usize) -> Result<Vec<u32>, LoadError> {
+    let indices = ctx.numbers::<u32>(p)?;
+    if indices.len() % stride != 0 || indices.len() < 3 * stride {
+        return Err(ctx.err(
+            p,
+            format!(
+                "{} indices do not form a polygon of 3 or more corners ({stride} per corner)",
+                indices.len()
+            ),
+        ));
     }
+    Ok(indices)
+}
+
+fn read_polygons(ctx: &Ctx, prim: Node, out: &mut Emitter) -> Result<(), LoadError> {
+    let stride = out.layout.stride;
     let mut faces = 0;
-    for (face, p) in children(prim, "p").enumerate() {
+    for (face, p) in prim
+        .children()
+        .filter(|c| c.is_element() && matches!(c.tag_name().name(), "p" | "ph"))
+        .enumerate()
+    {
+        if p.tag_name().name() == "p" {
+            let indices = polygon_indices(ctx, p, stride)?;
+            out.polygon(ctx, p, face, &indices)?;
+        } else {
+            let outer = child(p, "p").ok_or_else(|| ctx.err(p, "<ph> without <p>"))?;
+            let outer_indices = polygon_indices(ctx, outer, stride)?;
+            let holes = children(p, "h")
+                .map(|h| polygon_indices(ctx, h, stride))
+                .collect::<Result<Vec<_>, _>>()?;
+            let loops: Vec<&[u32]> = std::iter::once(outer_indices.as_slice())
+                .chain(holes.iter().map(Vec::as_slice))
+                .collect();
+            let (corners, tris) = triangulate_with_holes(&out.mesh.positions, out.layout, &loops);
+            for t in tris {
+                out.triangle(ctx, outer, face, t.map(|k| corners[k]))?;
+            }
+        }
+        faces += 1;
+    }
+    check_count(ctx, prim, faces)
+}
+
+/// `<tristrips>` and `<trifans>`: each `<p>` is one strip or fan. A strip's
+/// triangle `k` is `(k, k+1, k+2)`, with corners 0 and 1 swapped on odd `k` so
+/// every triangle keeps the strip's winding.
+fn read_strips(ctx: &Ctx, prim: Node, strip: bool, out: &mut Emitter) -> Result<(), LoadError> {
+    let stride = out.layout.stride;
+    let mut faces = 0;
+    for p in children(prim, "p") {
         let indices = ctx.numbers::<u32>(p)?;
-        if indices.len() % layout.stride != 0 || indices.len() < 3 * layout.stride {
+        if indices.len() % stride != 0 {
             return Err(ctx.err(
                 p,
                 format!(
-                    "{} indices do not form a polygon of 3 or more corners ({} per corner)",
-                    indices.len(),
-                    layout.stride
+                    "{} indices is not a whole number of corners ({stride} per corner)",
+                    indices.len()
                 ),
             ));
         }
-        emit_polygon(ctx, p, face, &indices, layout, group, mesh)?;
+        let n = indices.len() / stride;
+        if n < 3 {
+            // Fewer than three corners make no triangle; exporters write such stubs.
+            faces += 1;
+            continue;
+        }
+        if !strip {
+            out.polygon(ctx, p, faces, &indices)?;
+        } else {
+            let corner = |k: usize| &indices[k * stride..(k + 1) * stride];
+            for k in 0..n - 2 {
+                let c = if k % 2 == 0 {
+                    [corner(k), corner(k + 1), corner(k + 2)]
+                } else {
+                    [corner(k + 1), corner(k), corner(k + 2)]
+                };
+                out.triangle(ctx, p, faces, c)?;
+            }
+        }
         faces += 1;
     }
     check_count(ctx, prim, faces)
@@ -324,40 +607,215 @@ fn check_count(ctx: &Ctx, prim: Node, faces: usize) -> Result<(), LoadError> {
     }
 }
 
-/// Fan-triangulates one polygon `(c0, ci, ci+1)` from its corners' indices.
-fn emit_polygon(
-    ctx: &Ctx,
-    p: Node,
-    face: usize,
-    indices: &[u32],
+/// Triangulates a polygon with holes (`loops[0]` the outline, the rest holes, each a
+/// list of corners of `layout.stride` indices): each hole is bridged to the outline
+/// by a segment from its rightmost corner (in the polygon's plane) to the nearest
+/// visible outline corner, and the single loop that makes is ear-clipped. Returns
+/// the corners (slices of `loops`) and the triangles as indices into them. Out-of-
+/// range position indices are left to `Emitter::triangle` to report.
+fn triangulate_with_holes<'l>(
+    positions: &[Vec3],
     layout: &Layout,
-    group: u32,
-    mesh: &mut LocalMesh,
-) -> Result<(), LoadError> {
-    let corner = |c: usize, offset: usize, (base, n): (u32, u32), what: &str| {
-        let i = indices[c * layout.stride + offset];
-        if i < n {
-            Ok(base + i)
+    loops: &[&'l [u32]],
+) -> (Vec<&'l [u32]>, Vec<[usize; 3]>) {
+    let s = layout.stride;
+    let (base, count) = layout.positions;
+    let corners: Vec<Vec<&[u32]>> = loops.iter().map(|l| l.chunks_exact(s).collect()).collect();
+    let pos = |c: &[u32]| {
+        let i = c[layout.vertex_offset];
+        if i < count {
+            positions[(base + i) as usize]
         } else {
-            Err(ctx.err(
-                p,
-                format!("face {face}: {what} index {i} is out of range (only {n} available)"),
-            ))
+            Vec3::ZERO
         }
     };
-    let k = indices.len() / layout.stride;
-    let vertex = |c| corner(c, layout.vertex_offset, layout.positions, "position");
-    let normal = |c, (off, range)| corner(c, off, range, "normal");
-    for i in 1..k - 1 {
-        let n = match layout.normals {
-            Some(nl) => Some([normal(0, nl)?, normal(i, nl)?, normal(i + 1, nl)?]),
-            None => None,
-        };
-        mesh.triangles.push(LocalTriangle {
-            v: [vertex(0)?, vertex(i)?, vertex(i + 1)?],
-            n,
-            group,
-        });
+    // Project onto the plane of the outline's Newell normal.
+    let outline: Vec<Vec3> = corners[0].iter().map(|c| pos(c)).collect();
+    let normal = newell_normal(&outline);
+    let (ax, ay) = plane_axes(normal);
+    let flat = |c: &[u32]| {
+        let p = pos(c);
+        Vec2::new(p.dot(ax), p.dot(ay))
+    };
+    // One loop of corner ids (index into `all`), holes spliced in.
+    let mut all: Vec<&[u32]> = corners[0].clone();
+    let mut ring: Vec<usize> = (0..all.len()).collect();
+    let mut holes: Vec<(f32, Vec<usize>)> = corners[1..]
+        .iter()
+        .map(|h| {
+            let ids: Vec<usize> = (all.len()..all.len() + h.len()).collect();
+            all.extend(h.iter().copied());
+            let max_x = ids.iter().map(|&k| flat(all[k]).x).fold(f32::MIN, f32::max);
+            (max_x, ids)
+        })
+        .collect();
+    // Holes run against the outline (COLLADA fixes neither orientation).
+    let signed_area = |ids: &[usize]| -> f32 {
+        (0..ids.len())
+            .map(|k| cross2(flat(all[ids[k]]), flat(all[ids[(k + 1) % ids.len()]])))
+            .sum()
+    };
+    let outline_area = signed_area(&ring);
+    for (_, hole) in &mut holes {
+        if signed_area(hole) * outline_area > 0.0 {
+            hole.reverse();
+        }
     }
-    Ok(())
+    // Rightmost holes first, so later bridges do not cross earlier ones.
+    holes.sort_by(|a, b| b.0.total_cmp(&a.0));
+    for (_, hole) in holes {
+        let (h_at, _) = hole
+            .iter()
+            .enumerate()
+            .max_by(|a, b| flat(all[*a.1]).x.total_cmp(&flat(all[*b.1]).x))
+            .unwrap_or((0, &hole[0]));
+        let hp = flat(all[hole[h_at]]);
+        let visible = |k: usize| {
+            let a = flat(all[ring[k]]);
+            (0..ring.len()).all(|e| {
+                let (p, q) = (flat(all[ring[e]]), flat(all[ring[(e + 1) % ring.len()]]));
+                e == k || (e + 1) % ring.len() == k || !segments_cross(hp, a, p, q)
+            })
+        };
+        let best = (0..ring.len())
+            .filter(|&k| visible(k))
+            .min_by(|&a, &b| {
+                let da = (flat(all[ring[a]]) - hp).length_squared();
+                let db = (flat(all[ring[b]]) - hp).length_squared();
+                da.total_cmp(&db)
+            })
+            .unwrap_or(0);
+        // ring[..=best], hole from h_at around to h_at, back to ring[best], rest.
+        let mut spliced = ring[..=best].to_vec();
+        spliced.extend((0..=hole.len()).map(|j| hole[(h_at + j) % hole.len()]));
+        spliced.extend_from_slice(&ring[best..]);
+        ring = spliced;
+    }
+    let flat_ring: Vec<Vec2> = ring.iter().map(|&k| flat(all[k])).collect();
+    let tris = ear_clip(&flat_ring)
+        .into_iter()
+        .map(|t| t.map(|k| ring[k]))
+        .collect();
+    (all, tris)
+}
+
+/// Whether a polygon (corners of `layout.stride` indices) turns both ways in its plane.
+fn is_concave(positions: &[Vec3], layout: &Layout, indices: &[u32]) -> bool {
+    let (base, count) = layout.positions;
+    let p: Vec<Vec3> = indices
+        .chunks_exact(layout.stride)
+        .map(|c| c[layout.vertex_offset])
+        .map(|i| {
+            if i < count {
+                positions[(base + i) as usize]
+            } else {
+                Vec3::ZERO
+            }
+        })
+        .collect();
+    let n = newell_normal(&p);
+    let scale = p.iter().map(|v| v.abs().max_element()).fold(0.0, f32::max);
+    (0..p.len()).any(|i| {
+        let (a, b, c) = (p[i], p[(i + 1) % p.len()], p[(i + 2) % p.len()]);
+        (b - a).cross(c - b).dot(n) < -1e-6 * scale * scale
+    })
+}
+
+fn newell_normal(p: &[Vec3]) -> Vec3 {
+    let mut n = Vec3::ZERO;
+    for i in 0..p.len() {
+        let (a, b) = (p[i], p[(i + 1) % p.len()]);
+        n += Vec3::new(
+            (a.y - b.y) * (a.z + b.z),
+            (a.z - b.z) * (a.x + b.x),
+            (a.x - b.x) * (a.y + b.y),
+        );
+    }
+    n.normalize_or_zero()
+}
+
+/// Two axes spanning the plane of unit `n` such that `(ax, ay, n)` is right-handed.
+fn plane_axes(n: Vec3) -> (Vec3, Vec3) {
+    if n == Vec3::ZERO {
+        return (Vec3::X, Vec3::Y);
+    }
+    let ax = n.any_orthonormal_vector();
+    (ax, n.cross(ax))
+}
+
+fn cross2(a: Vec2, b: Vec2) -> f32 {
+    a.x * b.y - a.y * b.x
+}
+
+/// Whether segments `ab` and `pq` cross at a point inside both.
+fn segments_cross(a: Vec2, b: Vec2, p: Vec2, q: Vec2) -> bool {
+    let d1 = cross2(b - a, p - a);
+    let d2 = cross2(b - a, q - a);
+    let d3 = cross2(q - p, a - p);
+    let d4 = cross2(q - p, b - p);
+    d1 * d2 < 0.0 && d3 * d4 < 0.0
+}
+
+/// Ear clipping of a simple (or bridged) counter-clockwise or clockwise polygon;
+/// every polygon of `n` corners yields `n − 2` triangles (where no ear is found,
+/// as for a degenerate polygon, the rest is fanned).
+fn ear_clip(p: &[Vec2]) -> Vec<[usize; 3]> {
+    let area: f32 = (0..p.len())
+        .map(|i| cross2(p[i], p[(i + 1) % p.len()]))
+        .sum();
+    let orient = if area < 0.0 { -1.0 } else { 1.0 };
+    let mut idx: Vec<usize> = (0..p.len()).collect();
+    let mut out = Vec::with_capacity(p.len().saturating_sub(2));
+    while idx.len() > 3 {
+        let n = idx.len();
+        let ear = (0..n).find(|&i| {
+            let (a, b, c) = (idx[(i + n - 1) % n], idx[i], idx[(i + 1) % n]);
+            let convex = orient * cross2(p[b] - p[a], p[c] - p[b]) > 0.0;
+            convex
+                && idx.iter().all(|&k| {
+                    k == a
+                        || k == b
+                        || k == c
+                        || p[k] == p[a]
+                        || p[k] == p[b]
+                        || p[k] == p[c]
+                        || !inside_triangle(p[k], p[a], p[b], p[c], orient)
+                })
+        });
+        let i = ear.unwrap_or(1);
+        out.push([idx[(i + n - 1) % n], idx[i], idx[(i + 1) % n]]);
+        idx.remove(i);
+    }
+    if idx.len() == 3 {
+        out.push([idx[0], idx[1], idx[2]]);
+    }
+    out
+}
+
+fn inside_triangle(q: Vec2, a: Vec2, b: Vec2, c: Vec2, orient: f32) -> bool {
+    orient * cross2(b - a, q - a) >= 0.0
+        && orient * cross2(c - b, q - b) >= 0.0
+        && orient * cross2(a - c, q - c) >= 0.0
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn ear_clip_of_a_concave_polygon_stays_inside() {
+        // An L shape: fanning from corner 0 would cover the notch.
+        let p = [(0., 0.), (2., 0.), (2., 1.), (1., 1.), (1., 2.), (0., 2.)]
+            .map(|(x, y)| Vec2::new(x, y));
+        let tris = ear_clip(&p);
+        assert_eq!(tris.len(), 4);
+        let area: f32 = tris
+            .iter()
+            .map(|t| cross2(p[t[1]] - p[t[0]], p[t[2]] - p[t[0]]) * 0.5)
+            .sum();
+        assert!((area - 3.0).abs() < 1e-6, "{area}");
+        for t in &tris {
+            assert!(cross2(p[t[1]] - p[t[0]], p[t[2]] - p[t[0]]) > 0.0, "{t:?}");
+        }
+    }
 }

@@ -38,7 +38,8 @@ pub(crate) fn local_matrix(ctx: &mut Ctx, node: Node) -> Result<DMat4, LoadError
             "translate" => DMat4::from_translation(DVec3::from(ctx.exact::<3>(t)?)),
             "scale" => DMat4::from_scale(DVec3::from(ctx.exact::<3>(t)?)),
             "rotate" => rotation(ctx, t)?,
-            "lookat" | "skew" => {
+            "lookat" => look_at(ctx, t)?,
+            "skew" => {
                 ctx.warn(t, "transform is not supported; ignored");
                 continue;
             }
@@ -50,7 +51,7 @@ pub(crate) fn local_matrix(ctx: &mut Ctx, node: Node) -> Result<DMat4, LoadError
 }
 
 /// A row-major `<matrix>`; missing trailing entries are 0 (spec §2).
-fn matrix(ctx: &mut Ctx, node: Node) -> Result<DMat4, LoadError> {
+pub(crate) fn matrix(ctx: &mut Ctx, node: Node) -> Result<DMat4, LoadError> {
     let v = ctx.numbers::<f64>(node)?;
     match v.len() {
         0 => return Err(ctx.err(node, "matrix has no numbers")),
@@ -70,14 +71,49 @@ fn matrix(ctx: &mut Ctx, node: Node) -> Result<DMat4, LoadError> {
     Ok(DMat4::from_cols_array(&a).transpose())
 }
 
-/// `<rotate> ax ay az deg`: right-handed rotation about the axis.
-fn rotation(ctx: &Ctx, node: Node) -> Result<DMat4, LoadError> {
+/// `<rotate> ax ay az deg`: right-handed rotation about the axis. A zero axis
+/// (`0 0 0 0`, written by some animation exporters) names no rotation: the identity.
+fn rotation(ctx: &mut Ctx, node: Node) -> Result<DMat4, LoadError> {
     let [x, y, z, deg] = ctx.exact::<4>(node)?;
     let axis = DVec3::new(x, y, z);
     if axis.length_squared() == 0.0 {
-        return Err(ctx.err(node, "rotation axis is zero"));
+        ctx.warn_once(
+            "zero axis",
+            node,
+            "rotation axis is zero; read as no rotation",
+        );
+        return Ok(DMat4::IDENTITY);
     }
     Ok(DMat4::from_axis_angle(axis.normalize(), deg.to_radians()))
+}
+
+/// `<lookat>` eye, interest point, up: the frame at `eye` whose −Z points at the
+/// interest point and whose +Y is `up` made orthogonal to it (Maya and XSI write it
+/// for cameras). A degenerate one (eye on the interest point, up along the view) is
+/// the translation alone, with a warning.
+fn look_at(ctx: &mut Ctx, node: Node) -> Result<DMat4, LoadError> {
+    let v = ctx.exact::<9>(node)?;
+    let (eye, target, up) = (
+        DVec3::new(v[0], v[1], v[2]),
+        DVec3::new(v[3], v[4], v[5]),
+        DVec3::new(v[6], v[7], v[8]),
+    );
+    let f = (target - eye).normalize_or_zero();
+    let r = f.cross(up).normalize_or_zero();
+    if f == DVec3::ZERO || r == DVec3::ZERO {
+        ctx.warn(
+            node,
+            "degenerate lookat (no view direction or up along it); only its eye is used",
+        );
+        return Ok(DMat4::from_translation(eye));
+    }
+    let u = r.cross(f);
+    Ok(DMat4::from_cols(
+        r.extend(0.0),
+        u.extend(0.0),
+        (-f).extend(0.0),
+        eye.extend(1.0),
+    ))
 }
 
 /// The linear part `W3` of a transform.
@@ -111,6 +147,20 @@ pub(crate) fn normal_matrix(m: &DMat4) -> DMat3 {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn lookat_points_minus_z_at_the_interest_point() {
+        let doc = roxmltree::Document::parse("<lookat>1 2 3  1 2 -7  0 1 0</lookat>").unwrap();
+        let mut ctx = Ctx::new("t.dae", &doc);
+        let m = look_at(&mut ctx, doc.root_element()).unwrap();
+        assert!((point(&m, DVec3::ZERO) - DVec3::new(1.0, 2.0, 3.0)).length() < 1e-12);
+        assert!((linear(&m) * DVec3::NEG_Z - DVec3::NEG_Z).length() < 1e-12);
+        let doc = roxmltree::Document::parse("<lookat>0 0 0  1 0 0  0 0 1</lookat>").unwrap();
+        let mut ctx = Ctx::new("t.dae", &doc);
+        let m = look_at(&mut ctx, doc.root_element()).unwrap();
+        assert!((linear(&m) * DVec3::NEG_Z - DVec3::X).length() < 1e-12);
+        assert!((linear(&m) * DVec3::Y - DVec3::Z).length() < 1e-12);
+    }
 
     #[test]
     fn normal_matrix_is_inverse_transpose_direction() {

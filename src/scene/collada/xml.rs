@@ -4,6 +4,7 @@
 
 use super::LoadError;
 use roxmltree::{Document, Node};
+use std::cell::RefCell;
 use std::collections::{HashMap, HashSet};
 use std::fmt::Display;
 use std::str::FromStr;
@@ -15,9 +16,19 @@ const EXTENSION_PROFILES: [&str; 2] = ["CGL", "CMU462"];
 /// messages, the id table, and the warnings gathered so far.
 pub(crate) struct Ctx<'a, 'i> {
     pub file: &'a str,
+    /// The course wrote the file (`camera::course_placement`): its effects mean what
+    /// spec §6 says, so what a Lambertian surface cannot show is not warned about.
+    pub course_file: bool,
+    doc: &'a Document<'i>,
     ids: HashMap<&'a str, Node<'a, 'i>>,
     warnings: Vec<String>,
     seen_warnings: HashSet<String>,
+    /// The first element whose numbers were written with a decimal comma
+    /// (`1,5`), once the whole file was found to write every number that way.
+    /// Held as the element's label, for the one warning `into_warnings` adds.
+    decimal_comma: RefCell<Option<String>>,
+    /// Warnings from readers that hold the context shared (`note`).
+    notes: RefCell<Vec<String>>,
 }
 
 impl<'a, 'i> Ctx<'a, 'i> {
@@ -31,9 +42,13 @@ impl<'a, 'i> Ctx<'a, 'i> {
         }
         Ctx {
             file,
+            course_file: true,
+            doc,
             ids,
             warnings: Vec::new(),
             seen_warnings: HashSet::new(),
+            decimal_comma: RefCell::new(None),
+            notes: RefCell::new(Vec::new()),
         }
     }
 
@@ -45,17 +60,58 @@ impl<'a, 'i> Ctx<'a, 'i> {
         }
     }
 
-    /// A non-fatal problem about `node`. Repeats are kept once so that a
-    /// large mesh cannot flood the list.
+    /// A non-fatal problem about `node`, in the one-line form `FILE: <element>: what`.
+    /// Repeats are kept once so that a large mesh cannot flood the list.
     pub fn warn(&mut self, node: Node, what: impl Display) {
-        let w = format!("{}: {what}", describe(node));
+        let w = format!("{}: {}: {what}", self.file, describe(node));
         if self.seen_warnings.insert(w.clone()) {
             self.warnings.push(w);
         }
     }
 
-    pub fn into_warnings(self) -> Vec<String> {
+    /// A warning given once per file for `key`, naming the first element it concerns
+    /// (for things that recur in every mesh of a file, such as lines).
+    pub fn warn_once(&mut self, key: &str, node: Node, what: impl Display) {
+        if self.seen_warnings.insert(format!("\u{0}{key}")) {
+            self.warn(node, what);
+        }
+    }
+
+    /// `warn` for readers that hold the context shared; added after the others.
+    pub fn note(&self, node: Node, what: impl Display) {
+        self.notes
+            .borrow_mut()
+            .push(format!("{}: {}: {what}", self.file, describe(node)));
+    }
+
+    pub fn into_warnings(mut self) -> Vec<String> {
+        for w in self.notes.take() {
+            if self.seen_warnings.insert(w.clone()) {
+                self.warnings.push(w);
+            }
+        }
+        if let Some(label) = self.decimal_comma.take() {
+            self.warnings.push(format!(
+                "{}: {label}: numbers are written with decimal commas (as under a comma \
+                 locale); read as decimal points throughout the file",
+                self.file
+            ));
+        }
         self.warnings
+    }
+
+    /// The `<image>` whose id is `id` (without `#`; some exporters write one).
+    pub fn image_by_id(&self, id: &str) -> Option<Node<'a, 'i>> {
+        let id = id.strip_prefix('#').unwrap_or(id);
+        self.ids
+            .get(id)
+            .copied()
+            .filter(|n| n.has_tag_name("image"))
+    }
+
+    /// The element with id `id`, whatever it is.
+    pub fn by_id(&self, id: &str) -> Option<Node<'a, 'i>> {
+        self.ids.get(id).copied()
     }
 
     /// The element named by `node@attr` (a `#id` URL), which must be a `<tag>`.
@@ -67,11 +123,17 @@ impl<'a, 'i> Ctx<'a, 'i> {
     ) -> Result<Node<'a, 'i>, LoadError> {
         self.resolve_if_present(node, attr, tag)?.ok_or_else(|| {
             let url = node.attribute(attr).unwrap_or_default();
-            self.err(node, format!("{attr}=\"{}\" names nothing", clip(url)))
+            let what = if self.local_id(url).is_some() {
+                "names nothing"
+            } else {
+                "is not a local #id reference (references into other files are not read)"
+            };
+            self.err(node, format!("{attr}=\"{}\" {what}", clip(url)))
         })
     }
 
-    /// Like `resolve`, but `None` when the URL names no element at all.
+    /// Like `resolve`, but `None` when the URL names no element of this file (nothing,
+    /// or something in another file).
     pub fn resolve_if_present(
         &self,
         node: Node<'a, 'i>,
@@ -81,11 +143,8 @@ impl<'a, 'i> Ctx<'a, 'i> {
         let url = node
             .attribute(attr)
             .ok_or_else(|| self.err(node, format!("missing attribute {attr}")))?;
-        let id = url.strip_prefix('#').ok_or_else(|| {
-            let msg = format!("{attr}=\"{}\" is not a local #id reference", clip(url));
-            self.err(node, msg)
-        })?;
-        let Some(&target) = self.ids.get(id) else {
+        // A reference into another file names nothing in this one.
+        let Some(&target) = self.local_id(url).and_then(|id| self.ids.get(id)) else {
             return Ok(None);
         };
         if target.tag_name().name() != tag {
@@ -99,6 +158,22 @@ impl<'a, 'i> Ctx<'a, 'i> {
         Ok(Some(target))
     }
 
+    /// The id a URL names in this document: `#id`, or `file.dae#id` where `file.dae`
+    /// is this file's own name (some exporters write the document's name in).
+    fn local_id<'u>(&self, url: &'u str) -> Option<&'u str> {
+        if let Some(id) = url.strip_prefix('#') {
+            return Some(id);
+        }
+        let (doc, id) = url.rsplit_once('#')?;
+        let name = |p: &str| {
+            p.rsplit(['/', '\\'])
+                .next()
+                .unwrap_or(p)
+                .to_ascii_lowercase()
+        };
+        (!doc.is_empty() && name(doc) == name(self.file)).then_some(id)
+    }
+
     /// Appends the whitespace-separated numbers of `node`'s text to `out`.
     /// Non-finite or unparsable entries are errors; nothing is sized from attributes.
     pub fn numbers_into<T: Number>(&self, node: Node, out: &mut Vec<T>) -> Result<(), LoadError> {
@@ -108,15 +183,56 @@ impl<'a, 'i> Ctx<'a, 'i> {
         for (k, word) in text.split_ascii_whitespace().enumerate() {
             match word.parse::<T>() {
                 Ok(v) if v.is_finite() => out.push(v),
-                _ => {
-                    return Err(self.err(
-                        node,
-                        format!("entry {k} \"{}\" is not {}", clip(word), T::WHAT),
-                    ))
-                }
+                _ => match self.decimal_comma_number::<T>(node, word) {
+                    Some(v) => out.push(v),
+                    None => {
+                        return Err(self.err(
+                            node,
+                            format!("entry {k} \"{}\" is not {}", clip(word), T::WHAT),
+                        ))
+                    }
+                },
             }
         }
         Ok(())
+    }
+
+    /// `word` read with its one comma as the decimal point, when `T` is a float and
+    /// the file writes no number with a decimal point: then the file was written
+    /// under a decimal-comma locale and every comma is unambiguous. A file mixing
+    /// both is refused, because there a comma could as well separate two numbers.
+    fn decimal_comma_number<T: Number>(&self, node: Node, word: &str) -> Option<T> {
+        if !T::FRACTIONAL || word.matches(',').count() != 1 {
+            return None;
+        }
+        let v = word
+            .replace(',', ".")
+            .parse::<T>()
+            .ok()
+            .filter(|v| v.is_finite())?;
+        if self.decimal_comma.borrow().is_none() {
+            if self.has_decimal_point_numbers() {
+                return None;
+            }
+            *self.decimal_comma.borrow_mut() = Some(describe(node));
+        }
+        Some(v)
+    }
+
+    /// Whether any element's text is a list of numbers one of which has a decimal point.
+    fn has_decimal_point_numbers(&self) -> bool {
+        self.doc
+            .descendants()
+            .filter(|n| n.is_element() && n.first_element_child().is_none())
+            .filter_map(|n| n.text())
+            .any(|t| {
+                let mut words = t.split_ascii_whitespace().peekable();
+                words.peek().is_some()
+                    && words
+                        .clone()
+                        .all(|w| w.replace(',', ".").parse::<f64>().is_ok())
+                    && words.any(|w| w.contains('.') && w.parse::<f64>().is_ok())
+            })
     }
 
     pub fn numbers<T: Number>(&self, node: Node) -> Result<Vec<T>, LoadError> {
@@ -177,6 +293,8 @@ impl<'a, 'i> Ctx<'a, 'i> {
 /// Numbers a COLLADA list may hold.
 pub(crate) trait Number: FromStr + Copy {
     const WHAT: &'static str;
+    /// Whether the type has a fractional part (so a decimal comma can mean one).
+    const FRACTIONAL: bool = true;
     fn is_finite(self) -> bool;
 }
 
@@ -196,6 +314,7 @@ impl Number for f64 {
 
 impl Number for u32 {
     const WHAT: &'static str = "a non-negative integer";
+    const FRACTIONAL: bool = false;
     fn is_finite(self) -> bool {
         true
     }

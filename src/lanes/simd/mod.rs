@@ -1,5 +1,5 @@
 //! Sixteen lanes of `f32`/`u32` for code that runs one ray or one path per lane
-//! (the packet path tracer and packet BVH traversal).
+//! (the light transport at sixteen lanes, packet BVH traversal).
 //!
 //! The code is written once, generic over an instruction set `S: Simd`, and
 //! compiled three times: AVX-512 (one register per value), AVX2 (two) and a
@@ -145,6 +145,16 @@ impl<S: Simd> F32s<S> {
     pub fn from_array(_: S, a: [f32; LANES]) -> Self {
         F32s(unsafe { S::f_load(&a) })
     }
+    /// `x` in every lane (the value `self` proves the instruction set).
+    #[inline(always)]
+    pub fn splat_like(self, x: f32) -> Self {
+        F32s(unsafe { S::f_splat(x) })
+    }
+    /// Lanes from an array (the value `self` proves the instruction set).
+    #[inline(always)]
+    pub fn from_array_like(self, a: [f32; LANES]) -> Self {
+        F32s(unsafe { S::f_load(&a) })
+    }
     #[inline(always)]
     pub fn to_array(self) -> [f32; LANES] {
         let mut a = [0.0; LANES];
@@ -240,6 +250,16 @@ impl<S: Simd> U32s<S> {
     }
     #[inline(always)]
     pub fn from_array(_: S, a: [u32; LANES]) -> Self {
+        U32s(unsafe { S::u_load(&a) })
+    }
+    /// `x` in every lane (the value `self` proves the instruction set).
+    #[inline(always)]
+    pub fn splat_like(self, x: u32) -> Self {
+        U32s(unsafe { S::u_splat(x) })
+    }
+    /// Lanes from an array (the value `self` proves the instruction set).
+    #[inline(always)]
+    pub fn from_array_like(self, a: [u32; LANES]) -> Self {
         U32s(unsafe { S::u_load(&a) })
     }
     #[inline(always)]
@@ -368,6 +388,11 @@ impl<S: Simd> Mask<S> {
     pub fn bits(self) -> LaneBits {
         unsafe { S::m_bits(self.0) }
     }
+    /// The lanes of `bits` (the value `self` proves the instruction set).
+    #[inline(always)]
+    pub fn from_bits_like(self, bits: LaneBits) -> Self {
+        Mask(unsafe { S::m_from_bits(bits) })
+    }
     #[inline(always)]
     pub fn any(self) -> bool {
         self.bits() != 0
@@ -413,137 +438,6 @@ impl<S: Simd> Not for Mask<S> {
     #[inline(always)]
     fn not(self) -> Self {
         Mask(unsafe { S::m_not(self.0) })
-    }
-}
-
-/// Three lanes of vectors, one component per value.
-#[derive(Clone, Copy)]
-pub struct Vec3s<S: Simd> {
-    pub x: F32s<S>,
-    pub y: F32s<S>,
-    pub z: F32s<S>,
-}
-
-impl<S: Simd> Vec3s<S> {
-    #[inline(always)]
-    pub fn new(x: F32s<S>, y: F32s<S>, z: F32s<S>) -> Self {
-        Vec3s { x, y, z }
-    }
-    #[inline(always)]
-    pub fn splat(s: S, v: glam::Vec3) -> Self {
-        Vec3s::new(
-            F32s::splat(s, v.x),
-            F32s::splat(s, v.y),
-            F32s::splat(s, v.z),
-        )
-    }
-    /// `(x·x + y·y) + z·z`, glam's order.
-    #[inline(always)]
-    pub fn dot(self, o: Self) -> F32s<S> {
-        self.x * o.x + self.y * o.y + self.z * o.z
-    }
-    /// glam's `cross`, operation for operation.
-    #[inline(always)]
-    pub fn cross(self, o: Self) -> Self {
-        Vec3s::new(
-            self.y * o.z - o.y * self.z,
-            self.z * o.x - o.z * self.x,
-            self.x * o.y - o.x * self.y,
-        )
-    }
-    #[inline(always)]
-    pub fn length_squared(self) -> F32s<S> {
-        self.dot(self)
-    }
-    /// glam's `normalize`: `self · (1 / |self|)`.
-    #[inline(always)]
-    pub fn normalize(self, s: S) -> Self {
-        let inv = F32s::splat(s, 1.0) / self.length_squared().sqrt();
-        self * inv
-    }
-    #[inline(always)]
-    pub fn abs(self) -> Self {
-        Vec3s::new(self.x.abs(), self.y.abs(), self.z.abs())
-    }
-    #[inline(always)]
-    pub fn select(m: Mask<S>, a: Self, b: Self) -> Self {
-        Vec3s::new(
-            F32s::select(m, a.x, b.x),
-            F32s::select(m, a.y, b.y),
-            F32s::select(m, a.z, b.z),
-        )
-    }
-    #[inline(always)]
-    pub fn lane(self, i: usize) -> glam::Vec3 {
-        glam::Vec3::new(self.x.lane(i), self.y.lane(i), self.z.lane(i))
-    }
-    /// Lanes from one array per component.
-    #[inline(always)]
-    pub fn from_arrays(s: S, a: &[[f32; LANES]; 3]) -> Self {
-        Vec3s::new(
-            F32s::from_array(s, a[0]),
-            F32s::from_array(s, a[1]),
-            F32s::from_array(s, a[2]),
-        )
-    }
-
-    /// One array per component.
-    #[inline(always)]
-    pub fn to_arrays(self) -> [[f32; LANES]; 3] {
-        [self.x.to_array(), self.y.to_array(), self.z.to_array()]
-    }
-
-    /// Lanes from sixteen vectors.
-    #[inline(always)]
-    pub fn from_lanes(s: S, v: &[glam::Vec3; LANES]) -> Self {
-        Vec3s::new(
-            F32s::from_array(s, v.map(|p| p.x)),
-            F32s::from_array(s, v.map(|p| p.y)),
-            F32s::from_array(s, v.map(|p| p.z)),
-        )
-    }
-}
-
-impl<S: Simd> Add for Vec3s<S> {
-    type Output = Self;
-    #[inline(always)]
-    fn add(self, o: Self) -> Self {
-        Vec3s::new(self.x + o.x, self.y + o.y, self.z + o.z)
-    }
-}
-impl<S: Simd> Sub for Vec3s<S> {
-    type Output = Self;
-    #[inline(always)]
-    fn sub(self, o: Self) -> Self {
-        Vec3s::new(self.x - o.x, self.y - o.y, self.z - o.z)
-    }
-}
-impl<S: Simd> Mul<F32s<S>> for Vec3s<S> {
-    type Output = Self;
-    #[inline(always)]
-    fn mul(self, k: F32s<S>) -> Self {
-        Vec3s::new(self.x * k, self.y * k, self.z * k)
-    }
-}
-impl<S: Simd> Mul for Vec3s<S> {
-    type Output = Self;
-    #[inline(always)]
-    fn mul(self, o: Self) -> Self {
-        Vec3s::new(self.x * o.x, self.y * o.y, self.z * o.z)
-    }
-}
-impl<S: Simd> Div<F32s<S>> for Vec3s<S> {
-    type Output = Self;
-    #[inline(always)]
-    fn div(self, k: F32s<S>) -> Self {
-        Vec3s::new(self.x / k, self.y / k, self.z / k)
-    }
-}
-impl<S: Simd> Neg for Vec3s<S> {
-    type Output = Self;
-    #[inline(always)]
-    fn neg(self) -> Self {
-        Vec3s::new(-self.x, -self.y, -self.z)
     }
 }
 

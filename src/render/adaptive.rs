@@ -14,17 +14,16 @@
 //! non-zero value (an emitter seen directly) stops after `min_samples_if_constant`;
 //! any other pixel follows the course's rule after every batch, up to the `-s` cap.
 //!
-//! Sample `i` of a pixel draws from its own stream (`Sampler::for_sample`), as without
-//! `-a`, so the pilot batch is the first samples of the fixed-count render and images
-//! depend on the seed only.
+//! `StopRule::PerPixel` (the course's rule with a minimum count for constant
+//! pixels, kept for comparison) is the same test with that minimum for pixels of
+//! zeros too, whatever their neighbours. Sample `i` of a pixel is the same sample with
+//! or without `-a`, so the pilot batch is the first samples of the fixed-count render
+//! and images depend on the seed only.
 
+use super::{Adaptive, StopRule};
 use crate::color::{is_finite, luminance};
-use crate::film::Image;
-use crate::integrators::PathIntegrator;
-use crate::render::{Adaptive, PixelRect, RenderJob, RenderOutput, RenderSettings, StopToken};
-use crate::sampling::Sampler;
+use crate::integrators::SampleValue;
 use crate::Color;
-use rayon::prelude::*;
 
 /// Pixels (Chebyshev distance) whose pilot batches say how often light is found near a pixel.
 pub const NEIGHBOUR_RADIUS: u32 = 5;
@@ -53,6 +52,26 @@ pub struct PixelStats {
 }
 
 impl PixelStats {
+    /// Adds one sample's value to the sum alone (`mean`, `n` and `nonfinite`), for
+    /// renders that do not decide when to stop.
+    #[inline]
+    pub fn add_to_sum(&mut self, v: &SampleValue) {
+        if is_finite(v.radiance) {
+            self.sum += v.radiance;
+        } else {
+            self.nonfinite += 1;
+        }
+        self.n += 1;
+    }
+
+    /// Adds one sample's value.
+    pub fn add_sample(&mut self, v: &SampleValue) {
+        self.add(v.radiance);
+        if self.is_zero() && !self.met_surface {
+            self.met_surface = v.met_surface;
+        }
+    }
+
     pub fn add(&mut self, mut v: Color) {
         if !is_finite(v) {
             self.nonfinite += 1;
@@ -148,9 +167,12 @@ pub fn min_samples_if_zero(p_hat: f64) -> u32 {
 /// Constant non-zero pixels (emitters seen directly) stop after
 /// `min_samples_if_constant`: missing rare light there is a relative error of that
 /// light's share only, whereas a pixel of zeros that missed it is wrong by 100 %.
+/// Under `StopRule::PerPixel` every constant pixel needs `min_samples_if_constant`.
 pub fn may_stop(p: &PixelStats, min_if_zero: u32, a: Adaptive) -> bool {
     if !p.constant {
         p.meets_tolerance(a.tol)
+    } else if a.rule == StopRule::PerPixel {
+        p.n >= a.min_samples_if_constant.max(2)
     } else if p.is_empty() {
         p.n >= min_if_zero.min(min_samples_if_zero(1.0))
     } else if p.is_zero() {
@@ -160,102 +182,10 @@ pub fn may_stop(p: &PixelStats, min_if_zero: u32, a: Adaptive) -> bool {
     }
 }
 
-/// Renders radiance of pixels `rect` of `job` with adaptive sampling under this
-/// module's rule. The pilot covers `rect` grown by `NEIGHBOUR_RADIUS` (within the image),
-/// so a rectangle is exactly the crop of the full image.
-pub fn render(
-    job: &RenderJob,
-    settings: &RenderSettings,
-    a: Adaptive,
-    rect: PixelRect,
-    progress: &(dyn Fn(u64) + Sync),
-    stop: &StopToken,
-) -> RenderOutput {
-    let (camera, w) = (&job.camera, job.camera.width);
-    let spp = settings.spp.max(1);
-    let integrator = PathIntegrator::new(
-        &job.scene,
-        job.accel.as_ref(),
-        settings.path_settings(&job.scene),
-    );
-    // Sample `p.n` of pixel (x, y), added to `p`.
-    let sample = |x: u32, y: u32, p: &mut PixelStats| {
-        let pixel = y as u64 * w as u64 + x as u64;
-        let index = settings.spp_offset as u64 + p.n as u64;
-        let mut s = Sampler::for_sample(settings.seed, pixel, index);
-        let ray = camera.sample_ray(x, y, &mut s);
-        p.add(integrator.li(ray, &mut s));
-        if p.is_empty() {
-            p.met_surface = job.accel.occluded(&ray);
-        }
-    };
-    let r = NEIGHBOUR_RADIUS;
-    let halo = PixelRect {
-        x0: rect.x0.saturating_sub(r),
-        y0: rect.y0.saturating_sub(r),
-        x1: (rect.x1 + r).min(w),
-        y1: (rect.y1 + r).min(camera.height),
-    };
-    let hw = halo.width();
-    let pilot: Vec<PixelStats> = (0..halo.area() as usize)
-        .into_par_iter()
-        .map(|i| {
-            let (x, y) = (halo.x0 + i as u32 % hw, halo.y0 + i as u32 / hw);
-            let mut p = PixelStats::default();
-            if stop.should_stop() {
-                return p;
-            }
-            for _ in 0..a.batch.min(spp) {
-                sample(x, y, &mut p);
-            }
-            p
-        })
-        .collect();
-    let min_if_zero: Vec<u32> = neighbour_hit_rates(&pilot, hw, halo.height(), r)
-        .into_iter()
-        .map(min_samples_if_zero)
-        .collect();
-    // Rows in a scattered order, so that the progress bar's ETA is not fooled by
-    // empty background at the top; put back in order below.
-    let order: Vec<u32> = crate::render::scattered(rect.height() as usize)
-        .map(|i| rect.y0 + i as u32)
-        .collect();
-    let mut rows: Vec<(u32, Vec<PixelStats>)> = order
-        .into_par_iter()
-        .map(|y| {
-            let row: Vec<PixelStats> = (rect.x0..rect.x1)
-                .map(|x| {
-                    let i = ((y - halo.y0) * hw + (x - halo.x0)) as usize;
-                    let mut p = pilot[i];
-                    // Once stopped, a pixel keeps the samples it has (its pilot).
-                    while p.n < spp && !may_stop(&p, min_if_zero[i], a) && !stop.should_stop() {
-                        for _ in 0..a.batch.min(spp - p.n) {
-                            sample(x, y, &mut p);
-                        }
-                    }
-                    p
-                })
-                .collect();
-            progress(rect.width() as u64);
-            (y, row)
-        })
-        .collect();
-    rows.sort_unstable_by_key(|&(y, _)| y);
-    let stats: Vec<PixelStats> = rows.into_iter().flat_map(|(_, row)| row).collect();
-    let mut image = Image::new(rect.width(), rect.height());
-    for (px, p) in image.pixels.iter_mut().zip(&stats) {
-        *px = p.mean();
-    }
-    RenderOutput {
-        image,
-        samples: stats.iter().map(|p| p.n).collect(),
-        nonfinite_samples: stats.iter().map(|p| p.nonfinite as u64).sum(),
-    }
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::render::Adaptive;
 
     fn stats(values: &[f32]) -> PixelStats {
         let mut p = PixelStats::default();

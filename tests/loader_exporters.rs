@@ -1,0 +1,619 @@
+//! What files from modelling tools other than the course's Blender bring (issue 26):
+//! strips and fans, polygons with holes, lines, instanced nodes, skinned meshes,
+//! decimal commas, zero rotation axes, dangling bindings, UTF-16, `.zae` archives,
+//! the file's own camera, emission, specular warnings, textures and spot lights.
+
+mod common;
+
+use common::{edit, geometry_instance, parse_err, parse_ok, quad_instance, scene_doc, TEMPLATE};
+use ember::camera::Camera;
+use ember::info::scene_info;
+use ember::lights::Light;
+use ember::materials::{Bsdf, Material};
+use ember::scene::collada::{load, parse};
+use ember::scene::{Placement, Scene};
+use ember::Vec3;
+use std::io::Write;
+use std::path::Path;
+
+fn close(a: Vec3, b: Vec3) -> bool {
+    (a - b).length() < 1e-5
+}
+
+/// A geometry `id` over the positions of a 3×3 grid in the z = 0 plane
+/// (index `3·row + column`, at `(column, row, 0)`) whose only primitive is `prim`.
+fn grid_geometry(id: &str, prim: &str) -> String {
+    let mut pos = String::new();
+    for r in 0..3 {
+        for c in 0..3 {
+            pos += &format!("{c} {r} 0 ");
+        }
+    }
+    format!(
+        r##"<library_geometries><geometry id="{id}"><mesh>
+          <source id="{id}-pos"><float_array id="{id}-pos-a" count="27">{pos}</float_array></source>
+          <vertices id="{id}-vtx"><input semantic="POSITION" source="#{id}-pos"/></vertices>
+          {prim}
+        </mesh></geometry></library_geometries>"##
+    )
+}
+
+fn load_grid(prim: &str) -> Scene {
+    let nodes = format!(
+        "<node>{}</node>",
+        geometry_instance("g", "grey-sym", "grey")
+    );
+    parse_ok(&scene_doc("Y_UP", &grid_geometry("g", prim), &nodes))
+}
+
+fn area(s: &Scene) -> f32 {
+    (0..s.triangles.len())
+        .map(|i| {
+            let [a, b, c] = s.triangle_positions(i);
+            0.5 * (b - a).cross(c - a).length()
+        })
+        .sum()
+}
+
+/// Whether triangle `i` covers point `q` of its plane (strictly inside).
+fn covers(s: &Scene, i: usize, q: Vec3) -> bool {
+    let [a, b, c] = s.triangle_positions(i);
+    let n = (b - a).cross(c - a);
+    [(a, b), (b, c), (c, a)]
+        .iter()
+        .all(|(p, r)| (*r - *p).cross(q - *p).dot(n) > 0.0)
+}
+
+/// Signed z of each triangle's geometric normal.
+fn normal_z(s: &Scene) -> Vec<f32> {
+    (0..s.triangles.len())
+        .map(|i| {
+            let [a, b, c] = s.triangle_positions(i);
+            (b - a).cross(c - a).z
+        })
+        .collect()
+}
+
+#[test]
+fn tristrips_and_trifans_are_triangulated() {
+    // A strip 0 3 1 4 2 5 over the grid's two lower rows: four triangles, area 2.
+    let s = load_grid(
+        r##"<tristrips material="grey-sym" count="1"><input semantic="VERTEX" source="#g-vtx" offset="0"/>
+             <p>0 3 1 4 2 5</p></tristrips>"##,
+    );
+    assert_eq!(s.triangles.len(), 4);
+    assert!((area(&s) - 2.0).abs() < 1e-6, "{}", area(&s));
+    // Every second triangle is flipped back, so the strip keeps one winding.
+    let z = normal_z(&s);
+    assert!(
+        z.iter().all(|&v| v < 0.0) || z.iter().all(|&v| v > 0.0),
+        "{z:?}"
+    );
+    // A fan around the centre 4 over five outer corners, and a stub of two corners.
+    let s = load_grid(
+        r##"<trifans material="grey-sym" count="2"><input semantic="VERTEX" source="#g-vtx" offset="0"/>
+             <p>4 0 1 2 5 8</p><p>0 1</p></trifans>"##,
+    );
+    assert_eq!(s.triangles.len(), 4);
+    assert!((area(&s) - 2.0).abs() < 1e-6);
+    // (scene_doc's scene has no camera.)
+    assert_eq!(s.warnings.len(), 1, "{:?}", s.warnings);
+}
+
+#[test]
+fn polygons_with_holes_are_triangulated_around_the_hole() {
+    // The outer square 0 2 8 6 (area 4) with a square hole [0.5, 1.5]² around its centre.
+    let prim = r##"<polygons material="grey-sym" count="1"><input semantic="VERTEX" source="#g-vtx" offset="0"/>
+        <ph><p>0 2 8 6</p><h>9 10 11 12</h></ph></polygons>"##;
+    let mut doc = scene_doc(
+        "Y_UP",
+        &grid_geometry("g", prim),
+        &format!(
+            "<node>{}</node>",
+            geometry_instance("g", "grey-sym", "grey")
+        ),
+    );
+    // Four more positions: the square [0.5, 1.5]² (indices 9–12).
+    doc = doc.replace(
+        "count=\"27\">",
+        "count=\"39\">0.5 0.5 0 1.5 0.5 0 1.5 1.5 0 0.5 1.5 0 ",
+    );
+    // The extra positions were put first: shift the grid's indices by 4 in <p>, and
+    // the hole is 0 1 2 3.
+    let doc = doc
+        .replace("<p>0 2 8 6</p>", "<p>4 6 12 10</p>")
+        .replace("<h>9 10 11 12</h>", "<h>0 1 2 3</h>");
+    let s = parse_ok(&doc);
+    // 4 + 4 corners and two bridge corners: 8 triangles covering 4 − 1.
+    assert_eq!(s.triangles.len(), 8);
+    assert!((area(&s) - 3.0).abs() < 1e-5, "area {}", area(&s));
+    for i in 0..s.triangles.len() {
+        assert!(
+            !covers(&s, i, Vec3::new(1.0, 1.0, 0.0)),
+            "triangle {i} covers the hole"
+        );
+    }
+}
+
+#[test]
+fn lines_are_skipped_with_one_warning() {
+    let lines = r##"<lines count="2"><input semantic="VERTEX" source="#g-vtx" offset="0"/><p>0 1 1 2</p></lines>
+        <linestrips count="1"><input semantic="VERTEX" source="#g-vtx" offset="0"/><p>0 1 2</p></linestrips>
+        <triangles material="grey-sym" count="1"><input semantic="VERTEX" source="#g-vtx" offset="0"/><p>0 1 4</p></triangles>"##;
+    let s = load_grid(lines);
+    assert_eq!(s.triangles.len(), 1);
+    let w: Vec<_> = s.warnings.iter().filter(|w| w.contains("lines")).collect();
+    assert_eq!(w.len(), 1, "{:?}", s.warnings);
+}
+
+#[test]
+fn instance_node_places_library_nodes() {
+    let libs = format!(
+        r##"<library_nodes><node id="unit">{}</node>
+             <node id="pair"><instance_node url="#unit"/><node><translate>5 0 0</translate><instance_node url="#unit"/></node></node>
+           </library_nodes>"##,
+        quad_instance()
+    );
+    let nodes = r##"<node><translate>0 10 0</translate><instance_node url="#pair"/></node>
+                    <node><instance_node url="#nothing"/></node>"##;
+    let s = parse_ok(&scene_doc("Y_UP", &libs, nodes));
+    assert_eq!(s.triangles.len(), 4);
+    assert!(
+        close(s.positions[1], Vec3::new(1.0, 10.0, 0.0)),
+        "{}",
+        s.positions[1]
+    );
+    assert!(close(s.positions[4 + 1], Vec3::new(6.0, 10.0, 0.0)));
+    assert!(s
+        .warnings
+        .iter()
+        .any(|w| w.contains("instance_node") && w.contains("#nothing")));
+    // A node instancing itself ends in an error, not a hang or a stack overflow.
+    let libs =
+        r##"<library_nodes><node id="loop"><instance_node url="#loop"/></node></library_nodes>"##;
+    parse_err(
+        &scene_doc(
+            "Y_UP",
+            libs,
+            r##"<node><instance_node url="#loop"/></node>"##,
+        ),
+        &["deeper than"],
+    );
+}
+
+fn skin_doc(bind_shape: &str) -> String {
+    let libs = format!(
+        r##"<library_controllers><controller id="skin"><skin source="#quad">
+             <bind_shape_matrix>{bind_shape}</bind_shape_matrix>
+             <source id="joints"><Name_array id="joints-a" count="1">bone</Name_array></source>
+           </skin></controller>
+           <controller id="morph"><morph source="#skin" method="NORMALIZED"/></controller></library_controllers>"##
+    );
+    let nodes = r##"<node><translate>100 0 0</translate>
+        <instance_controller url="#morph"><skeleton>#bone</skeleton><bind_material><technique_common>
+          <instance_material symbol="grey-sym" target="#grey"/></technique_common></bind_material></instance_controller></node>
+        <node><instance_controller url="#skin"/></node>"##;
+    scene_doc("Y_UP", &libs, nodes)
+}
+
+#[test]
+fn skinned_meshes_load_at_their_bind_pose_with_one_warning() {
+    let s = parse_ok(&skin_doc("1 0 0 0  0 1 0 2  0 0 1 0  0 0 0 1"));
+    assert_eq!(s.triangles.len(), 4);
+    // bind_shape_matrix moves the quad up by 2; the instancing node's translation
+    // does not enter (at the bind pose the skin is in world space).
+    assert!(
+        close(s.positions[1], Vec3::new(1.0, 2.0, 0.0)),
+        "{}",
+        s.positions[1]
+    );
+    let w: Vec<_> = s
+        .warnings
+        .iter()
+        .filter(|w| w.contains("bind pose"))
+        .collect();
+    assert_eq!(w.len(), 1, "{:?}", s.warnings);
+    parse_err(
+        &skin_doc("1 0 0 0").replace("source=\"#quad\"", "source=\"#nothing\""),
+        &["<controller id=\"skin\">/skin", "names no geometry"],
+    );
+}
+
+/// The template with every decimal point written as a comma.
+fn comma_template() -> String {
+    let mut out = String::new();
+    let mut in_tag = false;
+    let chars: Vec<char> = TEMPLATE.chars().collect();
+    for (i, &c) in chars.iter().enumerate() {
+        match c {
+            '<' => in_tag = true,
+            '>' => in_tag = false,
+            _ => {}
+        }
+        let digit = |k: usize| chars.get(k).is_some_and(|d| d.is_ascii_digit());
+        if c == '.' && !in_tag && i > 0 && digit(i - 1) && digit(i + 1) {
+            out.push(',');
+        } else {
+            out.push(c);
+        }
+    }
+    out
+}
+
+#[test]
+fn decimal_commas_load_with_one_warning() {
+    let doc = comma_template();
+    assert!(doc.contains("0,3 0,3 0,3"));
+    let s = parse_ok(&doc);
+    let reference = parse_ok(TEMPLATE);
+    assert_eq!(s.materials, reference.materials);
+    assert_eq!(s.spheres, reference.spheres);
+    let w: Vec<_> = s
+        .warnings
+        .iter()
+        .filter(|w| w.contains("decimal comma"))
+        .collect();
+    assert_eq!(w.len(), 1, "{:?}", s.warnings);
+    // Mixed with decimal points, a comma is ambiguous: an error.
+    let mixed = doc.replacen(
+        "<translate>0 0 1</translate>",
+        "<translate>0 0 1.5</translate>",
+        1,
+    );
+    parse_err(&mixed, &["is not a finite number"]);
+}
+
+#[test]
+fn a_zero_rotation_axis_is_the_identity_with_a_warning() {
+    // Animation exporters write one per node: one warning for the file.
+    let doc = edit(
+        "<translate>0 0 1</translate>",
+        "<translate>0 0 1</translate><rotate>0 0 0 0</rotate>",
+    )
+    .replace(
+        "<translate>0 0 3</translate>",
+        "<translate>0 0 3</translate><rotate>0 0 0 0</rotate>",
+    );
+    let s = parse_ok(&doc);
+    let reference = parse_ok(TEMPLATE);
+    assert_eq!(s.spheres, reference.spheres);
+    assert_eq!(s.lights, reference.lights);
+    let w: Vec<_> = s.warnings.iter().filter(|w| w.contains("zero")).collect();
+    assert_eq!(w.len(), 1, "{:?}", s.warnings);
+    assert!(w[0].starts_with("scene.dae: <node id=\"ball-node\">/rotate"));
+}
+
+#[test]
+fn a_dangling_material_binding_falls_back_with_a_warning() {
+    // A target naming nothing, or something in another file, loses only the material.
+    for target in ["#nothing", "materials.dae#grey"] {
+        let s = parse_ok(&edit("target=\"#grey\"", &format!("target=\"{target}\"")));
+        assert_eq!(s.triangles.len(), 2);
+        assert_eq!(
+            s.materials[s.triangles[0].material as usize],
+            Material::default()
+        );
+        assert!(s.warnings.iter().any(|w| w.starts_with("scene.dae: ")
+            && w.contains("instance_material")
+            && w.contains(target)));
+    }
+}
+
+fn write(dir: &Path, name: &str, bytes: &[u8]) -> std::path::PathBuf {
+    let p = dir.join(name);
+    std::fs::write(&p, bytes).unwrap();
+    p
+}
+
+#[test]
+fn utf16_and_byte_order_marks_are_read() {
+    let dir = tempfile::tempdir().unwrap();
+    let reference = parse_ok(TEMPLATE);
+    let text = TEMPLATE.replace("encoding=\"utf-8\"", "encoding=\"UTF-16\"");
+    let le: Vec<u8> = [0xFF, 0xFE]
+        .into_iter()
+        .chain(text.encode_utf16().flat_map(u16::to_le_bytes))
+        .collect();
+    let be: Vec<u8> = [0xFE, 0xFF]
+        .into_iter()
+        .chain(text.encode_utf16().flat_map(u16::to_be_bytes))
+        .collect();
+    let bom8: Vec<u8> = [0xEF, 0xBB, 0xBF]
+        .into_iter()
+        .chain(TEMPLATE.bytes())
+        .collect();
+    for (name, bytes) in [("le.dae", le), ("be.dae", be), ("bom8.dae", bom8)] {
+        let s = load(&write(dir.path(), name, &bytes)).unwrap_or_else(|e| panic!("{name}: {e}"));
+        assert_eq!(s.positions, reference.positions, "{name}");
+        assert!(s.warnings.is_empty(), "{name}: {:?}", s.warnings);
+    }
+    // An odd byte after the mark is not UTF-16: a one-line error.
+    let p = write(dir.path(), "bad.dae", &[0xFF, 0xFE, 0x00, 0xD8, 0x41, 0x00]);
+    let e = load(&p).unwrap_err().to_string();
+    assert!(
+        e.contains("bad.dae") && e.contains("UTF-16") && !e.contains('\n'),
+        "{e}"
+    );
+}
+
+fn zip_file(path: &Path, entries: &[(&str, &[u8])]) {
+    let mut z = zip::ZipWriter::new(std::fs::File::create(path).unwrap());
+    for (name, bytes) in entries {
+        z.start_file(*name, zip::write::SimpleFileOptions::default())
+            .unwrap();
+        z.write_all(bytes).unwrap();
+    }
+    z.finish().unwrap();
+}
+
+const DATA: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/tests/data/collada");
+
+#[test]
+fn zae_archives_are_read_with_or_without_a_manifest() {
+    let dir = tempfile::tempdir().unwrap();
+    let dae = std::fs::read(Path::new(DATA).join("textured_quad.dae")).unwrap();
+    let png = std::fs::read(Path::new(DATA).join("texture4x4.png")).unwrap();
+    let manifest = b"<?xml version=\"1.0\"?><dae_root>./models/quad.dae</dae_root>";
+    let with = dir.path().join("with.zae");
+    zip_file(
+        &with,
+        &[
+            ("manifest.xml", manifest),
+            ("models/quad.dae", &dae),
+            ("models/texture4x4.png", &png),
+            ("other.dae", b"not xml"),
+        ],
+    );
+    let s = load(&with).unwrap_or_else(|e| panic!("{e}"));
+    let direct = load(&Path::new(DATA).join("textured_quad.dae")).unwrap();
+    assert_eq!(s.triangles.len(), direct.triangles.len());
+    assert_eq!(s.textures.len(), 1);
+    assert_eq!(s.textures[0].width(), 4);
+    let without = dir.path().join("without.zae");
+    zip_file(&without, &[("quad.dae", &dae), ("texture4x4.png", &png)]);
+    assert_eq!(load(&without).unwrap().textures.len(), 1);
+    // A manifest naming nothing, and a broken archive, are one-line errors.
+    let bad = dir.path().join("bad.zae");
+    zip_file(&bad, &[("manifest.xml", b"<dae_root>gone.dae</dae_root>")]);
+    let e = load(&bad).unwrap_err().to_string();
+    assert!(e.contains("bad.zae") && e.contains("dae_root"), "{e}");
+    let truncated = write(dir.path(), "cut.zae", &std::fs::read(&with).unwrap()[..60]);
+    let e = load(&truncated).unwrap_err().to_string();
+    assert!(e.contains("cut.zae") && !e.contains('\n'), "{e}");
+}
+
+/// The template as `tool` would write it: without the course's CGL extension (its
+/// sphere and mirror then load as an empty geometry and a grey material).
+fn with_tool(tool: &str) -> String {
+    edit(
+        "<asset><up_axis>Z_UP</up_axis></asset>",
+        &format!(
+            "<asset><contributor><authoring_tool>{tool}</authoring_tool></contributor><up_axis>Z_UP</up_axis></asset>"
+        ),
+    )
+    .replace("profile=\"CGL\"", "profile=\"OTHER\"")
+}
+
+#[test]
+fn files_from_other_tools_keep_their_camera_position() {
+    // The template's camera node stands at (0, −3, 1) in its Z_UP frame: (0, 1, −3) here.
+    let maya = parse_ok(&with_tool("Maya 2020 | ColladaMaya v3.05B"));
+    assert_eq!(maya.camera.placement, Placement::File);
+    let cam = Camera::new(&maya.camera, &maya.bounds, 64, 48);
+    assert!(close(cam.eye, Vec3::new(0.0, 1.0, -3.0)), "{}", cam.eye);
+    let info = scene_info(&maya, 64, 48);
+    assert!(
+        info.contains("placement: the file's camera position"),
+        "{info}"
+    );
+    assert!(info.contains("Maya 2020"), "{info}");
+    // The course's exporter, and files naming no tool, keep the course's rule.
+    for doc in [
+        with_tool("Blender 2.74.0 commit date:2015-03-31, commit time:13:39, hash:000dfc0"),
+        TEMPLATE.to_string(),
+    ] {
+        let s = parse_ok(&doc);
+        assert_eq!(s.camera.placement, Placement::Course);
+        let cam = Camera::new(&s.camera, &s.bounds, 64, 48);
+        let rule = s.bounds.centre() - 1.5 * s.bounds.diagonal().length() * cam.forward;
+        assert!(close(cam.eye, rule), "{}", cam.eye);
+        assert!(scene_info(&s, 64, 48).contains("placement: course rule"));
+    }
+}
+
+fn effect_doc(body: &str) -> String {
+    edit(
+        "<lambert>\n      <diffuse><color>0.3 0.3 0.3 1</color></diffuse>\n    </lambert>",
+        body,
+    )
+}
+
+#[test]
+fn emission_makes_a_surface_emit() {
+    let s = parse_ok(&effect_doc(
+        "<lambert><emission><color>2 3 4 1</color></emission><diffuse><color>0 0 0 1</color></diffuse></lambert>",
+    ));
+    // It emits from its front, and reflects its (here black) diffuse colour too.
+    assert_eq!(
+        s.materials[s.triangles[0].material as usize],
+        Material::lambertian(Vec3::ZERO).with_emission(Vec3::new(2.0, 3.0, 4.0), false)
+    );
+    assert!(s.has_unsampled_emitters());
+    // Black emission is no emission.
+    let s = parse_ok(&effect_doc(
+        "<phong><emission><color>0 0 0 1</color></emission><diffuse><color>0.3 0.3 0.3 1</color></diffuse></phong>",
+    ));
+    let m = s.materials[s.triangles[0].material as usize];
+    assert!(matches!(m.bsdf, Bsdf::Lambertian(_)) && !m.emits());
+}
+
+#[test]
+fn specular_is_warned_about_once_per_material_outside_course_files() {
+    let phong = "<phong><diffuse><color>0.3 0.3 0.3 1</color></diffuse>\
+        <specular><color>0.5 0.5 0.5 1</color></specular><shininess><float>50</float></shininess></phong>";
+    let doc = with_tool("3ds Max").replace(
+        "<lambert>\n      <diffuse><color>0.3 0.3 0.3 1</color></diffuse>\n    </lambert>",
+        phong,
+    );
+    // The quad instanced twice still gives one warning for its one material.
+    let doc = doc.replace(
+        "<node id=\"ball-node\">",
+        &format!("<node>{}</node><node id=\"ball-node\">", quad_instance()),
+    );
+    let s = parse_ok(&doc);
+    assert!(
+        matches!(s.materials[0].bsdf, Bsdf::Lambertian(b) if b.albedo.vec3() == Vec3::splat(0.3))
+    );
+    let w: Vec<_> = s
+        .warnings
+        .iter()
+        .filter(|w| w.contains("specular"))
+        .collect();
+    assert_eq!(w.len(), 1, "{:?}", s.warnings);
+    // The course's files mean Lambertian by <phong> (spec §6): no warning there.
+    let s = parse_ok(&effect_doc(phong));
+    assert!(s.warnings.is_empty(), "{:?}", s.warnings);
+}
+
+#[test]
+fn spot_lights_are_read() {
+    let s = load(&Path::new(DATA).join("spot_plane.dae")).unwrap();
+    let [Light::Spot(spot)] = s.lights.as_slice() else {
+        panic!("{:?}", s.lights);
+    };
+    assert!(close(spot.position, Vec3::Y));
+    assert!(close(spot.direction, Vec3::NEG_Y));
+    assert_eq!(spot.intensity, Vec3::splat(2.0));
+    assert!((spot.cutoff_degrees() - 45.0).abs() < 1e-4);
+    assert_eq!(spot.exponent, 2.0);
+    assert!(scene_info(&s, 8, 8).contains("spot: intensity (2, 2, 2)"));
+    // Defaults: a 180° cone without falloff.
+    let libs = r##"<library_lights><light id="s"><technique_common><spot><color>1 1 1</color></spot></technique_common></light></library_lights>"##;
+    let s = parse_ok(&scene_doc(
+        "Y_UP",
+        libs,
+        r##"<node><instance_light url="#s"/></node>"##,
+    ));
+    let Light::Spot(spot) = s.lights[0] else {
+        panic!()
+    };
+    assert!((spot.cutoff_degrees() - 90.0).abs() < 1e-4 && spot.exponent == 0.0);
+}
+
+#[test]
+fn textures_bind_their_coordinate_set_and_are_listed() {
+    let s = load(&Path::new(DATA).join("textured_quad.dae")).unwrap_or_else(|e| panic!("{e}"));
+    assert!(s.warnings.is_empty(), "{:?}", s.warnings);
+    assert_eq!(s.textures.len(), 1);
+    let t = &s.textures[0];
+    assert_eq!((t.width(), t.height()), (4, 4));
+    assert_eq!(t.wrap_s, ember::texture::Wrap::Clamp);
+    // Every corner reads set 0, (x + 1)/2, (1 − z)/2, not the decoy set 1.
+    for (i, tri) in s.triangles.iter().enumerate() {
+        let uv = s.triangle_uvs[i].expect("textured triangles carry coordinates");
+        for (&v, &k) in tri.v.iter().zip(&uv) {
+            let p = s.positions[v as usize];
+            let want = ember::Vec2::new((p.x + 1.0) / 2.0, (1.0 - p.z) / 2.0);
+            assert!((s.uvs[k as usize] - want).length() < 1e-6);
+        }
+    }
+    let info = scene_info(&s, 8, 8);
+    assert!(info.contains("textures: 1"), "{info}");
+    assert!(
+        info.contains("texture4x4.png: 4x4, wrap CLAMP/CLAMP"),
+        "{info}"
+    );
+}
+
+#[test]
+fn a_missing_texture_is_an_error_unless_a_colour_stands_in() {
+    let dir = tempfile::tempdir().unwrap();
+    let text = std::fs::read_to_string(Path::new(DATA).join("textured_quad.dae")).unwrap();
+    let gone = text.replace("texture4x4.png", "gone.png");
+    let e = load(&write(dir.path(), "gone.dae", gone.as_bytes()))
+        .unwrap_err()
+        .to_string();
+    assert!(
+        e.contains("gone.dae") && e.contains("<image id=\"tex-image\">/init_from"),
+        "{e}"
+    );
+    assert!(e.contains("gone.png") && !e.contains('\n'), "{e}");
+    let with_colour = gone.replace(
+        "<diffuse><texture",
+        "<diffuse><color>0.2 0.4 0.6 1</color><texture",
+    );
+    let s = load(&write(dir.path(), "colour.dae", with_colour.as_bytes())).unwrap();
+    assert!(s.textures.is_empty());
+    assert!(
+        matches!(s.materials[0].bsdf, Bsdf::Lambertian(b) if close(b.albedo.vec3(), Vec3::new(0.2, 0.4, 0.6)))
+    );
+    assert!(
+        s.warnings.iter().any(|w| w.contains("gone.png")),
+        "{:?}",
+        s.warnings
+    );
+    // A file that is no image is reported the same way.
+    write(dir.path(), "texture4x4.png", b"not a png");
+    let e = load(&write(dir.path(), "junk.dae", text.as_bytes()))
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("texture4x4.png") && !e.contains('\n'), "{e}");
+}
+
+#[test]
+fn parse_reads_images_relative_to_the_current_directory() {
+    // `parse` has no file to be beside; a relative image then names nothing here.
+    let text = std::fs::read_to_string(Path::new(DATA).join("textured_quad.dae")).unwrap();
+    assert!(parse(&text, "quad.dae").is_err());
+}
+
+#[test]
+fn off_standard_references_and_arrays_load_with_a_warning_naming_the_file() {
+    // The file's own name before '#' is a local reference.
+    let s = parse_ok(&edit(
+        "<instance_geometry url=\"#quad\">",
+        "<instance_geometry url=\"./scene.dae#quad\">",
+    ));
+    assert_eq!(s.triangles.len(), 2);
+    // More numbers than a float_array's count: the accessor's are read, with a warning.
+    let s = parse_ok(&edit(
+        "count=\"12\">0 0 0 1 0 0 1 1 0 0 1 0</float_array>",
+        "count=\"12\">0 0 0 1 0 0 1 1 0 0 1 0 7 7 7</float_array>",
+    ));
+    assert_eq!(s.positions, parse_ok(TEMPLATE).positions);
+    assert!(s
+        .warnings
+        .iter()
+        .any(|w| w.contains("extra ones are not read")));
+    // Two-component positions lie in z = 0.
+    let doc = edit(
+        "count=\"12\">0 0 0 1 0 0 1 1 0 0 1 0</float_array>\n          <technique_common><accessor source=\"#quad-pos-array\" count=\"4\" stride=\"3\"/>",
+        "count=\"8\">0 0 1 0 1 1 0 1</float_array>\n          <technique_common><accessor source=\"#quad-pos-array\" count=\"4\" stride=\"2\"/>",
+    );
+    let s = parse_ok(&doc);
+    assert_eq!(s.positions, parse_ok(TEMPLATE).positions);
+}
+
+#[test]
+fn concave_polygons_are_ear_clipped_and_convex_ones_fanned() {
+    // An L of six corners over the grid, the notch [1, 2]² at the upper right, starting
+    // at (1, 2), from where a fan would cover part of the notch.
+    let s = load_grid(
+        r##"<polylist material="grey-sym" count="2"><input semantic="VERTEX" source="#g-vtx" offset="0"/>
+             <vcount>6 4</vcount><p>7 6 0 2 5 4  0 1 4 3</p></polylist>"##,
+    );
+    assert_eq!(s.triangles.len(), 4 + 2);
+    assert!((area(&s) - (3.0 + 1.0)).abs() < 1e-6, "{}", area(&s));
+    // No triangle of the L reaches into the notch (the fan's (1,2) (2,0) (2,1) would).
+    for i in 0..4 {
+        assert!(
+            !covers(&s, i, Vec3::new(1.4, 1.5, 0.0)),
+            "triangle {i} covers the notch"
+        );
+    }
+    // The convex quad keeps the fan (0, 1, 4), (0, 4, 3).
+    let quad: Vec<_> = (4..6).map(|i| s.triangle_positions(i)).collect();
+    assert!(
+        close(quad[0][2], Vec3::new(1.0, 1.0, 0.0)) && close(quad[1][1], Vec3::new(1.0, 1.0, 0.0))
+    );
+}
