@@ -39,25 +39,25 @@ const CASES: &[Case] = &[
         scene: "scenes/cs184/sky/CBspheres_lambertian.dae",
         max_depth: 1,
         strategy: DirectStrategy::Light,
-        expected: 0x9faf_7375_f111_133f,
+        expected: 0xaf43_0d24_f33c_2f9a,
     },
     Case {
         scene: "scenes/cs184/sky/CBspheres_lambertian.dae",
         max_depth: 5,
         strategy: DirectStrategy::Mis,
-        expected: 0x4e82_6f70_43c5_e17a,
+        expected: 0x0a6b_78a8_b4dc_03a2,
     },
     Case {
         scene: "scenes/cs184/sky/CBspheres.dae",
         max_depth: 5,
         strategy: DirectStrategy::Light,
-        expected: 0x2c0c_e100_b6e9_65fa,
+        expected: 0x50f3_8a99_8b6f_0408,
     },
     Case {
         scene: "scenes/cs184/sky/CBbunny_microfacet_cu.dae",
         max_depth: 5,
         strategy: DirectStrategy::Mis,
-        expected: 0xc034_4926_e38b_44fb,
+        expected: 0xe6da_8631_0e3f_bea1,
     },
 ];
 
