@@ -240,6 +240,7 @@ impl RenderBenchReport {
             "threads",
             "engine",
             "backend",
+            "Embree variant",
             "spp",
             "-m",
             "render-only M samples/s",
@@ -264,6 +265,7 @@ impl RenderBenchReport {
                 r.threads.to_string(),
                 format!("{} → {}", r.engine, r.ran),
                 r.backend.clone(),
+                embree_variant(r.accel),
                 r.spp.to_string(),
                 r.max_depth.to_string(),
                 format!("{:.2}", r.samples_per_s() / 1e6),
@@ -282,6 +284,20 @@ impl RenderBenchReport {
             ]);
         }
         t
+    }
+}
+
+/// How an Embree row drove Embree, in full even for the default ("medium robust:
+/// packet8 queries, retry self-hits, ember spheres"); "—" for other backends.
+fn embree_variant(accel: AccelKind) -> String {
+    match accel {
+        AccelKind::Embree(m) => format!(
+            "{} {}: {}",
+            m.quality,
+            if m.robust { "robust" } else { "fast" },
+            m.driving()
+        ),
+        _ => "—".into(),
     }
 }
 
@@ -335,9 +351,11 @@ mod tests {
             ],
         };
         let md = report.table().to_markdown();
-        assert!(md.contains("| s.dae | 480×360 | 2 | auto → packets (AVX2) | native BVH (binned SAH) | 64 | 5 | 10.00 | 1.00 |"), "{md}");
+        assert!(md.contains("| s.dae | 480×360 | 2 | auto → packets (AVX2) | native BVH (binned SAH) | — | 64 | 5 | 10.00 | 1.00 |"), "{md}");
         assert!(
-            md.contains("(medium robust) | 64 | 5 | 9.00 | 0.90 |"),
+            md.contains(
+                "(medium robust) | medium robust: packet8 queries, retry self-hits, ember spheres | 64 | 5 | 9.00 | 0.90 |"
+            ),
             "{md}"
         );
     }
