@@ -6,8 +6,7 @@
 
 use super::table::Table;
 use super::{create_out_dir, Report};
-use crate::accel::{AccelBuilder, AccelKind, Backend, BvhBuilder, EmbreeQuality};
-use crate::camera::Camera;
+use crate::accel::{AccelKind, Backend, BvhBuilder, EmbreeQuality};
 use crate::render::{Engine, RenderJob, RenderSettings};
 use crate::scene::collada;
 use anyhow::Result;
@@ -164,16 +163,10 @@ fn measure(path: &Path, opts: &RenderBenchOptions) -> Result<Vec<RenderBenchRow>
             let scene = collada::load(path)?;
             let load_s = t0.elapsed().as_secs_f64();
             let t1 = Instant::now();
-            let camera = Camera::new(&scene.camera, &scene.bounds, WIDTH, HEIGHT);
             // A device per build, as a render makes it (with Embree 4's TBB, a scene of
             // Embree's own spheres leaves a worker yielding in a loop for as long as its
             // device lives: it must not outlive its own render).
-            let accel = AccelBuilder::new(rayon::current_num_threads()).build(&scene, accel)?;
-            let job = RenderJob {
-                scene,
-                accel,
-                camera,
-            };
+            let job = RenderJob::new(scene, accel, WIDTH, HEIGHT)?;
             let build_s = t1.elapsed().as_secs_f64();
             let ran = if settings.uses_packets(&job) {
                 format!("packets ({})", crate::lanes::instruction_set())
