@@ -65,3 +65,32 @@ fn cbbunny_native_and_embree_images_agree() {
 fn cbspheres_glass_mirror_native_and_embree_images_agree() {
     agree("scenes/cs184/sky/CBspheres.dae");
 }
+
+/// An Embree render is the same image bit for bit at 1 and 2 threads, by default and
+/// with camera rays in packets (the one variant whose lanes share an Embree query).
+#[test]
+fn embree_renders_do_not_depend_on_the_thread_count() {
+    use ember::accel::{EmbreeMode, EmbreeQueries};
+    let scene = load("scenes/cs184/sky/CBspheres_lambertian.dae");
+    let s = RenderSettings {
+        spp: 8,
+        max_depth: 5,
+        seed: 5,
+        ..Default::default()
+    };
+    let default = EmbreeMode::robust(EmbreeQuality::Medium);
+    let camera_packets = EmbreeMode {
+        queries: EmbreeQueries::CameraPackets,
+        ..default
+    };
+    for mode in [default, camera_packets] {
+        let job = common::job(&scene, 96, 72, AccelKind::Embree(mode));
+        let images: Vec<_> = [1, 2]
+            .map(|t| {
+                let pool = ember::accel::tracing_pool(Some(t)).expect("pool");
+                pool.install(|| job.render(&s)).image
+            })
+            .into();
+        assert!(images[0].pixels == images[1].pixels, "{mode}");
+    }
+}

@@ -10,10 +10,15 @@ compile_error!(
 );
 
 pub use super::EmbreeMode;
-use super::{Accel, AccelError, EmbreeQuality, HitPacket, RayPacket};
+use super::{
+    Accel, AccelError, EmbreeQuality, EmbreeQueries, EmbreeSelfHits, EmbreeSpheres, HitPacket,
+    RayPacket,
+};
 use crate::geometry::Ray;
 use crate::lanes::{LaneBits, LANES};
 use crate::scene::{PrimHit, Scene};
+
+const _: () = assert!(LANES == ffi::EMBER_LANES as usize);
 use std::ffi::{CStr, CString};
 use std::os::raw::c_char;
 use std::ptr::NonNull;
@@ -210,6 +215,7 @@ impl EmbreeAccel {
         }
         let _ = device.take_error();
         let before = device.memory_bytes();
+        let options = scene_options(mode);
         // SAFETY: the slices are valid for the lengths passed; the shim copies them.
         let raw = unsafe {
             ffi::ember_scene_new(
@@ -220,8 +226,7 @@ impl EmbreeAccel {
                 scene.triangles.len(),
                 spheres.as_ptr(),
                 scene.spheres.len(),
-                quality_code(mode.quality),
-                i32::from(mode.robust),
+                &options,
             )
         };
         let Some(raw) = NonNull::new(raw) else {
@@ -248,9 +253,8 @@ impl EmbreeAccel {
     }
 
     /// The scene flags Embree reports for this scene that tell the modes apart, by name
-    /// ("ROBUST" or "NONE"). The shim also sets the filter-function flag on every scene
-    /// (its filter skips the primitive a ray was spawned from); being the same in every
-    /// mode, it is left out of the name.
+    /// ("ROBUST" or "NONE"). The shim also sets the filter-function flag on scenes whose
+    /// mode uses the skip filter ([`EmbreeSelfHits`]); that is left out of the name.
     pub fn scene_flags(&self) -> &'static str {
         // SAFETY: the scene is live.
         let flags = unsafe { ffi::ember_scene_flags(self.scene.as_ptr()) };
@@ -300,6 +304,65 @@ impl EmbreeAccel {
     }
 }
 
+/// The shim's build options for `mode`.
+fn scene_options(mode: EmbreeMode) -> ffi::ember_scene_options {
+    ffi::ember_scene_options {
+        quality: quality_code(mode.quality),
+        robust: i32::from(mode.robust),
+        queries: (match mode.queries {
+            EmbreeQueries::Single => ffi::EMBER_QUERIES_SINGLE,
+            EmbreeQueries::Packet16 => ffi::EMBER_QUERIES_PACKET16,
+            EmbreeQueries::Stream => ffi::EMBER_QUERIES_STREAM,
+            EmbreeQueries::CameraPackets => ffi::EMBER_QUERIES_CAMERA8,
+            EmbreeQueries::Packet8 => ffi::EMBER_QUERIES_PACKET8,
+            EmbreeQueries::Packet8Coherent => ffi::EMBER_QUERIES_PACKET8_COHERENT,
+        }) as i32,
+        self_hits: (match mode.self_hits {
+            EmbreeSelfHits::Filter => ffi::EMBER_SELF_FILTER,
+            EmbreeSelfHits::Retry => ffi::EMBER_SELF_RETRY,
+            EmbreeSelfHits::Offset => ffi::EMBER_SELF_OFFSET,
+        }) as i32,
+        sphere: match mode.spheres {
+            EmbreeSpheres::Ember => Some(sphere_hit),
+            EmbreeSpheres::Embree => None,
+        },
+    }
+}
+
+/// ember's own sphere test for Embree's user-geometry spheres: the native BVH's test,
+/// `leaving` as a ray whose `skip` is this sphere.
+unsafe extern "C" fn sphere_hit(
+    org: *const f32,
+    dir: *const f32,
+    tnear: f32,
+    tfar: f32,
+    sphere: *const f32,
+    leaving: i32,
+) -> f32 {
+    // SAFETY: the shim passes three, three and four readable floats.
+    let (o, d, s) = unsafe {
+        (
+            std::slice::from_raw_parts(org, 3),
+            std::slice::from_raw_parts(dir, 3),
+            std::slice::from_raw_parts(sphere, 4),
+        )
+    };
+    let ray = Ray {
+        o: glam::Vec3::from_slice(o),
+        d: glam::Vec3::from_slice(d),
+        t_min: tnear,
+        t_max: tfar,
+        skip: crate::geometry::NO_PRIM,
+    };
+    let c = glam::Vec3::from_slice(&s[..3]);
+    let t = if leaving != 0 {
+        crate::geometry::sphere::intersect_sphere_leaving(&ray, c, s[3])
+    } else {
+        crate::geometry::sphere::intersect_sphere(&ray, c, s[3])
+    };
+    t.unwrap_or(-1.0)
+}
+
 const NO_HIT: ffi::ember_hit = ffi::ember_hit {
     t: 0.0,
     ng: [0.0; 3],
@@ -325,8 +388,14 @@ fn quality_code(q: EmbreeQuality) -> i32 {
     }) as i32
 }
 
-fn packet_to_ffi(rays: &RayPacket) -> [ffi::ember_ray; LANES] {
-    std::array::from_fn(|i| to_ffi(&rays.ray(i)))
+/// The shim's view of a packet: pointers into its arrays, no copy.
+fn packet_view(rays: &RayPacket) -> ffi::ember_packet {
+    ffi::ember_packet {
+        org: rays.o.as_ptr().cast(),
+        dir: rays.d.as_ptr().cast(),
+        tfar: rays.t_max.as_ptr(),
+        skip: rays.skip.as_ptr(),
+    }
 }
 
 fn to_ffi(ray: &Ray) -> ffi::ember_ray {
@@ -354,35 +423,29 @@ impl Accel for EmbreeAccel {
         unsafe { ffi::ember_occluded1(self.scene.as_ptr(), &r) != 0 }
     }
 
-    /// One `rtcIntersect16` packet.
+    /// The lanes as the mode's [`EmbreeQueries`] say (by default one `rtcIntersect1`
+    /// each). The shim reads the packet's arrays and writes the hits' in place.
     fn intersect_packet(&self, rays: &RayPacket, active: LaneBits, hits: &mut HitPacket) {
-        let packet = packet_to_ffi(rays);
-        let mut out = [NO_HIT; LANES];
-        // SAFETY: the scene is live; both arrays hold the 16 lanes the shim reads and writes.
-        unsafe {
-            ffi::ember_intersect16(
-                self.scene.as_ptr(),
-                packet.as_ptr(),
-                active,
-                out.as_mut_ptr(),
-            )
+        let view = packet_view(rays);
+        let out = ffi::ember_packet_hits {
+            t: hits.t.as_mut_ptr(),
+            prim: hits.prim.as_mut_ptr(),
+            u: hits.b1.as_mut_ptr(),
+            v: hits.b2.as_mut_ptr(),
         };
-        for i in (0..LANES).filter(|&i| active >> i & 1 != 0) {
-            hits.set(i, prim_hit(&out[i]));
-        }
+        // SAFETY: the scene is live; every array holds the 16 lanes the shim reads or
+        // writes (`[[f32; 16]; 3]` is 48 consecutive floats, axis by axis).
+        unsafe { ffi::ember_intersect16(self.scene.as_ptr(), &view, active, &out) };
     }
 
-    /// One `rtcOccluded16` packet.
     fn occluded_packet(&self, rays: &RayPacket, active: LaneBits) -> LaneBits {
-        let packet = packet_to_ffi(rays);
+        let view = packet_view(rays);
         // SAFETY: as in `intersect_packet`.
-        unsafe { ffi::ember_occluded16(self.scene.as_ptr(), packet.as_ptr(), active) }
+        unsafe { ffi::ember_occluded16(self.scene.as_ptr(), &view, active) }
     }
 
     fn name(&self) -> String {
-        let q = self.mode.quality;
-        let fast = if self.mode.robust { "" } else { ", fast" };
-        format!("{} ({q} quality{fast})", self.device.info())
+        format!("{} ({})", self.device.info(), self.mode)
     }
 
     /// Measured, not estimated: the device's memory monitor over the build. It includes
@@ -476,8 +539,8 @@ mod tests {
             .collect();
         for robust in [true, false] {
             let mode = EmbreeMode {
-                quality: EmbreeQuality::Medium,
                 robust,
+                ..EmbreeMode::robust(EmbreeQuality::Medium)
             };
             let device = Arc::new(EmbreeDevice::new(1).expect("device"));
             let accel = EmbreeAccel::build_mode(device, &mesh, mode).expect("builds");

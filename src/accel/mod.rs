@@ -248,7 +248,10 @@ impl EmbreeQuality {
     ];
 }
 
-/// How Embree builds and traverses a scene.
+/// How Embree builds and traverses a scene, and how ember's rays reach it. The
+/// default is the fastest way found that keeps every contract of [`Accel`]
+/// (BENCHMARKS.md, "Embree in renders"); the other settings are there to measure
+/// what each step costs.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct EmbreeMode {
     pub quality: EmbreeQuality,
@@ -256,7 +259,136 @@ pub struct EmbreeMode {
     /// shared by two triangles, at some speed. Off means no scene flags (Embree's
     /// default, "fast").
     pub robust: bool,
+    pub queries: EmbreeQueries,
+    pub self_hits: EmbreeSelfHits,
+    pub spheres: EmbreeSpheres,
 }
+
+/// How the 16-lane calls (`intersect_packet`, `occluded_packet`) reach Embree.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum EmbreeQueries {
+    /// Every ray alone (`rtcIntersect1`, `rtcOccluded1`), as Embree's path tracer
+    /// tutorial traces; a lane's answer never depends on the other lanes.
+    Single,
+    /// The active lanes as one `rtcIntersect16` / `rtcOccluded16` packet (ember before
+    /// issue 27; Embree emulates 16 lanes on AVX2 with two packets of 8).
+    Packet16,
+    /// Embree 3: the active lanes as one `rtcIntersect1M` / `rtcOccluded1M` stream
+    /// (Embree 4 has no streams and traces single rays).
+    Stream,
+    /// Single rays, but the camera rays of a call (lanes without a skip) as coherent
+    /// `rtcIntersect8` packets, one per half of the lanes with two or more.
+    CameraPackets,
+    /// Each half of the lanes as one `rtcIntersect8` / `rtcOccluded8` packet (Embree's
+    /// native width on AVX2).
+    Packet8,
+    /// As `Packet8`, with Embree's coherent query flag.
+    Packet8Coherent,
+}
+
+impl Named for EmbreeQueries {
+    const WHAT: &'static str = "Embree queries";
+    const TABLE: &'static [(Self, &'static str, &'static str)] = &[
+        (
+            EmbreeQueries::Single,
+            "single",
+            "rtcIntersect1/rtcOccluded1 per ray",
+        ),
+        (
+            EmbreeQueries::Packet16,
+            "packet16",
+            "rtcIntersect16/rtcOccluded16 per call",
+        ),
+        (
+            EmbreeQueries::Stream,
+            "stream",
+            "rtcIntersect1M/rtcOccluded1M per call (Embree 3)",
+        ),
+        (
+            EmbreeQueries::CameraPackets,
+            "camera8",
+            "single rays, camera rays as coherent rtcIntersect8 packets",
+        ),
+        (
+            EmbreeQueries::Packet8,
+            "packet8",
+            "rtcIntersect8/rtcOccluded8 per half call",
+        ),
+        (
+            EmbreeQueries::Packet8Coherent,
+            "packet8-coherent",
+            "rtcIntersect8/rtcOccluded8 per half call, coherent flag",
+        ),
+    ];
+}
+display_from_table!(EmbreeQueries);
+
+/// How a ray spawned from a surface keeps off the primitive it leaves (its
+/// [`Ray::skip`](crate::geometry::Ray::skip)) under Embree.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum EmbreeSelfHits {
+    /// A filter callback on every candidate hit of every spawned ray (ember before).
+    Filter,
+    /// No callback on the common path: a spawned ray is traced without the filter,
+    /// and again with it only when its nearest hit is the triangle it left; shadow
+    /// rays keep the filter (they stop at their first hit, so it runs about once).
+    /// The answers are the filter's, exactly.
+    Retry,
+    /// No filter at all: the origin offset by the hit point's error bound alone keeps
+    /// rays off their triangle (and the sphere test off its sphere; Embree's own
+    /// sphere primitive has no such protection).
+    Offset,
+}
+
+impl Named for EmbreeSelfHits {
+    const WHAT: &'static str = "Embree self-hit handling";
+    const TABLE: &'static [(Self, &'static str, &'static str)] = &[
+        (
+            EmbreeSelfHits::Filter,
+            "filter",
+            "filter callback on every spawned ray",
+        ),
+        (
+            EmbreeSelfHits::Retry,
+            "retry",
+            "no callback; re-traced with it when the triangle left was hit; shadow rays filtered",
+        ),
+        (
+            EmbreeSelfHits::Offset,
+            "offset",
+            "offset origins only, no callback",
+        ),
+    ];
+}
+display_from_table!(EmbreeSelfHits);
+
+/// What tests a ray against a sphere under Embree.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum EmbreeSpheres {
+    /// ember's own sphere test ([`crate::geometry::sphere`]) as Embree user geometry:
+    /// the same hits as the native BVH, and a ray leaving a sphere reaches only its
+    /// far side by the test itself.
+    Ember,
+    /// Embree's own sphere primitive (`RTC_GEOMETRY_TYPE_SPHERE_POINT`).
+    Embree,
+}
+
+impl Named for EmbreeSpheres {
+    const WHAT: &'static str = "Embree spheres";
+    const TABLE: &'static [(Self, &'static str, &'static str)] = &[
+        (
+            EmbreeSpheres::Ember,
+            "ember",
+            "ember's sphere test as user geometry",
+        ),
+        (
+            EmbreeSpheres::Embree,
+            "embree",
+            "RTC_GEOMETRY_TYPE_SPHERE_POINT",
+        ),
+    ];
+}
+display_from_table!(EmbreeSpheres);
 
 impl Default for EmbreeMode {
     /// Robust, so no ray slips between the triangles of a watertight mesh.
@@ -266,11 +398,34 @@ impl Default for EmbreeMode {
 }
 
 impl EmbreeMode {
-    /// Robust traversal at `quality`: what `--accel embree` uses.
-    pub fn robust(quality: EmbreeQuality) -> EmbreeMode {
+    /// Robust traversal at `quality`, rays driven the default way: what `--accel
+    /// embree` uses.
+    pub const fn robust(quality: EmbreeQuality) -> EmbreeMode {
         EmbreeMode {
             quality,
             robust: true,
+            queries: EmbreeQueries::Packet8,
+            self_hits: EmbreeSelfHits::Retry,
+            spheres: EmbreeSpheres::Ember,
+        }
+    }
+
+    /// As [`robust`](Self::robust), without `RTC_SCENE_FLAG_ROBUST`.
+    pub const fn fast(quality: EmbreeQuality) -> EmbreeMode {
+        let mut mode = EmbreeMode::robust(quality);
+        mode.robust = false;
+        mode
+    }
+
+    /// How ember drove Embree before issue 27: every 16-lane call as one
+    /// `rtcIntersect16`/`rtcOccluded16` packet, the skip filter on every spawned ray,
+    /// Embree's own spheres.
+    pub fn before(quality: EmbreeQuality) -> EmbreeMode {
+        EmbreeMode {
+            queries: EmbreeQueries::Packet16,
+            self_hits: EmbreeSelfHits::Filter,
+            spheres: EmbreeSpheres::Embree,
+            ..EmbreeMode::robust(quality)
         }
     }
 
@@ -282,13 +437,29 @@ impl EmbreeMode {
             "NONE"
         }
     }
+
+    /// How rays reach Embree, e.g. "single rays, retry, ember spheres".
+    pub fn driving(self) -> String {
+        format!(
+            "{} queries, {} self-hits, {} spheres",
+            self.queries, self.self_hits, self.spheres
+        )
+    }
 }
 
-/// "medium robust" or "medium fast".
+/// "medium robust" or "medium fast", followed by how rays reach Embree when that is
+/// not the default ("medium robust (packet16 queries, filter self-hits, embree spheres)").
 impl std::fmt::Display for EmbreeMode {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         let flags = if self.robust { "robust" } else { "fast" };
-        write!(f, "{} {flags}", self.quality)
+        write!(f, "{} {flags}", self.quality)?;
+        let default = EmbreeMode::robust(self.quality);
+        if (self.queries, self.self_hits, self.spheres)
+            != (default.queries, default.self_hits, default.spheres)
+        {
+            write!(f, " ({})", self.driving())?;
+        }
+        Ok(())
     }
 }
 

@@ -4,9 +4,10 @@
 //! of the build that measured it, so the tables of an Embree 3 and an Embree 4 build
 //! merge into one ([`AccelBenchReport::merge`], `--append`).
 
-use super::embree_modes::{self, EmbreeModeRow};
+use super::embree_modes::{self, EmbreeModeRow, EmbreeVariantRow};
 use super::measure::{make_rays, measure_all, three_digits, Measurement, Repeats, TreeShape};
 use super::meshes;
+use super::render_calls::{CallRates, RenderCalls};
 use super::table::Table;
 use super::Report;
 use crate::accel::{
@@ -82,7 +83,8 @@ pub struct AccelBenchOptions {
     /// Build quality of the Embree rows of the main table (robust and fast).
     pub embree_quality: EmbreeQuality,
     /// Also measure every Embree mode (scene flags × quality × packet width) on
-    /// camera rays, when this build has Embree.
+    /// camera rays, and every way of driving Embree on a render's calls
+    /// ([`embree_modes::variants`]), when this build has Embree.
     pub embree_modes: bool,
     pub seed: u64,
 }
@@ -135,6 +137,9 @@ pub struct AccelBenchRow {
     pub rays: usize,
     pub repeats: usize,
     pub measured: Measurement,
+    /// The calls of [`RENDER_TILES`] tiles of a render of the scene as `ember bench
+    /// render` makes it, replayed: the same four `Accel` calls, packet for packet.
+    pub render: Option<CallRates>,
 }
 
 impl AccelBenchRow {
@@ -148,11 +153,14 @@ impl AccelBenchRow {
     }
 }
 
-/// The main table's rows and the Embree modes rows.
+/// The main table's rows, the Embree modes rows and the Embree variants rows.
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct AccelBenchReport {
     pub rows: Vec<AccelBenchRow>,
     pub modes: Vec<EmbreeModeRow>,
+    /// Not read back by [`AccelBenchReport::read`] (`--append` keeps the file's rows
+    /// apart: see [`Report::write`]).
+    pub variants: Vec<EmbreeVariantRow>,
     /// Set when the run was stopped before its last scene: what it left out.
     pub stopped: Option<String>,
 }
@@ -191,7 +199,10 @@ fn backends(quality: EmbreeQuality) -> Vec<AccelKind> {
     ];
     if HAS_EMBREE {
         for robust in [true, false] {
-            list.push(AccelKind::Embree(EmbreeMode { quality, robust }));
+            list.push(AccelKind::Embree(EmbreeMode {
+                robust,
+                ..EmbreeMode::robust(quality)
+            }));
         }
     }
     list
@@ -214,6 +225,7 @@ pub fn run(
         let scene = bench_scene.load()?;
         let name = bench_scene.name();
         let rays = make_rays(&scene, opts.width, opts.height, opts.rays, opts.seed);
+        let calls = render_calls(&scene, opts)?;
         let auto = AccelKind::default().resolve(&scene).kind;
         for &threads in &opts.threads {
             if stop() {
@@ -225,7 +237,14 @@ pub fn run(
             let build = embree_modes::build_label(&builder)?;
             let kinds = backends(opts.embree_quality);
             let measured = measure_all(&scene, &rays, &pool, &builder, &kinds, repeats)?;
-            for (kind, m) in kinds.into_iter().zip(measured) {
+            let accels = kinds
+                .iter()
+                .map(|&k| pool.install(|| builder.build(&scene, k)))
+                .collect::<Result<Vec<_>, _>>()?;
+            let refs: Vec<&dyn accel::Accel> = accels.iter().map(|a| a.as_ref()).collect();
+            let replayed = calls.measure(&refs, &pool, opts.repeats);
+            drop(accels);
+            for ((kind, m), render) in kinds.into_iter().zip(measured).zip(replayed) {
                 let row = AccelBenchRow {
                     scene: name.clone(),
                     prims: scene.num_prims(),
@@ -240,6 +259,7 @@ pub fn run(
                     rays: opts.rays,
                     repeats: repeats.count,
                     measured: m,
+                    render: Some(render),
                 };
                 progress(Progress::Line(progress_line(&row)));
                 report.rows.push(row);
@@ -257,12 +277,46 @@ pub fn run(
                     "{name} / Embree modes / {threads} threads: done"
                 )));
                 report.modes.extend(modes);
+                let variants = embree_modes::embree_variants(
+                    &scene,
+                    &name,
+                    &calls,
+                    &pool,
+                    &builder,
+                    opts.repeats,
+                )?;
+                progress(Progress::Line(format!(
+                    "{name} / Embree variants / {threads} threads: done"
+                )));
+                report.variants.extend(variants);
             }
             progress(Progress::Rows(&report));
         }
     }
     Ok(report)
 }
+
+/// The calls of 24 tiles of a render of `scene` as `ember bench render` makes it (64
+/// samples per pixel, `-m 5`) at the camera rays' resolution (seed `opts.seed`).
+fn render_calls(scene: &Scene, opts: &AccelBenchOptions) -> Result<RenderCalls, BenchError> {
+    let bench = super::render::RenderBenchOptions::default();
+    let settings = crate::render::RenderSettings {
+        spp: bench.spp,
+        max_depth: bench.max_depth,
+        strategy: None,
+        seed: opts.seed,
+        ..Default::default()
+    };
+    Ok(RenderCalls::record(
+        scene.clone(),
+        (opts.width, opts.height),
+        &settings,
+        RENDER_TILES,
+    )?)
+}
+
+/// Tiles of the render whose calls `ember bench accel` replays.
+pub const RENDER_TILES: usize = 24;
 
 /// "CBbunny / native SAH / 1 thread: camera 29.64, incoherent 11.86, shadow 9.21 Mrays/s, build 4.97 ms".
 fn progress_line(row: &AccelBenchRow) -> String {
@@ -292,7 +346,7 @@ fn stopped_note(opts: &AccelBenchOptions, done: usize, threads: usize) -> String
     )
 }
 
-const HEADER: [&str; 20] = [
+const HEADER: [&str; 23] = [
     "scene",
     "prims",
     "threads",
@@ -309,8 +363,11 @@ const HEADER: [&str; 20] = [
     "depth",
     "SAH cost",
     "auto picks",
-    "native/Embree robust (cam / inc / shadow)",
-    "native/Embree fast (cam / inc / shadow)",
+    "native/Embree robust (cam / inc / shadow / render)",
+    "native/Embree fast (cam / inc / shadow / render)",
+    "render calls: intersect (Mrays/s)",
+    "render calls: occluded (Mrays/s)",
+    "render calls (s)",
     "rays",
     "runs",
 ];
@@ -327,9 +384,13 @@ impl AccelBenchReport {
                 self.embree_row(r, robust)
                     .filter(|_| !r.is_embree())
                     .map_or("—".into(), |e| {
+                        let render = match (r.render, e.render) {
+                            (Some(n), Some(e)) => format!("{:.2}", e.seconds / n.seconds),
+                            _ => "—".into(),
+                        };
                         let e = &e.measured;
                         format!(
-                            "{:.2} / {:.2} / {:.2}",
+                            "{:.2} / {:.2} / {:.2} / {render}",
                             m.camera_mrays / e.camera_mrays,
                             m.incoherent_mrays / e.incoherent_mrays,
                             m.shadow_mrays / e.shadow_mrays
@@ -360,6 +421,11 @@ impl AccelBenchReport {
                 if r.auto { "yes" } else { "" }.into(),
                 ratio(true),
                 ratio(false),
+                r.render
+                    .map_or("—".into(), |c| format!("{:.2}", c.intersect_mrays)),
+                r.render
+                    .map_or("—".into(), |c| format!("{:.2}", c.occluded_mrays)),
+                r.render.map_or("—".into(), |c| format!("{:.4}", c.seconds)),
                 r.rays.to_string(),
                 r.repeats.to_string(),
             ]);
@@ -484,11 +550,13 @@ impl AccelBenchReport {
     pub fn merge(mut self, other: AccelBenchReport) -> AccelBenchReport {
         self.rows.extend(other.rows);
         self.modes.extend(other.modes);
+        self.variants.extend(other.variants);
         self.stopped = self.stopped.or(other.stopped);
         let scenes = first_seen(self.rows.iter().map(|r| r.scene.clone()));
         let rank = |s: &str| scenes.iter().position(|x| x == s);
         self.rows.sort_by_key(|r| (rank(&r.scene), r.threads));
         self.modes.sort_by_key(|r| (rank(&r.scene), r.threads));
+        self.variants.sort_by_key(|r| (rank(&r.scene), r.threads));
         self
     }
 
@@ -500,24 +568,34 @@ impl AccelBenchReport {
         let rows = Table::from_csv(&text)
             .and_then(|t| Self::rows_from_table(&t))
             .map_err(|e| anyhow::anyhow!("{}: {e}", main.display()))?;
-        let modes_path = out_dir.join("embree_modes.csv");
-        let modes = match std::fs::read_to_string(&modes_path) {
-            Ok(text) => Table::from_csv(&text)
-                .and_then(|t| embree_modes::rows_from_table(&t))
-                .map_err(|e| anyhow::anyhow!("{}: {e}", modes_path.display()))?,
-            Err(e) if e.kind() == std::io::ErrorKind::NotFound => Vec::new(),
-            Err(e) => {
-                return Err(anyhow::anyhow!(
-                    "{}: cannot read: {e}",
-                    modes_path.display()
-                ))
-            }
-        };
+        let modes = read_optional(
+            &out_dir.join("embree_modes.csv"),
+            embree_modes::rows_from_table,
+        )?;
+        let variants = read_optional(
+            &out_dir.join("embree_variants.csv"),
+            embree_modes::variant_rows_from_table,
+        )?;
         Ok(AccelBenchReport {
             rows,
             modes,
+            variants,
             stopped: None,
         })
+    }
+}
+
+/// The rows of the table at `path`, none when the file does not exist.
+fn read_optional<R>(
+    path: &Path,
+    rows: fn(&Table) -> Result<Vec<R>, String>,
+) -> anyhow::Result<Vec<R>> {
+    match std::fs::read_to_string(path) {
+        Ok(text) => Table::from_csv(&text)
+            .and_then(|t| rows(&t))
+            .map_err(|e| anyhow::anyhow!("{}: {e}", path.display())),
+        Err(e) if e.kind() == std::io::ErrorKind::NotFound => Ok(Vec::new()),
+        Err(e) => Err(anyhow::anyhow!("{}: cannot read: {e}", path.display())),
     }
 }
 
@@ -548,8 +626,8 @@ fn row_from_cells(c: &[String]) -> Result<AccelBenchRow, String> {
                 .find(|q| mode.starts_with(&q.to_string()))
                 .ok_or_else(|| format!("unknown Embree backend {:?}", c[3]))?;
             Some(EmbreeMode {
-                quality,
                 robust: c[4] == "ROBUST",
+                ..EmbreeMode::robust(quality)
             })
         }
     };
@@ -563,6 +641,15 @@ fn row_from_cells(c: &[String]) -> Result<AccelBenchRow, String> {
             sah_cost: num(14)?,
         })
     };
+    let render = if c[18] == "—" {
+        None
+    } else {
+        Some(CallRates {
+            intersect_mrays: num(18)?,
+            occluded_mrays: num(19)?,
+            seconds: num(20)?,
+        })
+    };
     Ok(AccelBenchRow {
         scene: c[0].clone(),
         prims: count(1)?,
@@ -571,8 +658,8 @@ fn row_from_cells(c: &[String]) -> Result<AccelBenchRow, String> {
         embree_mode,
         build: c[5].clone(),
         auto: c[15] == "yes",
-        rays: count(18)?,
-        repeats: count(19)?,
+        rays: count(21)?,
+        repeats: count(22)?,
         measured: Measurement {
             build_ms: num(6)?,
             memory_mb: num(7)?,
@@ -581,18 +668,24 @@ fn row_from_cells(c: &[String]) -> Result<AccelBenchRow, String> {
             shadow_mrays: num(10)?,
             tree,
         },
+        render,
     })
 }
 
 impl Report for AccelBenchReport {
-    /// `accel.csv`/`.md`, and `embree_modes.csv`/`.md` when there are modes rows.
+    /// `accel.csv`/`.md`, and `embree_modes.csv`/`.md` and `embree_variants.csv`/`.md`
+    /// when there are such rows.
     fn write(&self, out_dir: &Path) -> anyhow::Result<Vec<PathBuf>> {
         super::create_out_dir(out_dir)?;
         let mut stems = vec![out_dir.join("accel")];
         self.table().write(&stems[0])?;
         if !self.modes.is_empty() {
             stems.push(out_dir.join("embree_modes"));
-            self.modes_table().write(&stems[1])?;
+            self.modes_table().write(stems.last().expect("pushed"))?;
+        }
+        if !self.variants.is_empty() {
+            stems.push(out_dir.join("embree_variants"));
+            embree_modes::variants_table(&self.variants).write(stems.last().expect("pushed"))?;
         }
         Ok(stems
             .iter()
@@ -605,6 +698,10 @@ impl Report for AccelBenchReport {
         if !self.modes.is_empty() {
             out += "\n";
             out += &self.modes_table().to_markdown();
+        }
+        if !self.variants.is_empty() {
+            out += "\n";
+            out += &embree_modes::variants_table(&self.variants).to_markdown();
         }
         out += "\n";
         if let Some(s) = &self.stopped {
@@ -645,14 +742,16 @@ mod tests {
                     sah_cost: 4.25,
                 }),
             },
+            render: Some(CallRates {
+                intersect_mrays: mrays,
+                occluded_mrays: mrays,
+                seconds: 2.5 / mrays,
+            }),
         }
     }
 
     const SAH: AccelKind = AccelKind::Native(BvhBuilder::Sah);
-    const FAST: AccelKind = AccelKind::Embree(EmbreeMode {
-        quality: EmbreeQuality::Medium,
-        robust: false,
-    });
+    const FAST: AccelKind = AccelKind::Embree(EmbreeMode::fast(EmbreeQuality::Medium));
 
     #[test]
     fn ratios_are_native_over_embree_of_the_same_build() {
@@ -665,6 +764,7 @@ mod tests {
                 row(FAST, e3, 20.0),
             ],
             modes: vec![],
+            variants: vec![],
             stopped: None,
         };
         let second = AccelBenchReport {
@@ -673,14 +773,15 @@ mod tests {
                 row(AccelKind::embree(EmbreeQuality::Medium), e4, 3.0),
             ],
             modes: vec![],
+            variants: vec![],
             stopped: None,
         };
         let md = first.merge(second).table().to_markdown();
         assert!(
-            md.contains("| 0.50 / 0.50 / 0.50 | 0.25 / 0.25 / 0.25 |"),
+            md.contains("| 0.50 / 0.50 / 0.50 / 0.50 | 0.25 / 0.25 / 0.25 / 0.25 |"),
             "{md}"
         );
-        assert!(md.contains("| 2.00 / 2.00 / 2.00 | — |"), "{md}");
+        assert!(md.contains("| 2.00 / 2.00 / 2.00 / 2.00 | — |"), "{md}");
         assert!(
             md.contains("| Embree medium fast | NONE | Embree 3.13.5"),
             "{md}"
@@ -705,6 +806,7 @@ mod tests {
                 row(AccelKind::embree(EmbreeQuality::Medium), "e", 1.0),
             ],
             modes: vec![],
+            variants: vec![],
             stopped: None,
         };
         for (repeats, rays) in [(1, 500_000), (5, 50_000)] {
@@ -733,6 +835,7 @@ mod tests {
                 })
                 .collect(),
             modes: vec![],
+            variants: vec![],
             stopped: None,
         };
         // Native ahead at 10, behind at 100 and 1000, ahead again at 50 (noise).
@@ -745,12 +848,16 @@ mod tests {
 
     #[test]
     fn the_csv_reads_back_into_the_same_rows() {
+        let mut fast = row(FAST, "Embree 4.4.0 (AVX2, x)", 7.25);
+        fast.render = Some(CallRates {
+            intersect_mrays: 7.25,
+            occluded_mrays: 3.5,
+            seconds: 0.125,
+        });
         let report = AccelBenchReport {
-            rows: vec![
-                row(SAH, "none", 5.0),
-                row(FAST, "Embree 4.4.0 (AVX2, x)", 7.25),
-            ],
+            rows: vec![row(SAH, "none", 5.0), fast],
             modes: vec![],
+            variants: vec![],
             stopped: None,
         };
         let t = Table::from_csv(&report.table().to_csv()).expect("csv");
@@ -781,11 +888,13 @@ mod tests {
         let a = AccelBenchReport {
             rows: vec![at("x", 1, "3"), at("x", 2, "3"), at("y", 1, "3")],
             modes: vec![],
+            variants: vec![],
             stopped: None,
         };
         let b = AccelBenchReport {
             rows: vec![at("x", 1, "4"), at("x", 2, "4"), at("y", 1, "4")],
             modes: vec![],
+            variants: vec![],
             stopped: None,
         };
         let order: Vec<(String, usize, String)> = a
@@ -856,6 +965,8 @@ mod tests {
         let embree_rows = if HAS_EMBREE { 2 } else { 0 };
         assert_eq!(report.rows.len(), 2 + embree_rows);
         assert_eq!(report.modes.len(), if HAS_EMBREE { 24 } else { 0 });
+        assert_eq!(report.variants.is_empty(), !HAS_EMBREE);
+        assert!(report.rows.iter().all(|r| r.render.is_some()));
         // Auto picks the native SAH tree for 2k triangles.
         let auto: Vec<&str> = report
             .rows

@@ -6,6 +6,7 @@
 
 use super::measure::three_digits;
 pub use super::measure::tiled_camera_rays;
+use super::render_calls::{CallRates, RenderCalls, SelfHits};
 use super::table::Table;
 use crate::accel::{AccelBuilder, AccelError, EmbreeMode, EmbreeQuality};
 use crate::geometry::Ray;
@@ -35,10 +36,17 @@ impl RayQuery {
     }
 }
 
-/// The ray query flags of every row: the shim passes Embree's defaults
-/// (`rtcInitIntersectContext` in 3, `rtcInitIntersectArguments` in 4), which are
-/// INCOHERENT in both.
-pub const QUERY_FLAGS: &str = "INCOHERENT (default)";
+impl RayQuery {
+    /// The query flags the shim passes: Embree's default (INCOHERENT) for single rays,
+    /// COHERENT for packets, which hold the camera rays of a compact pixel tile (as
+    /// Embree's tutorials flag primary rays).
+    pub fn flags(self) -> &'static str {
+        match self {
+            RayQuery::Single => "INCOHERENT (default)",
+            RayQuery::Packet(_) => "COHERENT",
+        }
+    }
+}
 
 #[derive(Clone, Debug, PartialEq)]
 pub struct EmbreeModeRow {
@@ -88,7 +96,11 @@ pub fn embree_modes(
     let mut rows = Vec::new();
     for robust in [true, false] {
         for quality in EmbreeQuality::ALL {
-            let mode = EmbreeMode { quality, robust };
+            let mode = EmbreeMode {
+                quality,
+                robust,
+                ..EmbreeMode::default()
+            };
             let mut build_s = Vec::new();
             let mut accel = None;
             for _ in 0..repeats.max(1) {
@@ -203,7 +215,7 @@ pub fn table(rows: &[EmbreeModeRow]) -> Table {
             r.mode.quality.to_string(),
             r.scene_flags.clone(),
             r.query.call(),
-            QUERY_FLAGS.into(),
+            r.query.flags().into(),
             r.threads.to_string(),
             three_digits(r.build_ms),
             three_digits(r.camera_mrays),
@@ -239,12 +251,401 @@ pub fn rows_from_table(t: &Table) -> Result<Vec<EmbreeModeRow>, String> {
                 mode: EmbreeMode {
                     quality,
                     robust: c[3] == "ROBUST",
+                    ..EmbreeMode::default()
                 },
                 scene_flags: c[3].clone(),
                 query,
                 threads: num(6)? as usize,
                 build_ms: num(7)?,
                 camera_mrays: num(8)?,
+            })
+        })
+        .collect()
+}
+
+/// One step of issue 27: a way of driving Embree that differs from a neighbouring one
+/// in one setting, so each row's figures against its neighbour's are that setting's
+/// cost or gain.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct EmbreeVariant {
+    /// What the step changes, e.g. "single rays".
+    pub step: &'static str,
+    pub mode: EmbreeMode,
+    /// Also measured in whole renders (`ember bench render --embree-steps`).
+    pub in_renders: bool,
+}
+
+impl EmbreeVariant {
+    /// The step's name, marked when it is what `--accel embree` uses.
+    pub fn label(&self) -> String {
+        if self.mode == EmbreeMode::robust(self.mode.quality)
+            && self.mode.quality == EmbreeQuality::default()
+        {
+            format!("{} (default)", self.step)
+        } else {
+            self.step.to_string()
+        }
+    }
+}
+
+/// The variants measured in whole renders too, as backends (none without Embree).
+pub fn render_steps() -> Vec<crate::accel::AccelKind> {
+    #[cfg(any(feature = "embree", feature = "embree4"))]
+    {
+        let major = crate::accel::embree::info().map_or(3, |i| i.version.0);
+        variants(EmbreeQuality::default(), major)
+            .into_iter()
+            .filter(|v| v.in_renders)
+            .map(|v| crate::accel::AccelKind::Embree(v.mode))
+            .collect()
+    }
+    #[cfg(not(any(feature = "embree", feature = "embree4")))]
+    Vec::new()
+}
+
+/// The variants `ember bench accel` measures on a render's calls: from how ember drove
+/// Embree before (16-lane packets, the skip filter on every spawned ray, Embree's
+/// sphere primitive) one step at a time towards the default, then the default with
+/// one setting changed. Streams only with Embree 3 (Embree 4 has none); a mode
+/// already listed is not listed again.
+pub fn variants(quality: EmbreeQuality, embree_major: i32) -> Vec<EmbreeVariant> {
+    use crate::accel::{EmbreeQueries as Q, EmbreeSelfHits as H, EmbreeSpheres as S};
+    let default = EmbreeMode::robust(quality);
+    let with = |queries, self_hits, spheres| EmbreeMode {
+        queries,
+        self_hits,
+        spheres,
+        ..default
+    };
+    let steps = [
+        (
+            "before: rtcIntersect16 packets",
+            EmbreeMode::before(quality),
+            true,
+        ),
+        ("single rays", with(Q::Single, H::Filter, S::Embree), true),
+        (
+            "streams (rtcIntersect1M)",
+            with(Q::Stream, H::Filter, S::Embree),
+            true,
+        ),
+        (
+            "filter only on retry",
+            with(Q::Single, H::Retry, S::Embree),
+            true,
+        ),
+        (
+            "no filter (offset origins)",
+            with(Q::Single, H::Offset, S::Embree),
+            false,
+        ),
+        (
+            "ember's sphere test",
+            with(Q::Single, H::Retry, S::Ember),
+            true,
+        ),
+        (
+            "rtcIntersect8 packets",
+            with(Q::Packet8, H::Retry, S::Ember),
+            true,
+        ),
+        ("default", default, true),
+    ];
+    // The steps end at the default; the rest change one of its settings.
+    let changed = [
+        (
+            "default, single rays",
+            EmbreeMode {
+                queries: Q::Single,
+                ..default
+            },
+            false,
+        ),
+        (
+            "default, coherent flag",
+            EmbreeMode {
+                queries: Q::Packet8Coherent,
+                ..default
+            },
+            false,
+        ),
+        (
+            "default, rtcIntersect16",
+            EmbreeMode {
+                queries: Q::Packet16,
+                ..default
+            },
+            false,
+        ),
+        (
+            "default, camera rays only in packets",
+            EmbreeMode {
+                queries: Q::CameraPackets,
+                ..default
+            },
+            false,
+        ),
+        (
+            "default, filter everywhere",
+            EmbreeMode {
+                self_hits: H::Filter,
+                ..default
+            },
+            false,
+        ),
+        (
+            "default, no filter",
+            EmbreeMode {
+                self_hits: H::Offset,
+                ..default
+            },
+            false,
+        ),
+        (
+            "default, Embree's spheres",
+            EmbreeMode {
+                spheres: S::Embree,
+                ..default
+            },
+            false,
+        ),
+        (
+            "default, no ROBUST flag",
+            EmbreeMode {
+                robust: false,
+                ..default
+            },
+            true,
+        ),
+        (
+            "default, low quality",
+            EmbreeMode {
+                quality: EmbreeQuality::Low,
+                ..default
+            },
+            false,
+        ),
+        (
+            "default, medium quality",
+            EmbreeMode {
+                quality: EmbreeQuality::Medium,
+                ..default
+            },
+            false,
+        ),
+        (
+            "default, high quality",
+            EmbreeMode {
+                quality: EmbreeQuality::High,
+                ..default
+            },
+            false,
+        ),
+    ];
+    let mut list: Vec<EmbreeVariant> = Vec::new();
+    for (step, mode, in_renders) in steps.into_iter().chain(changed) {
+        let unavailable = embree_major >= 4 && mode.queries == Q::Stream;
+        if unavailable || list.iter().any(|v| v.mode == mode) {
+            continue;
+        }
+        list.push(EmbreeVariant {
+            step,
+            mode,
+            in_renders,
+        });
+    }
+    list
+}
+
+/// One variant on one scene's render calls, against the native SAH tree on the same
+/// calls, with what it gives up.
+#[derive(Clone, Debug, PartialEq)]
+pub struct EmbreeVariantRow {
+    pub scene: String,
+    /// [`build_label`].
+    pub embree: String,
+    pub step: String,
+    pub mode: EmbreeMode,
+    pub threads: usize,
+    pub build_ms: f64,
+    pub calls: CallRates,
+    /// The native SAH tree's seconds for the same calls in the same rounds, over this
+    /// variant's.
+    pub native_over_embree: f64,
+    /// The render's spawned rays on which it broke the skip contract.
+    pub self_hits: SelfHits,
+    /// Case 6's grazing ray queries (≥ 2e-4 rad, and 1e-5 to 1e-4 rad): rays, misses.
+    pub grazing: [(u64, u64); 2],
+}
+
+/// Measures every variant of [`variants`] on `calls` (a render of `scene`), with the
+/// native SAH tree in the same rounds. Errors when this build has no Embree.
+#[cfg(any(feature = "embree", feature = "embree4"))]
+pub fn embree_variants(
+    scene: &Scene,
+    scene_name: &str,
+    calls: &RenderCalls,
+    pool: &rayon::ThreadPool,
+    builder: &AccelBuilder,
+    repeats: usize,
+) -> Result<Vec<EmbreeVariantRow>, AccelError> {
+    use crate::accel::{Accel, AccelKind, BvhBuilder};
+    use crate::bench::stability::robust::grid_queries_with;
+    use std::time::Instant;
+
+    let embree = build_label(builder)?;
+    let major = builder.embree_device()?.info().version.0;
+    let native = pool.install(|| builder.build(scene, AccelKind::Native(BvhBuilder::Sah)))?;
+    let mut rows = Vec::new();
+    for variant in variants(EmbreeQuality::default(), major) {
+        // Each variant on a device of its own, dropped before the next: with Embree 4's
+        // TBB, a scene of Embree's own spheres leaves a worker yielding in a loop for as
+        // long as its device lives, which would slow every variant measured after it.
+        let own = AccelBuilder::new(pool.current_num_threads());
+        let start = Instant::now();
+        let accel = pool.install(|| own.build_embree(scene, variant.mode))?;
+        let build_ms = 1e3 * start.elapsed().as_secs_f64();
+        let both: [&dyn Accel; 2] = [native.as_ref(), &accel];
+        let rates = calls.measure(&both, pool, repeats);
+        let grid = grid_queries_with(AccelKind::Embree(variant.mode), 1)
+            .map_err(|e| AccelError::Embree(format!("case 6 queries: {e}")))?;
+        rows.push(EmbreeVariantRow {
+            scene: scene_name.to_string(),
+            embree: embree.clone(),
+            step: variant.label(),
+            mode: variant.mode,
+            threads: pool.current_num_threads(),
+            build_ms,
+            calls: rates[1],
+            native_over_embree: rates[0].seconds / rates[1].seconds,
+            self_hits: pool.install(|| calls.self_hits(&accel, native.as_ref())),
+            grazing: [
+                (grid.rays, grid.holes),
+                (grid.extreme_rays, grid.extreme_holes),
+            ],
+        });
+    }
+    Ok(rows)
+}
+
+/// Measures every variant. Errors when this build has no Embree.
+#[cfg(not(any(feature = "embree", feature = "embree4")))]
+pub fn embree_variants(
+    _scene: &Scene,
+    _scene_name: &str,
+    _calls: &RenderCalls,
+    _pool: &rayon::ThreadPool,
+    _builder: &AccelBuilder,
+    _repeats: usize,
+) -> Result<Vec<EmbreeVariantRow>, AccelError> {
+    Err(AccelError::EmbreeUnavailable)
+}
+
+const VARIANT_HEADER: [&str; 18] = [
+    "scene",
+    "Embree",
+    "step",
+    "quality",
+    "scene flags",
+    "queries",
+    "self-hits",
+    "spheres",
+    "threads",
+    "build (ms)",
+    "render calls: intersect (Mrays/s)",
+    "occluded (Mrays/s)",
+    "render calls (s)",
+    "native ÷ Embree time",
+    "own primitive hit (of spawned)",
+    "extra occlusions (of spawned shadow)",
+    "case 6 misses ≥ 2e-4 rad",
+    "case 6 misses 1e-5..1e-4 rad",
+];
+
+/// The variant rows as a table: speed on the render's calls beside what each gives up.
+pub fn variants_table(rows: &[EmbreeVariantRow]) -> Table {
+    let mut t = Table::new(VARIANT_HEADER);
+    for r in rows {
+        let s = &r.self_hits;
+        t.push(vec![
+            r.scene.clone(),
+            r.embree.clone(),
+            r.step.clone(),
+            r.mode.quality.to_string(),
+            r.mode.scene_flags().into(),
+            r.mode.queries.to_string(),
+            r.mode.self_hits.to_string(),
+            r.mode.spheres.to_string(),
+            r.threads.to_string(),
+            three_digits(r.build_ms),
+            format!("{:.2}", r.calls.intersect_mrays),
+            format!("{:.2}", r.calls.occluded_mrays),
+            format!("{:.4}", r.calls.seconds),
+            format!("{:.2}", r.native_over_embree),
+            format!("{} of {}", s.own_hits, s.spawned),
+            format!("{} of {}", s.extra_occlusions, s.spawned_shadow),
+            format!("{} of {}", r.grazing[0].1, r.grazing[0].0),
+            format!("{} of {}", r.grazing[1].1, r.grazing[1].0),
+        ]);
+    }
+    t
+}
+
+/// Reads back rows [`variants_table`] wrote (its CSV), for merging two builds' tables.
+/// The spawned rays' disagreements other than own hits and extra occlusions are not in
+/// the table and read back as 0.
+pub fn variant_rows_from_table(t: &Table) -> Result<Vec<EmbreeVariantRow>, String> {
+    use crate::accel::{EmbreeQueries, EmbreeSelfHits, EmbreeSpheres};
+    use crate::names::Named;
+    if t.header != VARIANT_HEADER {
+        return Err(format!(
+            "not an Embree variants table: header {:?}",
+            t.header
+        ));
+    }
+    t.rows
+        .iter()
+        .map(|c| {
+            let num = |i: usize| {
+                c[i].parse::<f64>()
+                    .map_err(|_| format!("{}: not a number: {:?}", VARIANT_HEADER[i], c[i]))
+            };
+            let pair = |i: usize| -> Result<(u64, u64), String> {
+                let bad = || format!("{}: not \"N of M\": {:?}", VARIANT_HEADER[i], c[i]);
+                let (a, b) = c[i].split_once(" of ").ok_or_else(bad)?;
+                Ok((a.parse().map_err(|_| bad())?, b.parse().map_err(|_| bad())?))
+            };
+            let name = |e: crate::names::UnknownName| e.to_string();
+            let (own, spawned) = pair(14)?;
+            let (extra, shadow) = pair(15)?;
+            let (g0, g1) = (pair(16)?, pair(17)?);
+            Ok(EmbreeVariantRow {
+                scene: c[0].clone(),
+                embree: c[1].clone(),
+                step: c[2].clone(),
+                mode: EmbreeMode {
+                    quality: EmbreeQuality::from_name(&c[3]).map_err(name)?,
+                    robust: c[4] == "ROBUST",
+                    queries: EmbreeQueries::from_name(&c[5]).map_err(name)?,
+                    self_hits: EmbreeSelfHits::from_name(&c[6]).map_err(name)?,
+                    spheres: EmbreeSpheres::from_name(&c[7]).map_err(name)?,
+                },
+                threads: num(8)? as usize,
+                build_ms: num(9)?,
+                calls: CallRates {
+                    intersect_mrays: num(10)?,
+                    occluded_mrays: num(11)?,
+                    seconds: num(12)?,
+                },
+                native_over_embree: num(13)?,
+                self_hits: SelfHits {
+                    spawned,
+                    own_hits: own,
+                    spawned_shadow: shadow,
+                    extra_occlusions: extra,
+                    differ: 0,
+                },
+                grazing: [(g0.1, g0.0), (g1.1, g1.0)],
             })
         })
         .collect()
@@ -258,10 +659,7 @@ mod tests {
         EmbreeModeRow {
             scene: "s".into(),
             embree: "Embree 4.4.0 (AVX2, native ray packets of 8)".into(),
-            mode: EmbreeMode {
-                quality: EmbreeQuality::High,
-                robust: false,
-            },
+            mode: EmbreeMode::fast(EmbreeQuality::High),
             scene_flags: "NONE".into(),
             query,
             threads: 2,
@@ -276,9 +674,7 @@ mod tests {
         let t = table(&rows);
         let md = t.to_markdown();
         assert!(
-            md.contains(
-                "| high | NONE | rtcIntersect8 | INCOHERENT (default) | 2 | 42.0 | 35.4 | 1.77× |"
-            ),
+            md.contains("| high | NONE | rtcIntersect8 | COHERENT | 2 | 42.0 | 35.4 | 1.77× |"),
             "{md}"
         );
         let back = rows_from_table(&Table::from_csv(&t.to_csv()).expect("csv")).expect("rows");

@@ -13,6 +13,7 @@ pub mod measure;
 pub mod meshes;
 pub mod mitsuba;
 pub mod render;
+pub mod render_calls;
 pub mod scaling;
 pub mod stability;
 pub mod table;

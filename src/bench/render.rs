@@ -1,11 +1,12 @@
 //! `ember bench render`: samples per second of whole renders (load, build and render
-//! timed apart), the median of several repetitions per scene and engine; the engines
-//! of a scene are measured in turn within each repetition, so a drift of the
-//! machine's speed weighs on them alike.
+//! timed apart), the median of several repetitions per scene, engine and backend. All
+//! the runs of a scene are made in turn within each repetition (every engine through
+//! every backend), so a drift of the machine's speed weighs on them alike and the
+//! native and Embree rows of one table compare the backends on the same renders.
 
 use super::table::Table;
 use super::{create_out_dir, Report};
-use crate::accel::{AccelKind, BvhBuilder};
+use crate::accel::{AccelKind, Backend, BvhBuilder, EmbreeQuality};
 use crate::render::{Engine, RenderJob, RenderSettings};
 use crate::scene::collada;
 use anyhow::Result;
@@ -19,8 +20,9 @@ pub struct RenderBenchOptions {
     pub max_depth: u32,
     /// Repetitions per scene; the median render is reported.
     pub repeat: u32,
-    pub accel: AccelKind,
-    /// Engines to compare, each a row.
+    /// Backends to compare, each a row per engine ([`RenderBenchOptions::accels_for`]).
+    pub accels: Vec<AccelKind>,
+    /// Engines to compare, each a row per backend.
     pub engines: Vec<Engine>,
 }
 
@@ -33,6 +35,30 @@ impl RenderBenchOptions {
             root.join("CBbunny.dae"),
         ])
     }
+
+    /// The backends `--accel` names: `auto` compares the native SAH tree with Embree
+    /// (its default mode, what `--accel embree` renders with) in builds that have it.
+    /// `embree_steps` adds, after the native tree, every way of driving Embree that
+    /// `ember bench accel`'s variants table marks for whole renders (issue 27's steps).
+    pub fn accels_for(backend: Backend, embree_steps: bool) -> Vec<AccelKind> {
+        let native = AccelKind::Native(BvhBuilder::Sah);
+        let embree = AccelKind::embree(EmbreeQuality::default());
+        let mut list = match backend {
+            Backend::Native => vec![native],
+            Backend::Embree => vec![embree],
+            Backend::None => vec![AccelKind::None],
+            Backend::Auto if Backend::Embree.available() => vec![native, embree],
+            Backend::Auto => vec![native],
+        };
+        if embree_steps {
+            for kind in super::embree_modes::render_steps() {
+                if !list.contains(&kind) {
+                    list.push(kind);
+                }
+            }
+        }
+        list
+    }
 }
 
 impl Default for RenderBenchOptions {
@@ -43,7 +69,7 @@ impl Default for RenderBenchOptions {
             spp: 64,
             max_depth: 5,
             repeat: 3,
-            accel: AccelKind::Native(BvhBuilder::Sah),
+            accels: RenderBenchOptions::accels_for(Backend::Auto, false),
             engines: vec![Engine::Auto, Engine::Scalar],
         }
     }
@@ -53,25 +79,40 @@ impl Default for RenderBenchOptions {
 pub const WIDTH: u32 = 480;
 pub const HEIGHT: u32 = 360;
 
-/// The median run of one scene (seconds).
+/// The median run of one scene, engine and backend (seconds).
 #[derive(Clone, Debug)]
 pub struct RenderBenchRow {
     pub scene: String,
     /// The engine asked for, and what ran ("packets (AVX-512)", "scalar").
     pub engine: Engine,
     pub ran: String,
+    /// The backend asked for, and its full name as built (Embree's version, ISA and
+    /// mode: the variant measured).
+    pub accel: AccelKind,
+    pub backend: String,
+    pub threads: usize,
     pub spp: u32,
     pub max_depth: u32,
     pub render_s: f64,
+    /// The median of the renders' CPU seconds (all threads).
+    pub cpu_s: f64,
     pub load_s: f64,
     pub build_s: f64,
     pub samples: u64,
+}
+
+impl RenderBenchRow {
+    /// Render-only samples per second.
+    pub fn samples_per_s(&self) -> f64 {
+        self.samples as f64 / self.render_s
+    }
 }
 
 pub struct RenderBenchReport {
     pub rows: Vec<RenderBenchRow>,
 }
 
+/// Renders on the current rayon pool (its thread count is each row's).
 pub fn run(opts: &RenderBenchOptions) -> Result<RenderBenchReport> {
     let mut rows = Vec::new();
     for p in &opts.scenes {
@@ -80,7 +121,24 @@ pub fn run(opts: &RenderBenchOptions) -> Result<RenderBenchReport> {
     Ok(RenderBenchReport { rows })
 }
 
-/// One row per engine for the scene at `path`.
+/// One run: render, load and build seconds, samples, what ran, the backend's name,
+/// and the process's CPU seconds during the render.
+type Run = (f64, f64, f64, u64, String, String, f64);
+
+/// CPU seconds (user and system) this process has used so far: unlike the wall time,
+/// it does not grow when other processes take the cores, so two renders' CPU times
+/// compare on a busy machine too.
+fn cpu_seconds() -> f64 {
+    // SAFETY: getrusage only writes the struct it is given.
+    let mut u: libc::rusage = unsafe { std::mem::zeroed() };
+    if unsafe { libc::getrusage(libc::RUSAGE_SELF, &mut u) } != 0 {
+        return f64::NAN;
+    }
+    let secs = |t: libc::timeval| t.tv_sec as f64 + t.tv_usec as f64 * 1e-6;
+    secs(u.ru_utime) + secs(u.ru_stime)
+}
+
+/// One row per engine and backend for the scene at `path`.
 fn measure(path: &Path, opts: &RenderBenchOptions) -> Result<Vec<RenderBenchRow>> {
     let base = RenderSettings {
         spp: opts.spp,
@@ -88,10 +146,15 @@ fn measure(path: &Path, opts: &RenderBenchOptions) -> Result<Vec<RenderBenchRow>
         strategy: None,
         ..Default::default()
     };
-    let mut runs = vec![Vec::new(); opts.engines.len()];
-    let mut ran = vec![String::new(); opts.engines.len()];
+    let cases: Vec<(Engine, AccelKind)> = opts
+        .engines
+        .iter()
+        .flat_map(|&e| opts.accels.iter().map(move |&a| (e, a)))
+        .collect();
+    let mut runs: Vec<Vec<Run>> = vec![Vec::new(); cases.len()];
+
     for _ in 0..opts.repeat.max(1) {
-        for (k, &engine) in opts.engines.iter().enumerate() {
+        for (k, &(engine, accel)) in cases.iter().enumerate() {
             let settings = RenderSettings {
                 engine,
                 ..base.clone()
@@ -100,35 +163,57 @@ fn measure(path: &Path, opts: &RenderBenchOptions) -> Result<Vec<RenderBenchRow>
             let scene = collada::load(path)?;
             let load_s = t0.elapsed().as_secs_f64();
             let t1 = Instant::now();
-            let job = RenderJob::new(scene, opts.accel, WIDTH, HEIGHT)?;
+            // A device per build, as a render makes it (with Embree 4's TBB, a scene of
+            // Embree's own spheres leaves a worker yielding in a loop for as long as its
+            // device lives: it must not outlive its own render).
+            let job = RenderJob::new(scene, accel, WIDTH, HEIGHT)?;
             let build_s = t1.elapsed().as_secs_f64();
-            ran[k] = if settings.uses_packets(&job) {
+            let ran = if settings.uses_packets(&job) {
                 format!("packets ({})", crate::lanes::instruction_set())
             } else {
                 "scalar".into()
             };
-            let t2 = Instant::now();
+            let (t2, cpu) = (Instant::now(), cpu_seconds());
             let out = job.render(&settings);
             let render_s = t2.elapsed().as_secs_f64();
-            runs[k].push((render_s, load_s, build_s, out.total_samples()));
+            let cpu_s = cpu_seconds() - cpu;
+            let samples = out.total_samples();
+            runs[k].push((
+                render_s,
+                load_s,
+                build_s,
+                samples,
+                ran,
+                job.accel.name(),
+                cpu_s,
+            ));
         }
     }
     let scene = path
         .file_name()
         .map(|s| s.to_string_lossy().into_owned())
         .unwrap_or_default();
-    let rows = runs.into_iter().zip(ran).zip(&opts.engines);
-    Ok(rows
-        .map(|((mut runs, ran), &engine)| {
+    let threads = rayon::current_num_threads();
+    Ok(runs
+        .into_iter()
+        .zip(cases)
+        .map(|(mut runs, (engine, accel))| {
+            let mut cpu: Vec<f64> = runs.iter().map(|r| r.6).collect();
+            let cpu_s = super::median(&mut cpu);
             runs.sort_by(|a, b| a.0.total_cmp(&b.0));
-            let (render_s, load_s, build_s, samples) = runs[runs.len() / 2];
+            let (render_s, load_s, build_s, samples, ran, backend, _) =
+                runs.swap_remove(runs.len() / 2);
             RenderBenchRow {
                 scene: scene.clone(),
                 engine,
                 ran,
+                accel,
+                backend,
+                threads,
                 spp: opts.spp,
                 max_depth: opts.max_depth,
                 render_s,
+                cpu_s,
                 load_s,
                 build_s,
                 samples,
@@ -138,33 +223,74 @@ fn measure(path: &Path, opts: &RenderBenchOptions) -> Result<Vec<RenderBenchRow>
 }
 
 impl RenderBenchReport {
+    /// One line per scene, engine and backend; "÷ native" is a row's render-only
+    /// samples/s over the native row's of the same scene and engine, by wall time and
+    /// by CPU time (the figure to read on a machine other work keeps busy).
     pub fn table(&self) -> Table {
         let mut t = Table::new([
             "scene",
+            "resolution",
+            "threads",
             "engine",
+            "backend",
+            "Embree variant",
             "spp",
             "-m",
             "render-only M samples/s",
+            "÷ native",
+            "÷ native (CPU time)",
             "incl. load+build M samples/s",
             "render s",
+            "render CPU s",
             "load ms",
             "build ms",
         ]);
         for r in &self.rows {
             let n = r.samples as f64;
+            let native = self.rows.iter().find(|o| {
+                o.scene == r.scene
+                    && o.engine == r.engine
+                    && matches!(o.accel, AccelKind::Native(BvhBuilder::Sah))
+            });
             t.push(vec![
                 r.scene.clone(),
+                format!("{WIDTH}×{HEIGHT}"),
+                r.threads.to_string(),
                 format!("{} → {}", r.engine, r.ran),
+                r.backend.clone(),
+                embree_variant(r.accel),
                 r.spp.to_string(),
                 r.max_depth.to_string(),
-                format!("{:.2}", n / r.render_s / 1e6),
+                format!("{:.2}", r.samples_per_s() / 1e6),
+                native.map_or("—".into(), |o| {
+                    format!("{:.2}", r.samples_per_s() / o.samples_per_s())
+                }),
+                native.map_or("—".into(), |o| {
+                    let per_cpu = |r: &RenderBenchRow| r.samples as f64 / r.cpu_s;
+                    format!("{:.2}", per_cpu(r) / per_cpu(o))
+                }),
                 format!("{:.2}", n / (r.render_s + r.load_s + r.build_s) / 1e6),
                 format!("{:.3}", r.render_s),
+                format!("{:.3}", r.cpu_s),
                 format!("{:.1}", r.load_s * 1e3),
                 format!("{:.1}", r.build_s * 1e3),
             ]);
         }
         t
+    }
+}
+
+/// How an Embree row drove Embree, in full even for the default ("medium robust:
+/// packet8 queries, retry self-hits, ember spheres"); "—" for other backends.
+fn embree_variant(accel: AccelKind) -> String {
+    match accel {
+        AccelKind::Embree(m) => format!(
+            "{} {}: {}",
+            m.quality,
+            if m.robust { "robust" } else { "fast" },
+            m.driving()
+        ),
+        _ => "—".into(),
     }
 }
 
@@ -179,5 +305,62 @@ impl Report for RenderBenchReport {
 
     fn summary(&self) -> String {
         self.table().to_markdown()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn row(accel: AccelKind, samples_per_s: f64) -> RenderBenchRow {
+        RenderBenchRow {
+            scene: "s.dae".into(),
+            engine: Engine::Auto,
+            ran: "packets (AVX2)".into(),
+            accel,
+            backend: match accel {
+                AccelKind::Embree(_) => {
+                    "Embree 4.4.0 (AVX2, native ray packets of 8) (medium robust)".into()
+                }
+                _ => "native BVH (binned SAH)".into(),
+            },
+            threads: 2,
+            spp: 64,
+            max_depth: 5,
+            render_s: 1.0,
+            cpu_s: 2.0,
+            load_s: 0.0,
+            build_s: 0.0,
+            samples: samples_per_s as u64,
+        }
+    }
+
+    #[test]
+    fn embree_rows_name_their_variant_and_compare_with_native() {
+        let report = RenderBenchReport {
+            rows: vec![
+                row(AccelKind::Native(BvhBuilder::Sah), 10e6),
+                row(AccelKind::embree(EmbreeQuality::Medium), 9e6),
+            ],
+        };
+        let md = report.table().to_markdown();
+        assert!(md.contains("| s.dae | 480×360 | 2 | auto → packets (AVX2) | native BVH (binned SAH) | — | 64 | 5 | 10.00 | 1.00 |"), "{md}");
+        assert!(
+            md.contains(
+                "(medium robust) | medium robust: packet8 queries, retry self-hits, ember spheres | 64 | 5 | 9.00 | 0.90 |"
+            ),
+            "{md}"
+        );
+    }
+
+    #[test]
+    fn auto_compares_native_with_embree_when_built_with_it() {
+        let auto = RenderBenchOptions::accels_for(Backend::Auto, false);
+        assert_eq!(auto[0], AccelKind::Native(BvhBuilder::Sah));
+        assert_eq!(auto.len(), if Backend::Embree.available() { 2 } else { 1 });
+        assert_eq!(
+            RenderBenchOptions::accels_for(Backend::Embree, false),
+            [AccelKind::embree(EmbreeQuality::Medium)]
+        );
     }
 }

@@ -275,10 +275,15 @@ pub struct BenchRenderArgs {
     /// Worker threads (default: all cores).
     #[arg(short = 't', value_name = "THREADS", value_parser = at_least_one::<usize>)]
     pub threads: Option<usize>,
-    /// Backend (auto: as for a render).
+    /// Backend (auto: the native BVH and, in builds with Embree, Embree as `--accel embree`
+    /// renders, in one table).
     #[arg(long, value_parser = named::<Backend>(), default_value_t = Backend::Auto)]
     pub accel: Backend,
-    /// Engines to compare, in turn within each repetition (a row each).
+    /// Also render through each step of how ember drives Embree (builds with Embree; the
+    /// steps of `ember bench accel`'s Embree variants table), a row each.
+    #[arg(long)]
+    pub embree_steps: bool,
+    /// Engines to compare, in turn within each repetition (a row per backend each).
     #[arg(long, value_parser = named::<Engine>(), value_delimiter = ',', default_value = "auto,scalar")]
     pub engines: Vec<Engine>,
     /// Output folder (render.csv, render.md).

@@ -336,7 +336,6 @@ pub(super) fn adopt_scene_from_adaptive(args: &mut RenderArgs) {
 pub(super) fn bench_render_options(
     a: BenchRenderArgs,
 ) -> Result<bench::render::RenderBenchOptions> {
-    use ember::accel::{AccelKind, BvhBuilder, EmbreeQuality};
     Ok(bench::render::RenderBenchOptions {
         scenes: match a.scenes.is_empty() {
             true => bench::render::RenderBenchOptions::default_scenes()?,
@@ -345,7 +344,7 @@ pub(super) fn bench_render_options(
         spp: a.spp,
         max_depth: a.max_depth,
         repeat: a.repeats.max(1),
-        accel: AccelKind::new(a.accel, BvhBuilder::default(), EmbreeQuality::default()),
+        accels: bench::render::RenderBenchOptions::accels_for(a.accel, a.embree_steps),
         engines: a.engines,
     })
 }

@@ -7,6 +7,7 @@ use super::light_paths::student_t_two_sided;
 use super::measure::{lum, Budget, NATIVE};
 use super::scenes::{degenerate_room, embedded, grid_plane, transformed, GRID_CELLS, GRID_HALF};
 use super::Row;
+use crate::accel::AccelKind;
 use crate::camera::Camera;
 use crate::geometry::Ray;
 use crate::integrators::{DirectStrategy, Roulette};
@@ -415,15 +416,37 @@ pub struct GridCase {
 }
 
 pub fn grid(b: &Budget) -> Result<GridCase> {
+    grid_with(b, NATIVE)
+}
+
+/// Case 6 through a backend of `kind` (the Embree tests run it through Embree).
+pub fn grid_with(b: &Budget, kind: AccelKind) -> Result<GridCase> {
+    let mut c = GridCase::default();
+    let setup = grid_job(b, kind)?;
+    grid_queries(&setup, &mut c, b.seed);
+    grazing_render(&setup, b, &mut c);
+    degenerate(b, kind, &mut c)?;
+    Ok(c)
+}
+
+/// Only case 6's ray queries, through a backend of `kind`: the holes of `GridCase`.
+pub fn grid_queries_with(kind: AccelKind, seed: u64) -> Result<GridCase> {
+    let mut c = GridCase::default();
+    let b = Budget {
+        width: 1,
+        height: 1,
+        spp: 1,
+        seed,
+    };
+    grid_queries(&grid_job(&b, kind)?, &mut c, seed);
+    Ok(c)
+}
+
+fn grid_job(b: &Budget, kind: AccelKind) -> Result<RenderJob> {
     let scene = grid_plane();
     let mut camera = Camera::new(&scene.camera, &scene.bounds, b.width, b.height);
     camera.eye = Vec3::new(0.0, 0.02, -GRID_HALF - 0.5);
-    let setup = RenderJob::with_camera(scene, NATIVE, camera)?;
-    let mut c = GridCase::default();
-    grid_queries(&setup, &mut c, b.seed);
-    grazing_render(&setup, b, &mut c);
-    degenerate(b, &mut c)?;
-    Ok(c)
+    Ok(RenderJob::with_camera(scene, kind, camera)?)
 }
 
 /// Rays at grazing elevations aimed at every inner vertex, at the midpoints of shared
@@ -535,11 +558,11 @@ fn grazing_render(setup: &RenderJob, b: &Budget, c: &mut GridCase) {
 }
 
 /// Radiance renders of the degenerate-triangle room with every strategy, camera inside.
-fn degenerate(b: &Budget, c: &mut GridCase) -> Result<()> {
+fn degenerate(b: &Budget, kind: AccelKind, c: &mut GridCase) -> Result<()> {
     let scene = degenerate_room();
     let mut camera = Camera::new(&scene.camera, &scene.bounds, b.width, b.height);
     camera.eye = Vec3::new(0.05, -0.1, -0.95);
-    let setup = RenderJob::with_camera(scene, NATIVE, camera)?;
+    let setup = RenderJob::with_camera(scene, kind, camera)?;
     c.degenerate_all_finite = true;
     for strategy in [
         DirectStrategy::Mis,
