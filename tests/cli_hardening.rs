@@ -280,7 +280,7 @@ fn long_render_of(
 
 #[test]
 fn sigint_writes_what_was_rendered_and_no_partial_file() {
-    // Plain, in passes, adaptive, and light tracing (auto's choice for CBempty).
+    // Plain, in passes, adaptive, and light tracing (auto's choice for CBempty at -m 5).
     // Long enough to be stopped: packets render this scene at ~15 M samples/s.
     let lambertian = "CBspheres_lambertian.dae";
     for (scene, name, extra) in [

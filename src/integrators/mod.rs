@@ -176,8 +176,14 @@ impl Estimator {
     /// failing: every light is a point light, so the light reaches most of the scene
     /// indirectly, through the few surfaces near it, which camera paths find by chance
     /// and light paths find at once. Only when nothing specular or self-emitting is
-    /// present, which light tracing cannot show (see `light_tracing`).
-    pub fn auto_for(scene: &crate::scene::Scene) -> Estimator {
+    /// present, which light tracing cannot show (see `light_tracing`), and only when
+    /// paths may bounce (`max_depth` ≥ 2): direct light alone from point lights is
+    /// exact per camera sample (one unoccluded-or-not connection), which light tracing
+    /// can only approach by chance.
+    pub fn auto_for(scene: &crate::scene::Scene, max_depth: u32) -> Estimator {
+        if max_depth <= 1 {
+            return Estimator::Path;
+        }
         let point_lights_only = !scene.lights.is_empty()
             && scene.lights.iter().all(|l| {
                 matches!(

@@ -155,7 +155,8 @@ pub struct RenderSettings {
 impl RenderSettings {
     /// Which way these settings build paths in `scene`.
     pub fn estimator_for(&self, scene: &Scene) -> Estimator {
-        self.estimator.unwrap_or_else(|| Estimator::auto_for(scene))
+        self.estimator
+            .unwrap_or_else(|| Estimator::auto_for(scene, self.max_depth))
     }
 
     /// The direct-lighting estimator these settings use for `scene`.
