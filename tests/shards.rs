@@ -309,13 +309,15 @@ fn cli_shards_merge_into_the_whole_render_and_bad_merges_fail() {
         ember_in(d, &a).fails_with(needle);
     }
     ember_in(d, ["-q", "--shard", "0/2", "-f", "p.png", &scene]).fails_with("p.png: a part");
-    // Light tracing (auto's choice for CBempty) splats anywhere: no parts.
+    // Light tracing (auto's choice for CBempty at -m 5) splats anywhere: no parts.
     let empty = repo("scenes/cs184/sky/CBempty.dae").display().to_string();
     for flag in ["--shard", "--spp-offset"] {
         let value = if flag == "--shard" { "0/2" } else { "4" };
         ember_in(
             d,
-            ["-q", "-r", "40", "30", flag, value, "-f", "lt.exr", &empty],
+            [
+                "-q", "-m", "5", "-r", "40", "30", flag, value, "-f", "lt.exr", &empty,
+            ],
         )
         .fails_with("cannot be used with light tracing");
         assert!(!d.join("lt.exr").exists());
