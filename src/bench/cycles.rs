@@ -6,7 +6,7 @@
 //! and checks its image mean against the reference's manifest. Cycles is only
 //! ever run as a separate process, never linked.
 
-use super::mitsuba::{export, last_line, number_of, PeerRender};
+use super::mitsuba::{export, last_line, number_of, peer_script, PeerRender};
 use crate::camera::Camera;
 use crate::export::{MitsubaSampler, MitsubaSettings};
 use crate::image_io::read_image;
@@ -31,22 +31,14 @@ pub struct CyclesRunner {
 impl CyclesRunner {
     /// Checks that `python` imports `bpy` and writes the render script into `dir`.
     pub fn new(python: &Path, dir: &Path, reference: Option<&Path>) -> Result<Self> {
-        std::fs::create_dir_all(dir)
-            .with_context(|| format!("{}: cannot create", dir.display()))?;
-        let probe = Command::new(python)
-            .args(["-c", "import bpy, numpy"])
-            .output()
-            .with_context(|| format!("{}: cannot run", python.display()))?;
-        if !probe.status.success() {
-            bail!(
-                "{}: cannot import bpy (scripts/cycles-env installs it): {}",
-                python.display(),
-                last_line(&probe.stderr)
-            );
-        }
-        let script = dir.join("cycles_render.py");
-        std::fs::write(&script, RENDER_SCRIPT)
-            .with_context(|| format!("{}: cannot write", script.display()))?;
+        let script = peer_script(
+            python,
+            "import bpy, numpy",
+            "cannot import bpy (scripts/cycles-env installs it)",
+            dir,
+            "cycles_render.py",
+            RENDER_SCRIPT,
+        )?;
         Ok(CyclesRunner {
             python: python.to_path_buf(),
             script,

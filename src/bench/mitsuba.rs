@@ -38,25 +38,16 @@ impl MitsubaRunner {
     /// Checks that `python` imports Mitsuba with `variant` and writes the render
     /// script into `dir`.
     pub fn new(python: &Path, variant: &str, sampler: MitsubaSampler, dir: &Path) -> Result<Self> {
-        std::fs::create_dir_all(dir)
-            .with_context(|| format!("{}: cannot create", dir.display()))?;
-        let probe = Command::new(python)
-            .args([
-                "-c",
-                &format!("import mitsuba as mi, numpy; mi.set_variant('{variant}')"),
-            ])
-            .output()
-            .with_context(|| format!("{}: cannot run", python.display()))?;
-        if !probe.status.success() {
-            bail!(
-                "{}: cannot use Mitsuba variant {variant}: {}",
-                python.display(),
-                last_line(&probe.stderr)
-            );
-        }
-        let script = dir.join("mitsuba-render.py");
-        std::fs::write(&script, RENDER_SCRIPT)
-            .with_context(|| format!("{}: cannot write", script.display()))?;
+        let probe = format!("import mitsuba as mi, numpy; mi.set_variant('{variant}')");
+        let failed = format!("cannot use Mitsuba variant {variant}");
+        let script = peer_script(
+            python,
+            &probe,
+            &failed,
+            dir,
+            "mitsuba-render.py",
+            RENDER_SCRIPT,
+        )?;
         Ok(MitsubaRunner {
             python: python.to_path_buf(),
             script,
@@ -159,6 +150,29 @@ pub(crate) fn number_of(line: &str, key: &str) -> Option<f64> {
     let rest = &line[line.find(&tag)? + tag.len()..];
     let end = rest.find([',', '}'])?;
     rest[..end].trim().parse().ok()
+}
+
+/// Checks that `python` runs `probe` (else `failed` and Python's last line of error),
+/// then writes a peer's render script as `dir/name`: its path.
+pub(crate) fn peer_script(
+    python: &Path,
+    probe: &str,
+    failed: &str,
+    dir: &Path,
+    name: &str,
+    text: &str,
+) -> Result<PathBuf> {
+    std::fs::create_dir_all(dir).with_context(|| format!("{}: cannot create", dir.display()))?;
+    let out = Command::new(python)
+        .args(["-c", probe])
+        .output()
+        .with_context(|| format!("{}: cannot run", python.display()))?;
+    if !out.status.success() {
+        bail!("{}: {failed}: {}", python.display(), last_line(&out.stderr));
+    }
+    let script = dir.join(name);
+    std::fs::write(&script, text).with_context(|| format!("{}: cannot write", script.display()))?;
+    Ok(script)
 }
 
 pub(crate) fn last_line(bytes: &[u8]) -> String {

@@ -85,36 +85,16 @@ fn ratio_l<F: Real>(num: F, den: F) -> F {
 /// `cos_theta = |cos θ|`, with the spec's closed form, in f64: the reference
 /// [`conductor_l`] is tested against.
 pub fn conductor(cos_theta: f32, eta: Color, k: Color) -> Color {
-    ConductorIor::new(eta, k).reflectance(cos_theta)
-}
-
-/// A conductor's complex index `eta + i·k` per channel, with the angle-independent
-/// terms of the Fresnel closed form (`η² − k²`, `4η²k²`) computed once, at load.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct ConductorIor {
-    pub eta: Color,
-    pub k: Color,
-}
-
-impl ConductorIor {
-    pub fn new(eta: Color, k: Color) -> Self {
-        ConductorIor { eta, k }
-    }
-
-    /// Reflectance at `cos_theta = |cos θ|`.
-    pub fn reflectance(&self, cos_theta: f32) -> Color {
-        // Per channel `η² − k²` and `4η²k²`, in f64 as the formula needs them.
-        let [r, g, b] = [0, 1, 2].map(|i| {
-            let (eta, k) = (self.eta[i] as f64, self.k[i] as f64);
-            conductor_channel(cos_theta, (eta * eta - k * k, 4.0 * eta * eta * k * k))
-        });
-        Color::new(r, g, b)
-    }
+    // Per channel `η² − k²` and `4η²k²`, in f64 as the formula needs them.
+    let [r, g, b] = [0, 1, 2].map(|i| {
+        let (eta, k) = (eta[i] as f64, k[i] as f64);
+        conductor_channel(cos_theta, (eta * eta - k * k, 4.0 * eta * eta * k * k))
+    });
+    Color::new(r, g, b)
 }
 
 /// One channel, from `(η² − k², 4η²k²)`.
 fn conductor_channel(cos_theta: f32, (eta2_minus_k2, four_eta2_k2): (f64, f64)) -> f32 {
-    // f64 because A² − 2ac + c² cancels badly in f32 for k ≫ 1 at grazing angles.
     let c = cos_theta.clamp(0.0, 1.0) as f64;
     let s2 = 1.0 - c * c;
     let t0 = eta2_minus_k2 - s2;
