@@ -4,7 +4,6 @@
 
 use crate::integrators::{Estimator, Roulette};
 use crate::render::{Adaptive, RenderJob, RenderSettings, Shading, StopReason, StopRule};
-use crate::scene::Scene;
 use std::path::Path;
 
 /// Ordered key/value strings describing how an image was made.
@@ -49,7 +48,7 @@ impl ImageMetadata {
             m.push("ember.light_samples", s.light_samples);
             m.push("ember.max_depth", s.max_depth);
             m.push("ember.accumulate", s.accumulate);
-            m.push("ember.estimator", estimator_label(s, &job.scene));
+            m.push("ember.estimator", estimator_label(s, job));
             m.push("ember.roulette", roulette_text(&s.roulette));
         }
         m.push("ember.adaptive", adaptive_text(s.adaptive.as_ref()));
@@ -161,10 +160,10 @@ pub fn adaptive_text(a: Option<&Adaptive>) -> String {
 
 /// What `--integrator` (perhaps auto) chose for `scene`: light tracing, or path
 /// tracing with its direct-lighting strategy.
-pub fn estimator_label(s: &RenderSettings, scene: &Scene) -> String {
-    match s.estimator_for(scene) {
+pub fn estimator_label(s: &RenderSettings, job: &RenderJob) -> String {
+    match job.estimator(s) {
         Estimator::LightTracing => Estimator::LightTracing.to_string(),
-        e => format!("{e} ({})", s.strategy_for(scene)),
+        e => format!("{e} ({})", s.strategy_for(&job.scene)),
     }
 }
 

@@ -263,7 +263,7 @@ fn packet_renders_are_the_scalar_renders_far_from_the_origin() {
 /// CBgems (glass).
 fn assert_packet_matches_scalar(path: &str, scene: Scene, settings: &RenderSettings) {
     let job = RenderJob::new(scene, AccelKind::Native(BvhBuilder::Sah), 64, 48).unwrap();
-    if let Some(why) = settings.packet_blocker(&job.scene, &job.camera) {
+    if let Some(why) = settings.packet_blocker(&job) {
         assert!(path.contains("CBgems"), "{path}: {why}");
         return;
     }

@@ -339,10 +339,18 @@ fn light_tracing_cbempty_m1_and_m5_unmasked() {
 fn cbempty_m5_per_pixel_with_the_default_estimator() {
     use ember::bench::stability::light_paths::{reference as noisy_reference, welch_pixel_test};
     let scene = load("scenes/cs184/sky/CBempty.dae");
-    let estimator = Estimator::auto_for(&scene, 5);
+    let job = common::job(&scene, 160, 120, AccelKind::Native(BvhBuilder::Sah));
+    let auto = |max_depth| {
+        job.estimator(&RenderSettings {
+            estimator: None,
+            max_depth,
+            ..RenderSettings::default()
+        })
+    };
+    let estimator = auto(5);
     assert_eq!(estimator, Estimator::LightTracing);
     // Direct light alone is exact per camera sample: auto path-traces at -m 1.
-    assert_eq!(Estimator::auto_for(&scene, 1), Estimator::Path);
+    assert_eq!(auto(1), Estimator::Path);
     let (reference, noise) =
         noisy_reference(&repo("tests/data/references"), "CBempty_m5.exr").unwrap();
     let renders: Vec<Image> = (0..16)

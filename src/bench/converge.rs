@@ -697,10 +697,7 @@ mod tests {
         assert_eq!(all[0].name, DEFAULT_METHOD);
         let s = &all[0].settings;
         assert_eq!(s.strategy_for(&scene), DirectStrategy::Mis);
-        assert_eq!(
-            s.estimator_for(&scene),
-            Estimator::auto_for(&scene, s.max_depth)
-        );
+        assert_eq!(s.estimator, None, "the default method is auto's choice");
         let adaptive = all.iter().find(|m| m.settings.adaptive.is_some()).unwrap();
         assert_eq!(adaptive.settings.strategy_for(&scene), DirectStrategy::Mis);
     }

@@ -120,14 +120,11 @@ impl RenderCalls {
         let calls = Arc::new(Mutex::new(Vec::new()));
         let inner = pool.install(|| accel::build(&scene, AccelKind::Native(BvhBuilder::Sah)))?;
         let camera = crate::camera::Camera::new(&scene.camera, &scene.bounds, width, height);
-        let job = RenderJob {
-            scene,
-            accel: Box::new(Recorder {
-                inner,
-                calls: calls.clone(),
-            }),
-            camera,
+        let recorder = Recorder {
+            inner,
+            calls: calls.clone(),
         };
+        let job = RenderJob::with_accel(scene, Box::new(recorder), camera);
         let (cols, rows) = (width.div_ceil(TILE), height.div_ceil(TILE));
         let all = (cols * rows) as usize;
         for k in 0..tiles.clamp(1, all) {

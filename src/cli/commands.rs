@@ -199,9 +199,6 @@ impl RenderRequest {
         let mut scene = load_scene(&self.scene_path)?;
         apply_env_map(args.env_map.as_deref(), &mut scene)?;
         let t_load = t0.elapsed();
-        if self.part.is_some() && self.settings.estimator_for(&scene) == Estimator::LightTracing {
-            bail!("--shard/--spp-offset cannot be used with light tracing (the estimator for {}): its light paths splat anywhere in the image, so every band would trace all of them, and its paths are not numbered by sample; use --integrator path", self.scene_path.display());
-        }
         let (camera, camera_warning) = convert::camera(
             &scene,
             self.camera_file.as_ref(),
@@ -214,8 +211,13 @@ impl RenderRequest {
         let kind = self.accel_kind(args);
         let t1 = Instant::now();
         let job = pool.install(|| RenderJob::with_camera(scene, kind, camera))?;
+        if self.part.is_some()
+            && pool.install(|| job.estimator(&self.settings)) == Estimator::LightTracing
+        {
+            bail!("--shard/--spp-offset cannot be used with light tracing (the estimator for {}): its light paths splat anywhere in the image, so every band would trace all of them, and its paths are not numbered by sample; use --integrator path", self.scene_path.display());
+        }
         if self.settings.engine == Engine::Packet {
-            if let Some(why) = self.settings.packet_blocker(&job.scene, &job.camera) {
+            if let Some(why) = self.settings.packet_blocker(&job) {
                 bail!(
                     "--engine packet: {} needs the scalar engine ({why}); use --engine auto or scalar",
                     self.scene_path.display()
@@ -516,7 +518,7 @@ impl RenderRun<'_> {
         let shows = match s.shading {
             Shading::Radiance => format!(
                 "{} estimator, -m {}, -l {}",
-                ember::image_metadata::estimator_label(s, &self.job.scene),
+                ember::image_metadata::estimator_label(s, self.job),
                 s.max_depth,
                 s.light_samples
             ),
@@ -660,7 +662,8 @@ pub(super) fn info(path: &Path, w: u32, h: u32) -> Result<()> {
         strategy: None,
         ..RenderSettings::default()
     };
-    match defaults.packet_blocker(&scene, &camera) {
+    let job = RenderJob::with_accel(scene, bvh, camera);
+    match defaults.packet_blocker(&job) {
         None => ember::outln!(
             "--engine auto (the default) runs packets of 16 paths ({})",
             ember::lanes::instruction_set()

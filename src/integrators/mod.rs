@@ -172,17 +172,19 @@ impl Named for Estimator {
 display_from_table!(Estimator);
 
 impl Estimator {
-    /// Light tracing where `ember bench stability` (the CBempty case) shows path tracing
-    /// failing: every light is a point light, so the light reaches most of the scene
-    /// indirectly, through the few surfaces near it, which camera paths find by chance
-    /// and light paths find at once. Only when nothing specular or self-emitting is
-    /// present, which light tracing cannot show (see `light_tracing`), and only when
-    /// paths may bounce (`max_depth` ≥ 2): direct light alone from point lights is
-    /// exact per camera sample (one unoccluded-or-not connection), which light tracing
-    /// can only approach by chance.
-    pub fn auto_for(scene: &crate::scene::Scene, max_depth: u32) -> Estimator {
+    /// The estimator `--integrator auto` takes when the scene alone decides, or `None`
+    /// when both could win and a pilot render must choose (`RenderJob::estimator`).
+    /// Path tracing wherever light tracing cannot show the whole image (anything
+    /// specular or self-emitting, see `light_tracing`), where any light is not a point
+    /// or spot light (area and environment lights are sampled well from the camera),
+    /// and at `max_depth` ≤ 1: a point light's direct light is then exact per camera
+    /// sample, which light tracing only approaches by chance. Otherwise either can win
+    /// by orders of magnitude: CBempty, whose point light lights the room through the
+    /// ceiling just above it, wants light tracing (stability case 9); CMU462's
+    /// `basic/trigs1.dae`, lit directly, wants path tracing.
+    pub fn fixed_for(scene: &crate::scene::Scene, max_depth: u32) -> Option<Estimator> {
         if max_depth <= 1 {
-            return Estimator::Path;
+            return Some(Estimator::Path);
         }
         let point_lights_only = !scene.lights.is_empty()
             && scene.lights.iter().all(|l| {
@@ -193,9 +195,9 @@ impl Estimator {
             });
         let specular = scene.materials.iter().any(|m| m.is_delta());
         if point_lights_only && !specular && !scene.has_unsampled_emitters() {
-            Estimator::LightTracing
+            None
         } else {
-            Estimator::Path
+            Some(Estimator::Path)
         }
     }
 }

@@ -2,12 +2,15 @@
 //! resolution), rendered over a rectangle of pixels. The CLI, the benches and the tests all
 //! render through a `RenderJob`.
 
-use super::{render_warnings, RenderOutput, RenderSettings, StopToken};
+use super::pilot::{self, PilotScore};
+use super::{render_warnings, RenderOutput, RenderSettings, Shading, StopToken};
 use crate::accel::{self, Accel, AccelError, AccelKind};
 use crate::camera::Camera;
 use crate::color::luminance;
 use crate::film::Image;
+use crate::integrators::{Estimator, PathSettings};
 use crate::scene::Scene;
+use std::sync::Mutex;
 
 /// Pixels `[x0, x1) × [y0, y1)` of the camera's image (column from the left, row from the top).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -47,6 +50,8 @@ pub struct RenderJob {
     pub scene: Scene,
     pub accel: Box<dyn Accel>,
     pub camera: Camera,
+    /// The pilots run so far (`RenderJob::estimator`), by the settings they ran with.
+    pilots: Mutex<Vec<(PathSettings, Estimator, [PilotScore; 2])>>,
 }
 
 impl RenderJob {
@@ -60,11 +65,55 @@ impl RenderJob {
     /// A job with a camera of the caller's choosing (e.g. moved for a test).
     pub fn with_camera(scene: Scene, kind: AccelKind, camera: Camera) -> Result<Self, AccelError> {
         let accel = accel::build(&scene, kind)?;
-        Ok(RenderJob {
+        Ok(Self::with_accel(scene, accel, camera))
+    }
+
+    /// A job over an accelerator already built (or wrapped, as the benches do).
+    pub fn with_accel(scene: Scene, accel: Box<dyn Accel>, camera: Camera) -> Self {
+        RenderJob {
             scene,
             accel,
             camera,
-        })
+            pilots: Mutex::new(Vec::new()),
+        }
+    }
+
+    /// The estimator `s` renders this job with: its own, or auto's choice. Where the
+    /// scene alone cannot decide (`Estimator::fixed_for`), a pilot render of each
+    /// candidate decides (`render::pilot`), once per job and path settings.
+    pub fn estimator(&self, s: &RenderSettings) -> Estimator {
+        self.estimator_choice(s).0
+    }
+
+    /// As [`RenderJob::estimator`], with the pilot's scores (path tracing, light
+    /// tracing) when a pilot chose.
+    pub fn estimator_choice(&self, s: &RenderSettings) -> (Estimator, Option<[PilotScore; 2]>) {
+        if let Some(e) = s.estimator {
+            return (e, None);
+        }
+        if s.shading != Shading::Radiance {
+            return (Estimator::Path, None);
+        }
+        if let Some(e) = Estimator::fixed_for(&self.scene, s.max_depth) {
+            return (e, None);
+        }
+        let key = s.path_settings(&self.scene);
+        let known = |pilots: &[(PathSettings, Estimator, [PilotScore; 2])]| {
+            pilots
+                .iter()
+                .find(|(k, ..)| *k == key)
+                .map(|&(_, e, p)| (e, p))
+        };
+        if let Some((e, scores)) = known(&self.pilots.lock().unwrap_or_else(|e| e.into_inner())) {
+            return (e, Some(scores));
+        }
+        // Not under the lock: the pilot runs on rayon, whose threads may ask meanwhile.
+        let (e, scores) = pilot::choose(self, s);
+        let mut pilots = self.pilots.lock().unwrap_or_else(|e| e.into_inner());
+        if known(&pilots).is_none() {
+            pilots.push((key, e, scores));
+        }
+        (e, Some(scores))
     }
 
     /// The whole image.
@@ -74,7 +123,7 @@ impl RenderJob {
 
     /// Things the user should know before rendering with `s` (e.g. lights its estimator cannot see).
     pub fn warnings(&self, s: &RenderSettings) -> Vec<String> {
-        render_warnings(&self.scene, s)
+        render_warnings(self, s)
     }
 
     /// The whole image, without progress reports.

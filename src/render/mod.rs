@@ -7,6 +7,7 @@
 pub mod adaptive;
 mod job;
 mod memory;
+pub mod pilot;
 mod pixels;
 mod progressive;
 mod splats;
@@ -17,7 +18,6 @@ pub use memory::{available_bytes, render_bytes};
 pub use progressive::{pass_seed, pass_spp, render_passes, Film};
 pub use stop::{StopReason, StopToken};
 
-use crate::camera::Camera;
 use crate::film::{heat_map, Image};
 use crate::integrators::debug::{DebugView, View};
 use crate::integrators::{
@@ -133,8 +133,8 @@ pub struct RenderSettings {
     pub light_samples: u32,
     pub max_depth: u32,
     pub accumulate: bool,
-    /// Camera paths (with `strategy`) or light tracing; `None` chooses for the scene
-    /// (`Estimator::auto_for`).
+    /// Camera paths (with `strategy`) or light tracing; `None` chooses for the job
+    /// (`RenderJob::estimator`).
     pub estimator: Option<Estimator>,
     /// Direct-lighting estimator of camera paths; `None` chooses one for the scene
     /// (`DirectStrategy::auto_for`) where the integrator is built.
@@ -153,12 +153,6 @@ pub struct RenderSettings {
 }
 
 impl RenderSettings {
-    /// Which way these settings build paths in `scene`.
-    pub fn estimator_for(&self, scene: &Scene) -> Estimator {
-        self.estimator
-            .unwrap_or_else(|| Estimator::auto_for(scene, self.max_depth))
-    }
-
     /// The direct-lighting estimator these settings use for `scene`.
     pub fn strategy_for(&self, scene: &Scene) -> DirectStrategy {
         self.strategy
@@ -167,11 +161,11 @@ impl RenderSettings {
 
     /// Why these settings must render `scene` one path at a time, if they must: every
     /// path-traced radiance render runs in packets.
-    pub fn packet_blocker(&self, scene: &Scene, _camera: &Camera) -> Option<&'static str> {
+    pub fn packet_blocker(&self, job: &RenderJob) -> Option<&'static str> {
         if self.shading != Shading::Radiance {
             return Some("debug shading (--shading)");
         }
-        if self.estimator_for(scene) != Estimator::Path {
+        if job.estimator(self) != Estimator::Path {
             return Some("light tracing");
         }
         None
@@ -179,7 +173,7 @@ impl RenderSettings {
 
     /// Whether `job` renders by packets with these settings.
     pub fn uses_packets(&self, job: &RenderJob) -> bool {
-        self.engine != Engine::Scalar && self.packet_blocker(&job.scene, &job.camera).is_none()
+        self.engine != Engine::Scalar && self.packet_blocker(job).is_none()
     }
 
     pub fn path_settings(&self, scene: &Scene) -> PathSettings {
@@ -322,7 +316,7 @@ fn render_rect(
         return pixels::render(&debug, settings, None, frame, rect, progress, stop);
     }
     let path = settings.path_settings(scene);
-    if settings.estimator_for(scene) == Estimator::LightTracing {
+    if job.estimator(settings) == Estimator::LightTracing {
         let tracer = LightTracer::new(scene, accel, camera, path, engine, settings.seed);
         return splats::render(&tracer, camera, settings.spp.max(1), rect, progress, stop);
     }
@@ -349,8 +343,9 @@ fn percentile(v: &[f32], q: f32) -> f32 {
 }
 
 /// Cases where the chosen estimator cannot converge to the right image, said out loud.
-fn render_warnings(scene: &Scene, s: &RenderSettings) -> Vec<String> {
-    let light_tracing = s.estimator_for(scene) == Estimator::LightTracing;
+fn render_warnings(job: &RenderJob, s: &RenderSettings) -> Vec<String> {
+    let scene = &job.scene;
+    let light_tracing = job.estimator(s) == Estimator::LightTracing;
     let mut w = if light_tracing && s.shading == Shading::Radiance {
         light_tracing::warnings(scene, s.max_depth)
     } else {
