@@ -6,12 +6,11 @@
 //! `.cache/cycles` (about 1 GB), or set `EMBER_CYCLES_PYTHON`. Then
 //! `cargo test --test cycles_peer -- --ignored`.
 
+mod common;
+
+use common::{ember, repo};
 use std::path::{Path, PathBuf};
 use std::process::Command;
-
-fn repo(rel: &str) -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR")).join(rel)
-}
 
 fn cycles_python() -> PathBuf {
     std::env::var_os("EMBER_CYCLES_PYTHON")
@@ -22,17 +21,13 @@ fn cycles_python() -> PathBuf {
 /// Exports `scene` at 160x120 (the references' size) and runs the Cycles script on it.
 fn cycles(scene: &str, m: u32, spp: u32, reference: Option<&str>) -> std::process::Output {
     let dir = tempfile::tempdir().unwrap();
-    let out = Command::new(env!("CARGO_BIN_EXE_ember"))
-        .args(["export", repo(scene).to_str().unwrap(), "-r", "160", "120"])
-        .args(["-s", &spp.to_string(), "-m", &m.to_string(), "--out"])
-        .arg(dir.path())
-        .output()
-        .unwrap();
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
+    let scene_arg = repo(scene).to_string_lossy().into_owned();
+    let (spp, m) = (spp.to_string(), m.to_string());
+    let out_arg = dir.path().to_string_lossy().into_owned();
+    ember([
+        "export", &scene_arg, "-r", "160", "120", "-s", &spp, "-m", &m, "--out", &out_arg,
+    ])
+    .success();
     let stem = Path::new(scene).file_stem().unwrap().to_string_lossy();
     let mut cmd = Command::new(cycles_python());
     cmd.arg(repo("scripts/cycles_render.py"))

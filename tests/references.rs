@@ -384,7 +384,7 @@ fn cbempty_m5_per_pixel_with_the_default_estimator() {
 
 /// Not a test: prints the masked CBempty m5 mean at high spp (EMBER_SPP), to check for bias by hand.
 #[test]
-#[ignore]
+#[ignore = "a probe for checking bias by hand (it asserts nothing): EMBER_SPP=8192 cargo test --release --test references cbempty_m5_high_spp_probe -- --ignored --nocapture"]
 fn cbempty_m5_high_spp_probe() {
     let spp: u32 = std::env::var("EMBER_SPP")
         .ok()

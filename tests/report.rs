@@ -12,8 +12,8 @@ use std::path::{Path, PathBuf};
 use std::sync::OnceLock;
 
 /// The repository: the report runs here, so its commands name scenes as `scenes/...`.
-fn repo() -> &'static Path {
-    Path::new(env!("CARGO_MANIFEST_DIR"))
+fn repo() -> PathBuf {
+    common::repo("")
 }
 
 /// The folder of the quick report, made on first use (kept under the target folder
@@ -24,7 +24,7 @@ fn report() -> &'static Path {
         let out = Path::new(env!("CARGO_TARGET_TMPDIR")).join("report-quick");
         let _ = std::fs::remove_dir_all(&out);
         let out_arg = out.to_string_lossy().into_owned();
-        let run = ember_in(repo(), ["report", "--quick", "--out", &out_arg]).success();
+        let run = ember_in(&repo(), ["report", "--quick", "--out", &out_arg]).success();
         assert!(
             run.stdout().contains("index.html"),
             "ember report: {}",
@@ -132,7 +132,7 @@ fn run_printed(command: &str, out: &Path) {
     let mut words: Vec<String> = command.split(' ').skip(1).map(str::to_string).collect();
     let f = words.iter().position(|w| w == "-f").expect("-f") + 1;
     words[f] = out.to_string_lossy().into_owned();
-    ember_in(repo(), &words).success();
+    ember_in(&repo(), &words).success();
 }
 
 #[test]

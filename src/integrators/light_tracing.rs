@@ -15,6 +15,7 @@
 //! `CHUNK_PATHS` draws its numbers as one stratified set, and the render driver adds
 //! the splats chunk by chunk in order, so the image depends on the seed only.
 
+use super::Engine;
 use super::{PathIntegrator, PathSettings, SampleIntegrator, Splat, SplatIntegrator};
 use crate::accel::Accel;
 use crate::camera::Camera;
@@ -23,7 +24,6 @@ use crate::geometry::{Frame, Ray};
 use crate::lanes::One;
 use crate::lights::Light;
 use crate::materials::Material;
-use crate::render::Engine;
 use crate::sampling::{pixel_key, SampleStream};
 use crate::scene::{Scene, SurfaceInteraction};
 use crate::Color;

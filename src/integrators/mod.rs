@@ -144,6 +144,38 @@ impl DirectStrategy {
     }
 }
 
+/// How camera paths run on the CPU. The image is the same bit for bit either way (the
+/// transport is one code over its lane type); only the speed differs.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
+pub enum Engine {
+    /// Packets wherever the render allows them ([`crate::render::RenderSettings::packet_blocker`]).
+    #[default]
+    Auto,
+    /// One path at a time.
+    Scalar,
+    /// Sixteen paths at a time, one per SIMD lane; renders the engine cannot run
+    /// are refused by the CLI (a library caller gets one path at a time).
+    Packet,
+}
+
+impl Named for Engine {
+    const WHAT: &'static str = "engine";
+    const TABLE: &'static [(Self, &'static str, &'static str)] = &[
+        (
+            Engine::Auto,
+            "auto",
+            "Sixteen paths per SIMD pass for every path-traced render; light tracing and the debug views one at a time",
+        ),
+        (Engine::Scalar, "scalar", "One path at a time (the same code at one lane)"),
+        (
+            Engine::Packet,
+            "packet",
+            "Sixteen paths per SIMD pass (AVX-512, AVX2 or portable code); an error where the render cannot use them",
+        ),
+    ];
+}
+display_from_table!(Engine);
+
 /// Which way paths are built.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
 pub enum Estimator {

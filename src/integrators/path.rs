@@ -12,6 +12,7 @@
 //! are handed back, in sample order, once all are done. Lanes whose materials differ
 //! run each kind present (`BsdfLanes`), masked.
 
+use super::Engine;
 use super::{
     power_heuristic, DirectStrategy, PathSettings, PixelSamples, SampleIntegrator, SampleValue,
 };
@@ -25,7 +26,6 @@ use crate::lanes::{
 };
 use crate::lights::Light;
 use crate::materials::BsdfLanes;
-use crate::render::Engine;
 use crate::sampling::warps::{uniform_hemisphere_l, uniform_hemisphere_pdf};
 use crate::sampling::{pixel_key, SampleStream, FIRST_PATH_PAIR};
 use crate::scene::{Hits, Scene, NO_LIGHT};

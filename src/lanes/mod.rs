@@ -1,4 +1,4 @@
-//! Everything that lets ember trace many paths per instruction, behind one boundary.
+//! The lane types that let ember trace many paths per instruction.
 //!
 //! Light transport is written once over a lane type `L: Lanes`, as Mitsuba 3 writes
 //! `path.cpp` once over `Float`: [`One`] runs it for one path in plain `f32`, and each
@@ -6,6 +6,12 @@
 //! at once. Every lane operation is the IEEE operation it names, so a path's result is
 //! the same bit for bit whichever lane type ran it. [`rays`] holds the sixteen-ray
 //! packets the acceleration structures trace.
+//!
+//! Outside this folder, code uses lane values only through these types: the
+//! primitive tests for sixteen rays sit with their primitives
+//! (`geometry::{triangle, sphere}`), and the BVH's packet traversal and its
+//! instruction-set node tests with the BVH (`accel::bvh::{packet, wide}`), each
+//! beside the one-ray code it must agree with.
 
 pub mod math;
 pub mod rays;

@@ -6,9 +6,8 @@
 //! a structure visits its nodes.
 
 use crate::geometry::triangle::TriangleRays;
-use crate::geometry::{Ray, NO_PRIM};
+use crate::geometry::{PrimHit, Ray, NO_PRIM};
 use crate::lanes::{F32s, LaneBits, Mask, Simd, U32s, Vec3s, LANES};
-use crate::scene::PrimHit;
 
 /// Sixteen rays with `t_min = 0`, structure of arrays. Lane `i` is
 /// `o[·][i] + t·d[·][i]`, `t ∈ [0, t_max[i]]`, skipping primitive `skip[i]`

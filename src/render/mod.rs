@@ -13,6 +13,8 @@ mod progressive;
 mod splats;
 mod stop;
 
+/// Camera paths' engine, chosen with the render settings.
+pub use crate::integrators::Engine;
 pub use job::{average, Halves, PixelRect, RenderJob};
 pub use memory::{available_bytes, render_bytes};
 pub use progressive::{pass_seed, pass_spp, render_passes, Film};
@@ -60,38 +62,6 @@ impl Named for Shading {
     ];
 }
 display_from_table!(Shading);
-
-/// How camera paths run on the CPU. The image is the same bit for bit either way (the
-/// transport is one code over its lane type); only the speed differs.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
-pub enum Engine {
-    /// Packets wherever the render allows them ([`RenderSettings::packet_blocker`]).
-    #[default]
-    Auto,
-    /// One path at a time.
-    Scalar,
-    /// Sixteen paths at a time, one per SIMD lane; renders the engine cannot run
-    /// are refused by the CLI (a library caller gets one path at a time).
-    Packet,
-}
-
-impl Named for Engine {
-    const WHAT: &'static str = "engine";
-    const TABLE: &'static [(Self, &'static str, &'static str)] = &[
-        (
-            Engine::Auto,
-            "auto",
-            "Sixteen paths per SIMD pass for every path-traced render; light tracing and the debug views one at a time",
-        ),
-        (Engine::Scalar, "scalar", "One path at a time (the same code at one lane)"),
-        (
-            Engine::Packet,
-            "packet",
-            "Sixteen paths per SIMD pass (AVX-512, AVX2 or portable code); an error where the render cannot use them",
-        ),
-    ];
-}
-display_from_table!(Engine);
 
 /// Adaptive sampling (spec §7): stop a pixel once `1.96·σ/√n ≤ tol·μ`.
 #[derive(Clone, Copy, Debug, PartialEq)]

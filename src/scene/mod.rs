@@ -4,6 +4,7 @@
 pub mod collada;
 mod interaction;
 
+pub use crate::geometry::{PrimHit, PrimId};
 pub use interaction::Hits;
 
 use crate::geometry::{ray::gamma, Aabb, Ray};
@@ -123,20 +124,6 @@ pub struct Scene {
     /// The diffuse texture of each material (index into `textures`), parallel to
     /// `materials`; may be shorter (no texture).
     pub material_textures: Vec<Option<u32>>,
-}
-
-/// A primitive id: triangles first, then spheres.
-pub type PrimId = u32;
-
-/// The minimal answer of an acceleration structure: enough to rebuild the full
-/// surface interaction identically whichever backend found it.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct PrimHit {
-    pub t: f32,
-    pub prim: PrimId,
-    /// Barycentrics of corners 1 and 2 for triangles (Embree's u, v); unused for spheres.
-    pub b1: f32,
-    pub b2: f32,
 }
 
 /// Everything shading needs about a hit point.
