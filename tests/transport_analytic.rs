@@ -468,3 +468,35 @@ fn light_tracing_matches_the_area_light_closed_form() {
         "light tracing {mg} vs closed form {mw} (se {se})"
     );
 }
+
+/// Every bounce draws its own numbers (issue 24): were the roulette numbers of two
+/// bounces the same, a path would survive the second whenever it survived the first,
+/// and the furnace's mean under fixed roulette would be far off. With q = ½ from
+/// bounce 1 at depth 8, numbers shared by all bounces would give
+/// `Σₖ aᵏ·q·q^(−k)` instead of `Σₖ aᵏ`; the render must match the latter within
+/// 4.5 standard errors, and the two differ by far more than that, so the test has
+/// the power to see the sharing.
+#[test]
+fn bounces_do_not_share_their_numbers() {
+    let (a, m, q) = (0.8f64, 8u32, 0.5f64);
+    let rr = Roulette::Fixed {
+        start: 1,
+        prob: q as f32,
+    };
+    for strategy in [DirectStrategy::Light, DirectStrategy::Bsdf] {
+        let (mean, se) = furnace_render(a as f32, m, true, strategy, rr);
+        let want = furnace_expected(a as f32, 1.0, m, true) as f64;
+        let shared: f64 = 1.0
+            + (1..=m)
+                .map(|k| a.powi(k as i32) * q.powi(1 - k as i32))
+                .sum::<f64>();
+        assert!(
+            (mean - want).abs() <= 4.5 * se + 1e-5 * want,
+            "{strategy:?}: {mean} ± {se} vs {want}"
+        );
+        assert!(
+            (shared - want).abs() > 20.0 * se,
+            "no power: {shared} vs {want} ± {se}"
+        );
+    }
+}
