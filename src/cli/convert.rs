@@ -306,6 +306,9 @@ pub(super) fn check_scene_file(path: &Path) -> Result<()> {
     else {
         return Ok(());
     };
+    if loader_reads_as_is(&head[..n]) {
+        return Ok(());
+    }
     let text = head[..n]
         .strip_prefix(b"\xEF\xBB\xBF")
         .unwrap_or(&head[..n]);
@@ -316,6 +319,13 @@ pub(super) fn check_scene_file(path: &Path) -> Result<()> {
             path.display()
         ),
     }
+}
+
+/// Starts the loader recognises itself, which are not UTF-8 text: a `.zae` (zip)
+/// archive, and UTF-16 XML with a byte-order mark or opening with `<`.
+fn loader_reads_as_is(head: &[u8]) -> bool {
+    const STARTS: [&[u8]; 5] = [b"PK\x03\x04", b"\xFF\xFE", b"\xFE\xFF", b"<\0", b"\0<"];
+    STARTS.iter().any(|s| head.starts_with(s))
 }
 
 /// `-a` takes up to two values, so `ember -a scene.dae` hands the scene to `-a`;
