@@ -214,8 +214,18 @@ fn skinned_meshes_load_at_their_bind_pose_with_one_warning() {
         .collect();
     assert_eq!(w.len(), 1, "{:?}", s.warnings);
     parse_err(
-        &skin_doc("1 0 0 0").replace("source=\"#quad\"", "source=\"#nothing\""),
+        &skin_doc("1 0 0 0  0 1 0 0  0 0 1 0  0 0 0 1")
+            .replace("source=\"#quad\"", "source=\"#nothing\""),
         &["<controller id=\"skin\">/skin", "names no geometry"],
+    );
+    // A short bind shape matrix would send every vertex to infinity: refused, naming it.
+    parse_err(
+        &skin_doc("1 0 0"),
+        &[
+            "<controller id=\"skin\">/skin/bind_shape_matrix",
+            "has 3 numbers",
+            "needs 16",
+        ],
     );
 }
 
