@@ -535,6 +535,19 @@ impl<'a, 'i> Builder<'a, 'i, '_> {
                 "a textured material is bound to a mesh without TEXCOORD; the texture is read at (0, 0)",
             );
         }
+        let missing = uv_sets.iter().flatten().flatten();
+        if let (Some(&set), Some(first)) = (
+            missing
+                .into_iter()
+                .find(|&&s| !mesh.uv_sets.iter().any(|u| u.set == s)),
+            mesh.uv_sets.first(),
+        ) {
+            let msg = format!(
+                "<bind_vertex_input input_set=\"{set}\"> names a TEXCOORD set the mesh lacks; its set {} is used",
+                first.set
+            );
+            self.ctx.warn_once("texcoord set", inst, msg);
+        }
         let s = &mut self.scene;
         if s.positions.len() + mesh.positions.len() > MAX_VERTICES
             || s.normals.len() + mesh.normals.len() > MAX_VERTICES
