@@ -124,14 +124,17 @@ fn write_camera(out: &mut String, scene: &Scene, width: u32, height: u32) -> std
     let cam = Camera::new(&scene.camera, &scene.bounds, width.max(1), height.max(1));
     let (hfov, vfov) = cam.fov_degrees();
     writeln!(out, "camera ({width}x{height}):")?;
-    let placement = match (scene.camera.placement, scene.camera.position) {
-        (Placement::File, Some(_)) => "the file's camera position",
-        (Placement::File, None) => "course rule (the file has no camera)",
-        (Placement::Course, _) => "course rule (centre - 1.5 x diagonal x forward)",
+    let (placement, but) = match (scene.camera.placement, scene.camera.position) {
+        (Placement::File, Some(_)) => ("the file's camera position", ""),
+        (Placement::File, None) => (
+            "course rule (the file has no camera)",
+            "; the file has no camera, so the course's rule places the eye",
+        ),
+        (Placement::Course, _) => ("course rule (centre - 1.5 x diagonal x forward)", ""),
     };
     writeln!(out, "  placement: {placement}")?;
     if !scene.placement_reason.is_empty() {
-        writeln!(out, "  why: {}", scene.placement_reason)?;
+        writeln!(out, "  why: {}{but}", scene.placement_reason)?;
     }
     writeln!(out, "  eye {}", v(cam.eye))?;
     writeln!(out, "  forward {}", v(cam.forward))?;

@@ -395,6 +395,72 @@ fn other_scene_formats_are_named_as_not_collada() {
     }
 }
 
+/// The `triangles:` line of `ember info SCENE`.
+fn info_triangles(scene: &std::path::Path) -> String {
+    let info = run(command().arg("info").arg(scene)).success().stdout();
+    let line = info.lines().find(|l| l.starts_with("triangles: "));
+    line.unwrap_or_else(|| panic!("{info}")).to_string()
+}
+
+/// UTF-16 text (with a byte-order mark, or opening with `<`) and `.zae` archives reach
+/// the loader from the command line: `ember info` counts what the UTF-8 file holds, and
+/// a render writes its image.
+#[test]
+fn utf16_and_zae_scenes_are_read_from_the_command_line() {
+    let dir = tempfile::tempdir().unwrap();
+    let course = repo("scenes/cs184/sky/CBempty.dae");
+    let text = std::fs::read_to_string(&course).unwrap();
+    let units = || text.encode_utf16();
+    let bom_le = [0xFF, 0xFE].into_iter();
+    let variants = [
+        (
+            "le.dae",
+            bom_le.chain(units().flat_map(u16::to_le_bytes)).collect(),
+        ),
+        (
+            "be.dae",
+            [0xFE, 0xFF]
+                .into_iter()
+                .chain(units().flat_map(u16::to_be_bytes))
+                .collect(),
+        ),
+        (
+            "le_no_mark.dae",
+            units().flat_map(u16::to_le_bytes).collect::<Vec<u8>>(),
+        ),
+    ];
+    let quad = repo("tests/data/collada/textured_quad.dae");
+    let zae = dir.path().join("quad.zae");
+    let mut z = zip::ZipWriter::new(std::fs::File::create(&zae).unwrap());
+    for (name, from) in [
+        ("quad.dae", quad.clone()),
+        ("texture4x4.png", repo("tests/data/collada/texture4x4.png")),
+    ] {
+        z.start_file(name, zip::write::SimpleFileOptions::default())
+            .unwrap();
+        std::io::Write::write_all(&mut z, &std::fs::read(from).unwrap()).unwrap();
+    }
+    z.finish().unwrap();
+    let mut cases = vec![(zae, quad)];
+    for (name, bytes) in variants {
+        let path = dir.path().join(name);
+        std::fs::write(&path, bytes).unwrap();
+        cases.push((path, course.clone()));
+    }
+    for (scene, original) in cases {
+        assert_eq!(info_triangles(&scene), info_triangles(&original));
+        let out = dir.path().join("out.png");
+        run(command()
+            .args(["-s", "1", "-r", "8", "6", "-f"])
+            .arg(&out)
+            .arg(&scene))
+        .success();
+        let img = image::open(&out).unwrap();
+        assert_eq!((img.width(), img.height()), (8, 6), "{}", scene.display());
+        std::fs::remove_file(&out).unwrap();
+    }
+}
+
 /// `ember --help` lists every subcommand, each with its purpose on one line.
 #[test]
 fn help_lists_every_subcommand_in_one_line_each() {

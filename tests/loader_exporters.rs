@@ -96,8 +96,26 @@ fn tristrips_and_trifans_are_triangulated() {
     );
     assert_eq!(s.triangles.len(), 4);
     assert!((area(&s) - 2.0).abs() < 1e-6);
-    // (scene_doc's scene has no camera.)
-    assert_eq!(s.warnings.len(), 1, "{:?}", s.warnings);
+    // The stub is skipped with a warning naming the element (the other warning:
+    // scene_doc's scene has no camera).
+    assert_eq!(s.warnings.len(), 2, "{:?}", s.warnings);
+    let stub = "<geometry id=\"g\">/mesh/trifans: a <p> of fewer than 3 corners makes no triangle; skipped";
+    assert!(
+        s.warnings.iter().any(|w| w.ends_with(stub)),
+        "{:?}",
+        s.warnings
+    );
+    // Once per file, however many stubs.
+    let s = load_grid(
+        r##"<tristrips material="grey-sym" count="3"><input semantic="VERTEX" source="#g-vtx" offset="0"/>
+             <p>0 1</p><p>0 3 1</p><p>4</p></tristrips>"##,
+    );
+    assert_eq!(s.triangles.len(), 1);
+    let stubs = s
+        .warnings
+        .iter()
+        .filter(|w| w.contains("fewer than 3 corners"));
+    assert_eq!(stubs.count(), 1, "{:?}", s.warnings);
 }
 
 #[test]
@@ -214,8 +232,18 @@ fn skinned_meshes_load_at_their_bind_pose_with_one_warning() {
         .collect();
     assert_eq!(w.len(), 1, "{:?}", s.warnings);
     parse_err(
-        &skin_doc("1 0 0 0").replace("source=\"#quad\"", "source=\"#nothing\""),
+        &skin_doc("1 0 0 0  0 1 0 0  0 0 1 0  0 0 0 1")
+            .replace("source=\"#quad\"", "source=\"#nothing\""),
         &["<controller id=\"skin\">/skin", "names no geometry"],
+    );
+    // A short bind shape matrix would send every vertex to infinity: refused, naming it.
+    parse_err(
+        &skin_doc("1 0 0"),
+        &[
+            "<controller id=\"skin\">/skin/bind_shape_matrix",
+            "has 3 numbers",
+            "needs 16",
+        ],
     );
 }
 
@@ -322,7 +350,16 @@ fn utf16_and_byte_order_marks_are_read() {
         .into_iter()
         .chain(TEMPLATE.bytes())
         .collect();
-    for (name, bytes) in [("le.dae", le), ("be.dae", be), ("bom8.dae", bom8)] {
+    // Without a mark, the opening `<` in UTF-16 tells the byte order (XML 1.0, appendix F).
+    let le_bare = le[2..].to_vec();
+    let be_bare = be[2..].to_vec();
+    for (name, bytes) in [
+        ("le.dae", le),
+        ("be.dae", be),
+        ("bom8.dae", bom8),
+        ("le_bare.dae", le_bare),
+        ("be_bare.dae", be_bare),
+    ] {
         let s = load(&write(dir.path(), name, &bytes)).unwrap_or_else(|e| panic!("{name}: {e}"));
         assert_eq!(s.positions, reference.positions, "{name}");
         assert!(s.warnings.is_empty(), "{name}: {:?}", s.warnings);
@@ -498,6 +535,33 @@ fn spot_lights_are_read() {
         panic!()
     };
     assert!((spot.cutoff_degrees() - 90.0).abs() < 1e-4 && spot.exponent == 0.0);
+    // A full angle past 360° (the whole sphere) is read as 360° with a warning; 300° is a cone.
+    let spot_at = |angle: &str| {
+        let libs = libs.replace(
+            "</color>",
+            &format!("</color><falloff_angle>{angle}</falloff_angle>"),
+        );
+        parse_ok(&scene_doc(
+            "Y_UP",
+            &libs,
+            r##"<node><instance_light url="#s"/></node>"##,
+        ))
+    };
+    let wide = spot_at("720");
+    let Light::Spot(spot) = wide.lights[0] else {
+        panic!()
+    };
+    assert_eq!(spot.cos_cutoff, -1.0);
+    let warned: Vec<_> = (wide.warnings.iter())
+        .filter(|w| w.contains("<light id=\"s\">/technique_common/spot/falloff_angle: 720 degrees"))
+        .collect();
+    assert_eq!(warned.len(), 1, "{:?}", wide.warnings);
+    let cone = spot_at("300");
+    assert!(
+        !cone.warnings.iter().any(|w| w.contains("falloff_angle")),
+        "{:?}",
+        cone.warnings
+    );
 }
 
 #[test]
@@ -523,6 +587,31 @@ fn textures_bind_their_coordinate_set_and_are_listed() {
         info.contains("texture4x4.png: 4x4, wrap CLAMP/CLAMP"),
         "{info}"
     );
+    // A binding naming a set the mesh lacks: the mesh's first set (here the decoy,
+    // set 1), with one warning naming the binding.
+    let text = std::fs::read_to_string(Path::new(DATA).join("textured_quad.dae")).unwrap();
+    let bad = text.replace("input_set=\"0\"", "input_set=\"7\"");
+    assert_ne!(bad, text);
+    let s = parse_in_data(&bad);
+    let warned: Vec<_> = (s.warnings.iter())
+        .filter(|w| w.contains("<bind_vertex_input input_set=\"7\"> names a TEXCOORD set the mesh lacks; its set 1 is used"))
+        .collect();
+    assert_eq!(warned.len(), 1, "{:?}", s.warnings);
+    for uv in s.triangle_uvs.iter().flatten().flatten() {
+        assert_eq!(s.uvs[*uv as usize], ember::Vec2::splat(0.5));
+    }
+    assert_eq!(s.triangle_uvs.iter().flatten().count(), s.triangles.len());
+}
+
+/// `doc` loaded from a file in the test data folder, where its images are.
+fn parse_in_data(doc: &str) -> Scene {
+    let dir = tempfile::tempdir().unwrap();
+    write(
+        dir.path(),
+        "texture4x4.png",
+        &std::fs::read(Path::new(DATA).join("texture4x4.png")).unwrap(),
+    );
+    load(&write(dir.path(), "scene.dae", doc.as_bytes())).unwrap_or_else(|e| panic!("{e}"))
 }
 
 #[test]

@@ -77,6 +77,8 @@ pub enum Command {
         /// Resolution at which to report the camera's field of view.
         #[arg(short = 'r', num_args = 2, action = clap::ArgAction::Set, value_names = ["WIDTH", "HEIGHT"], default_values_t = [480, 360])]
         resolution: Vec<u32>,
+        #[command(flatten)]
+        placement: PlacementArgs,
     },
     /// Assemble the parts of a render made on many machines into one image.
     ///
@@ -174,6 +176,14 @@ pub struct LensArgs {
     #[arg(short = 'd', value_name = "DISTANCE", allow_negative_numbers = true)]
     pub focal_distance: Option<f32>,
 
+    #[command(flatten)]
+    pub placement: PlacementArgs,
+}
+
+/// `--camera-placement`, for the commands that place the scene's camera (renders,
+/// `ember camera`, `ember info`).
+#[derive(Args, Debug)]
+pub struct PlacementArgs {
     /// Where the camera's eye goes. auto: the course's rule for the course's files (they use its
     /// CGL/CMU462 extension, were written by its Blender 2.72/2.74, or name no authoring tool), the
     /// camera node's own position for files other tools wrote (`ember info` says which and why);

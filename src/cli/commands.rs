@@ -1,6 +1,6 @@
 //! One short function per subcommand: convert the flags, call the library, report.
 
-use super::args::{CameraArgs, ExportArgs, ExportFormat, RenderArgs};
+use super::args::{CameraArgs, ExportArgs, ExportFormat, PlacementArgs, RenderArgs};
 use super::convert::{
     self, adopt_scene_from_adaptive, apply_env_map, cell_rect, check_flags,
     check_image_destination, check_lens, check_resolution, check_scene_file, flag_warnings,
@@ -630,7 +630,7 @@ fn write_text_file(path: &Path, text: &str) -> Result<()> {
 }
 
 /// `ember info SCENE`: what the scene holds and the backends of this build.
-pub(super) fn info(path: &Path, w: u32, h: u32) -> Result<()> {
+pub(super) fn info(path: &Path, w: u32, h: u32, placement: &PlacementArgs) -> Result<()> {
     // An image: what it holds, and the metadata it was written with.
     if ember::image_io::OutputFormat::from_path(path).is_ok() {
         let text = ember::info::image_info(path)?;
@@ -639,7 +639,8 @@ pub(super) fn info(path: &Path, w: u32, h: u32) -> Result<()> {
         return Ok(());
     }
     check_resolution(w, h)?;
-    let scene = load_scene(path)?;
+    let mut scene = load_scene(path)?;
+    convert::apply_placement(&mut scene, placement);
     ember::outln!("{}", path.display())?;
     ember::out!("{}", ember::info::scene_info(&scene, w, h))?;
     let t0 = Instant::now();

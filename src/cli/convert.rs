@@ -4,7 +4,7 @@
 use super::args::{
     BenchAccelArgs, BenchConvergeArgs, BenchRenderArgs, BenchStabilityArgs, ReportArgs,
 };
-use super::args::{CameraPlacement, LensArgs, RenderArgs};
+use super::args::{CameraPlacement, LensArgs, PlacementArgs, RenderArgs};
 use anyhow::{bail, Context, Result};
 use ember::accel::Backend;
 #[cfg(feature = "bench")]
@@ -306,6 +306,9 @@ pub(super) fn check_scene_file(path: &Path) -> Result<()> {
     else {
         return Ok(());
     };
+    if loader_reads_as_is(&head[..n]) {
+        return Ok(());
+    }
     let text = head[..n]
         .strip_prefix(b"\xEF\xBB\xBF")
         .unwrap_or(&head[..n]);
@@ -316,6 +319,13 @@ pub(super) fn check_scene_file(path: &Path) -> Result<()> {
             path.display()
         ),
     }
+}
+
+/// Starts the loader recognises itself, which are not UTF-8 text: a `.zae` (zip)
+/// archive, and UTF-16 XML with a byte-order mark or opening with `<`.
+fn loader_reads_as_is(head: &[u8]) -> bool {
+    const STARTS: [&[u8]; 5] = [b"PK\x03\x04", b"\xFF\xFE", b"\xFE\xFF", b"<\0", b"\0<"];
+    STARTS.iter().any(|s| head.starts_with(s))
 }
 
 /// `-a` takes up to two values, so `ember -a scene.dae` hands the scene to `-a`;
@@ -455,14 +465,31 @@ pub(super) fn apply_env_map(env_map: Option<&Path>, scene: &mut ember::scene::Sc
 }
 /// The scene's camera with `--camera-placement` applied.
 fn placed(scene: &Scene, lens: &LensArgs) -> ember::scene::CameraDesc {
-    use ember::scene::Placement;
     let mut desc = scene.camera;
-    match lens.camera_placement {
-        CameraPlacement::Auto => {}
-        CameraPlacement::Course => desc.placement = Placement::Course,
-        CameraPlacement::File => desc.placement = Placement::File,
+    if let Some(p) = forced_placement(&lens.placement) {
+        desc.placement = p;
     }
     desc
+}
+
+/// The placement `--camera-placement` chooses; `None` for auto, the loader's choice.
+fn forced_placement(flag: &PlacementArgs) -> Option<ember::scene::Placement> {
+    use ember::scene::Placement;
+    match flag.camera_placement {
+        CameraPlacement::Auto => None,
+        CameraPlacement::Course => Some(Placement::Course),
+        CameraPlacement::File => Some(Placement::File),
+    }
+}
+
+/// `--camera-placement` applied to the scene itself, with the flag as the reason
+/// `ember info` gives.
+pub(super) fn apply_placement(scene: &mut Scene, flag: &PlacementArgs) {
+    if let Some(p) = forced_placement(flag) {
+        scene.camera.placement = p;
+        let name = clap::ValueEnum::to_possible_value(&flag.camera_placement).expect("not skipped");
+        scene.placement_reason = format!("--camera-placement {}", name.get_name());
+    }
 }
 
 /// `-b` and `-d` on their own: a radius of at least 0, a positive distance.

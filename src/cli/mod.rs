@@ -112,9 +112,11 @@ pub fn run(cli: Cli) -> anyhow::Result<()> {
         ember::data::set_root(dir);
     }
     match cli.command {
-        Some(Command::Info { path, resolution }) => {
-            commands::info(&path, resolution[0], resolution[1])
-        }
+        Some(Command::Info {
+            path,
+            resolution,
+            placement,
+        }) => commands::info(&path, resolution[0], resolution[1], &placement),
         Some(Command::Export(args)) => commands::export(args),
         Some(Command::Merge { out, parts }) => commands::merge(&out, &parts),
         Some(Command::Camera(args)) => commands::camera(args),

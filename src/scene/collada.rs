@@ -168,10 +168,11 @@ pub fn load(path: &Path) -> Result<Scene, LoadError> {
 }
 
 /// The text of an XML file: UTF-8 (a byte-order mark is dropped), or UTF-16 of
-/// either byte order, which the XML standard allows when a byte-order mark says so.
+/// either byte order, which the XML standard allows when a byte-order mark says so,
+/// or, without one, when the file opens with `<` in UTF-16 (XML 1.0, appendix F).
 fn decode_text(file: &str, bytes: Vec<u8>) -> Result<String, LoadError> {
-    let utf16 = |big: bool| {
-        let units: Vec<u16> = bytes[2..]
+    let utf16 = |big: bool, skip: usize| {
+        let units: Vec<u16> = bytes[skip..]
             .chunks_exact(2)
             .map(|c| {
                 if big {
@@ -181,16 +182,20 @@ fn decode_text(file: &str, bytes: Vec<u8>) -> Result<String, LoadError> {
                 }
             })
             .collect();
+        let after = if skip == 2 {
+            " after its byte-order mark"
+        } else {
+            ""
+        };
         String::from_utf16(&units).map_err(|_| {
-            LoadError::invalid(
-                file,
-                "not a text file (invalid UTF-16 after its byte-order mark)",
-            )
+            LoadError::invalid(file, format!("not a text file (invalid UTF-16{after})"))
         })
     };
     match bytes.as_slice() {
-        [0xFF, 0xFE, ..] => utf16(false),
-        [0xFE, 0xFF, ..] => utf16(true),
+        [0xFF, 0xFE, ..] => utf16(false, 2),
+        [0xFE, 0xFF, ..] => utf16(true, 2),
+        [b'<', 0, ..] => utf16(false, 0),
+        [0, b'<', ..] => utf16(true, 0),
         [0xEF, 0xBB, 0xBF, rest @ ..] => utf8(file, rest.to_vec()),
         _ => utf8(file, bytes),
     }

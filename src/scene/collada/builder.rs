@@ -4,7 +4,9 @@ use super::camera::{course_placement, read_camera};
 use super::effects::{read_material, TextureRef};
 use super::lights::read_light;
 use super::mesh::{parse_mesh, LocalMesh};
-use super::transform::{linear, local_matrix, matrix, normal_matrix, point, up_axis_matrix};
+use super::transform::{
+    bind_shape_matrix, linear, local_matrix, normal_matrix, point, up_axis_matrix,
+};
 use super::xml::{child, children, extension_technique, path, Ctx};
 use super::{LoadError, Resources};
 use crate::geometry::Aabb;
@@ -283,7 +285,7 @@ impl<'a, 'i> Builder<'a, 'i, '_> {
                 return Ok(());
             };
             if let Some(m) = child(kind, "bind_shape_matrix") {
-                bind_shape = matrix(&mut self.ctx, m)? * bind_shape;
+                bind_shape = bind_shape_matrix(&self.ctx, m)? * bind_shape;
             }
             self.ctx.warn_once(
                 "controller",
@@ -532,6 +534,19 @@ impl<'a, 'i> Builder<'a, 'i, '_> {
                 inst,
                 "a textured material is bound to a mesh without TEXCOORD; the texture is read at (0, 0)",
             );
+        }
+        let missing = uv_sets.iter().flatten().flatten();
+        if let (Some(&set), Some(first)) = (
+            missing
+                .into_iter()
+                .find(|&&s| !mesh.uv_sets.iter().any(|u| u.set == s)),
+            mesh.uv_sets.first(),
+        ) {
+            let msg = format!(
+                "<bind_vertex_input input_set=\"{set}\"> names a TEXCOORD set the mesh lacks; its set {} is used",
+                first.set
+            );
+            self.ctx.warn_once("texcoord set", inst, msg);
         }
         let s = &mut self.scene;
         if s.positions.len() + mesh.positions.len() > MAX_VERTICES

@@ -44,7 +44,7 @@ pub(crate) fn course_placement(doc: &Document) -> (Placement, String) {
     if extension {
         return (
             Placement::Course,
-            "course placement: the file uses the course's CGL/CMU462 extension".into(),
+            "the file uses the course's CGL/CMU462 extension".into(),
         );
     }
     let tool = child(doc.root_element(), "asset")
@@ -57,19 +57,19 @@ pub(crate) fn course_placement(doc: &Document) -> (Placement, String) {
     match tool {
         None => (
             Placement::Course,
-            "course placement: the file names no <authoring_tool>".into(),
+            "the file names no <authoring_tool>".into(),
         ),
         Some(t) if COURSE_EXPORTERS.iter().any(|c| t.starts_with(c)) => (
             Placement::Course,
             format!(
-                "course placement: written by \"{}\", the course's exporter",
+                "written by \"{}\", the course's exporter",
                 super::xml::clip(t)
             ),
         ),
         Some(t) => (
             Placement::File,
             format!(
-                "the file's placement: written by \"{}\", not by the course's exporter",
+                "written by \"{}\", not by the course's exporter",
                 super::xml::clip(t)
             ),
         ),

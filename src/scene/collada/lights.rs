@@ -51,6 +51,13 @@ pub(crate) fn read_light(
                 let msg = format!("falloff_angle {angle} must be positive and falloff_exponent {exponent} not negative");
                 return Err(ctx.err(kind, msg));
             }
+            // The cone's full angle: 360° already covers every direction.
+            if let Some(a) = child(kind, "falloff_angle").filter(|_| angle > 360.0) {
+                let msg = format!(
+                    "{angle} degrees is wider than the whole sphere (a full angle of 360); read as 360"
+                );
+                ctx.warn(a, msg);
+            }
             Light::Spot(SpotLight::new(
                 finite(ctx, kind, point(w, DVec3::ZERO))?,
                 finite(ctx, kind, axis.normalize())?,

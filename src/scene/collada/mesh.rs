@@ -123,7 +123,12 @@ pub(crate) fn parse_mesh<'a, 'i>(
             "triangles" => read_triangles(ctx, prim, &mut out)?,
             "polylist" => read_polylist(ctx, prim, &mut out)?,
             "polygons" => read_polygons(ctx, prim, &mut out)?,
-            _ => read_strips(ctx, prim, kind == "tristrips", &mut out)?,
+            _ => {
+                if read_strips(ctx, prim, kind == "tristrips", &mut out)? {
+                    let msg = "a <p> of fewer than 3 corners makes no triangle; skipped";
+                    ctx.warn_once("short strip", prim, msg);
+                }
+            }
         }
         if out.bad_uv {
             ctx.warn(
@@ -558,10 +563,12 @@ fn read_polygons(ctx: &Ctx, prim: Node, out: &mut Emitter) -> Result<(), LoadErr
 
 /// `<tristrips>` and `<trifans>`: each `<p>` is one strip or fan. A strip's
 /// triangle `k` is `(k, k+1, k+2)`, with corners 0 and 1 swapped on odd `k` so
-/// every triangle keeps the strip's winding.
-fn read_strips(ctx: &Ctx, prim: Node, strip: bool, out: &mut Emitter) -> Result<(), LoadError> {
+/// every triangle keeps the strip's winding. Says whether a `<p>` was too short to
+/// make a triangle.
+fn read_strips(ctx: &Ctx, prim: Node, strip: bool, out: &mut Emitter) -> Result<bool, LoadError> {
     let stride = out.layout.stride;
     let mut faces = 0;
+    let mut short = false;
     for p in children(prim, "p") {
         let indices = ctx.numbers::<u32>(p)?;
         if indices.len() % stride != 0 {
@@ -577,6 +584,7 @@ fn read_strips(ctx: &Ctx, prim: Node, strip: bool, out: &mut Emitter) -> Result<
         if n < 3 {
             // Fewer than three corners make no triangle; exporters write such stubs.
             faces += 1;
+            short = true;
             continue;
         }
         if !strip {
@@ -594,7 +602,7 @@ fn read_strips(ctx: &Ctx, prim: Node, strip: bool, out: &mut Emitter) -> Result<
         }
         faces += 1;
     }
-    check_count(ctx, prim, faces)
+    check_count(ctx, prim, faces).map(|()| short)
 }
 
 /// The primitive's `count` attribute, when present, must equal its face count.

@@ -51,7 +51,7 @@ pub(crate) fn local_matrix(ctx: &mut Ctx, node: Node) -> Result<DMat4, LoadError
 }
 
 /// A row-major `<matrix>`; missing trailing entries are 0 (spec §2).
-pub(crate) fn matrix(ctx: &mut Ctx, node: Node) -> Result<DMat4, LoadError> {
+fn matrix(ctx: &mut Ctx, node: Node) -> Result<DMat4, LoadError> {
     let v = ctx.numbers::<f64>(node)?;
     match v.len() {
         0 => return Err(ctx.err(node, "matrix has no numbers")),
@@ -68,6 +68,20 @@ pub(crate) fn matrix(ctx: &mut Ctx, node: Node) -> Result<DMat4, LoadError> {
     let mut a = [0.0; 16];
     a[..v.len()].copy_from_slice(&v);
     // glam is column-major; the file is row-major.
+    Ok(DMat4::from_cols_array(&a).transpose())
+}
+
+/// A skin's row-major `<bind_shape_matrix>`. Unlike a node's `<matrix>`, a short one is
+/// refused: padded with zeros it would send every vertex to infinity.
+pub(crate) fn bind_shape_matrix(ctx: &Ctx, node: Node) -> Result<DMat4, LoadError> {
+    let v = ctx.numbers::<f64>(node)?;
+    let Ok(a) = <[f64; 16]>::try_from(v.as_slice()) else {
+        let msg = format!(
+            "has {} numbers; a bind shape matrix needs 16 (a row-major 4x4 matrix)",
+            v.len()
+        );
+        return Err(ctx.err(node, msg));
+    };
     Ok(DMat4::from_cols_array(&a).transpose())
 }
 
