@@ -16,8 +16,12 @@ fn main() {
     embree::build();
 }
 
-/// `EMBER_GIT_HASH` for the image metadata: the commit being built, or "unknown"
-/// outside a git checkout (a crate tarball). Rebuilt when HEAD moves.
+/// `EMBER_GIT_HASH` for the image metadata: the commit being built, with `-dirty` when
+/// tracked files differ from it (untracked ones are ignored), or "unknown" outside a
+/// git checkout (a crate tarball). Rerun when HEAD moves or a file the binary is made
+/// of changes (the sources, the shim, the manifests, and the scripts and scenes it
+/// embeds), so the mark follows edits that change the binary without rerunning on
+/// every build; an edit elsewhere (docs, tests) shows at the next such rerun.
 fn git_hash() {
     let git = |args: &[&str]| {
         std::process::Command::new("git")
@@ -27,12 +31,41 @@ fn git_hash() {
             .filter(|o| o.status.success())
             .map(|o| String::from_utf8_lossy(&o.stdout).trim().to_string())
     };
-    let hash = git(&["rev-parse", "HEAD"]).unwrap_or_else(|| "unknown".into());
+    let hash = match git(&["rev-parse", "HEAD"]) {
+        // No optional locks: a build must not hold the index lock a user's git wants.
+        Some(hash) => match git(&[
+            "--no-optional-locks",
+            "status",
+            "--porcelain",
+            "--untracked-files=no",
+        ]) {
+            Some(changes) if !changes.is_empty() => format!("{hash}-dirty"),
+            _ => hash,
+        },
+        None => "unknown".into(),
+    };
     println!("cargo:rustc-env=EMBER_GIT_HASH={hash}");
-    for path in ["HEAD", "refs/heads"] {
-        if let Some(p) = git(&["rev-parse", "--git-path", path]) {
-            println!("cargo:rerun-if-changed={p}");
-        }
+    // HEAD, and the branch it names (not all of refs/heads: other worktrees' commits
+    // would rerun this); a packed ref has no file of its own, packed-refs holds it.
+    let git_path = |p: &str| git(&["rev-parse", "--git-path", p]);
+    let branch = git(&["symbolic-ref", "-q", "HEAD"]).and_then(|r| git_path(&r));
+    let branch = match branch {
+        Some(file) if std::path::Path::new(&file).exists() => Some(file),
+        Some(_) => git_path("packed-refs"),
+        None => None,
+    };
+    for file in git_path("HEAD").into_iter().chain(branch) {
+        println!("cargo:rerun-if-changed={file}");
+    }
+    for input in [
+        "src",
+        "embree-shim",
+        "Cargo.toml",
+        "Cargo.lock",
+        "scripts",
+        "scenes",
+    ] {
+        println!("cargo:rerun-if-changed={input}");
     }
 }
 

@@ -132,8 +132,8 @@ pub fn heat_map(width: u32, height: u32, counts: &[f32], scale: f32) -> Image {
     }
 }
 
-/// What the sample-rate map's legend calls its colours.
-pub const RATE_LEGEND_TITLE: &str = "samples per pixel";
+/// What the sample-rate map's legend calls its colours, shorter for narrower maps.
+pub const RATE_LEGEND_TITLES: [&str; 3] = ["samples per pixel", "samples/pixel", "spp"];
 
 /// The adaptive sample-rate map as the PNG shows it: every pixel coloured by its
 /// sample count (blue none, red `spp`, the most a pixel may take), with a legend
@@ -141,14 +141,15 @@ pub const RATE_LEGEND_TITLE: &str = "samples per pixel";
 pub fn sample_rate_map(width: u32, height: u32, samples: &[u32], spp: u32) -> Image {
     let counts: Vec<f32> = samples.iter().map(|&s| s as f32).collect();
     let map = heat_map(width, height, &counts, spp as f32);
-    with_heat_legend(&map, spp as f32, RATE_LEGEND_TITLE)
+    with_heat_legend(&map, spp as f32, &RATE_LEGEND_TITLES)
 }
 
 /// `map` (made by [`heat_map`] with `scale`) with a legend strip added below it: the
-/// colour ramp from 0 to `scale`, labelled 0, `scale`/2 and `scale`, and `title` above
-/// the ramp. Text is drawn with 8×8 glyphs, doubled from 640 pixels wide; what does not
-/// fit a narrow map is left out (the ramp last).
-pub fn with_heat_legend(map: &Image, scale: f32, title: &str) -> Image {
+/// colour ramp from 0 to `scale`, labelled 0, `scale`/2 and `scale`, and above the ramp
+/// the first of `titles` that fits (longest first). Text is drawn with 8×8 glyphs,
+/// doubled from 640 pixels wide; what does not fit a narrow map is left out (the ramp
+/// last).
+pub fn with_heat_legend(map: &Image, scale: f32, titles: &[&str]) -> Image {
     let px = if map.width >= 640 { 2 } else { 1 };
     let glyph = 8 * px;
     let pad = 3 * px;
@@ -163,7 +164,10 @@ pub fn with_heat_legend(map: &Image, scale: f32, title: &str) -> Image {
     let text_y = map.height + pad;
     let bar_y = text_y + glyph + pad;
     let label_y = bar_y + glyph + pad;
-    draw_text_centred(&mut out, title, map.width / 2, text_y, px);
+    let fits = |t: &&str| t.chars().count() as u32 * glyph <= map.width;
+    if let Some(title) = titles.iter().copied().find(fits) {
+        draw_text_centred(&mut out, title, map.width / 2, text_y, px);
+    }
     let bar = margin..map.width.saturating_sub(margin);
     let span = (bar.end - bar.start).max(2) - 1;
     for x in bar.clone() {
@@ -246,6 +250,17 @@ mod tests {
         assert!(legend.contains(&heat_color(0.0)) && legend.contains(&heat_color(1.0)));
         let white = legend.iter().filter(|&&p| p == Color::ONE).count();
         assert!(white > 100, "{white} white pixels of text");
+    }
+
+    #[test]
+    fn a_narrow_map_names_its_colours_in_fewer_letters() {
+        // `ember report --quick` draws 120-pixel-wide maps: too narrow for
+        // "samples per pixel" in 8-pixel glyphs, wide enough for "samples/pixel".
+        let (w, h) = (120, 90);
+        let map = sample_rate_map(w, h, &vec![3; (w * h) as usize], 8);
+        let title_rows = &map.pixels[((h + 3) * w) as usize..((h + 3 + 8) * w) as usize];
+        let white = title_rows.iter().filter(|&&p| p == Color::ONE).count();
+        assert!(white > 100, "{white} white pixels in the title row");
     }
 
     #[test]

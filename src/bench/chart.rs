@@ -1,9 +1,38 @@
 //! Log-log line charts for the benchmarks, written as PNG and SVG with plotters.
 //! The font ships inside the binary (DejaVu Sans), so charts need no system fonts.
 
+use plotters::coord::combinators::WithKeyPoints;
 use plotters::prelude::*;
 use std::path::Path;
 use std::sync::Once;
+
+/// Evaluates `$body` with `$m` a function from a point to marker `$shape` (circle,
+/// triangle, square, cross; see [`MARKERS`]) in `$color`: a macro, as each shape is
+/// its own type and plotters' boxed elements do not fit its series' lifetimes.
+macro_rules! with_marker {
+    ($shape:expr, $color:expr, |$m:ident| $body:expr) => {{
+        let color: RGBAColor = $color;
+        match $shape % MARKERS {
+            0 => {
+                let $m = |p| Circle::new(p, 4, color.filled());
+                $body
+            }
+            1 => {
+                let $m = |p| TriangleMarker::new(p, 5, color.filled());
+                $body
+            }
+            2 => {
+                let $m =
+                    |p| EmptyElement::at(p) + Rectangle::new([(-3, -3), (3, 3)], color.filled());
+                $body
+            }
+            _ => {
+                let $m = |p| Cross::new(p, 4, color.stroke_width(2));
+                $body
+            }
+        }
+    }};
+}
 
 /// One line of a chart.
 #[derive(Clone, Debug)]
@@ -33,6 +62,51 @@ fn tick(v: f64) -> String {
     }
 }
 
+/// Tick values of a log axis over `lo..hi`: `(labelled, grid only)`. plotters' own
+/// log ticks start at the first power of ten inside the range, so a range below it
+/// (0.02 to 0.3) shows no number under 0.1, and one within a decade shows none at
+/// all. Here every decade is labelled, and 1-2-5 or every integer mantissa in
+/// narrower ranges; the other mantissas draw light grid lines.
+fn log_ticks(lo: f64, hi: f64) -> (Vec<f64>, Vec<f64>) {
+    let (lo, hi) = (lo.min(hi), lo.max(hi));
+    if !(lo > 0.0 && hi.is_finite()) {
+        return (Vec::new(), Vec::new());
+    }
+    let decades = (hi / lo).log10();
+    let labelled: &[u32] = match decades {
+        d if d <= 0.6 => &[1, 2, 3, 4, 5, 6, 7, 8, 9],
+        d if d <= 2.5 => &[1, 2, 5],
+        _ => &[1],
+    };
+    // Past 8 decades, a label on every k-th power of ten keeps them apart.
+    let every = (decades / 8.0).ceil().max(1.0) as i32;
+    let (first, last) = (lo.log10().floor() as i32, hi.log10().ceil() as i32);
+    let (mut bold, mut light) = (Vec::new(), Vec::new());
+    for e in first..=last {
+        for m in 1..=9 {
+            let v = f64::from(m) * 10f64.powi(e);
+            if v < lo || v > hi {
+                continue;
+            }
+            if labelled.contains(&m) && (m != 1 || e.rem_euclid(every) == 0) {
+                bold.push(v);
+            } else {
+                light.push(v);
+            }
+        }
+    }
+    (bold, light)
+}
+
+/// A logarithmic axis over `lo..hi` ticked by [`log_ticks`].
+fn log_axis(lo: f64, hi: f64) -> WithKeyPoints<LogCoord<f64>> {
+    let (bold, light) = log_ticks(lo, hi);
+    (lo..hi)
+        .log_scale()
+        .with_key_points(bold)
+        .with_light_points(light)
+}
+
 fn register_font() {
     static ONCE: Once = Once::new();
     ONCE.call_once(|| {
@@ -43,11 +117,6 @@ fn register_font() {
             dejavu::sans::regular(),
         );
     });
-}
-
-/// Writes the chart to `stem.png` and `stem.svg`, its legend inside the plot.
-pub fn write_chart(stem: &Path, spec: &ChartSpec, series: &[Series]) -> anyhow::Result<()> {
-    write_both(stem, spec, series, 0)
 }
 
 /// Writes the chart to `stem.png` and `stem.svg` with its legend in a column right of
@@ -63,7 +132,7 @@ pub fn write_chart_legend_outside(
     write_both(stem, spec, series, legend)
 }
 
-/// Both files; `legend` > 0 is the width of a legend column beside the 900-pixel plot.
+/// Both files; `legend` is the width of the legend column beside the 900-pixel plot.
 fn write_both(stem: &Path, spec: &ChartSpec, series: &[Series], legend: u32) -> anyhow::Result<()> {
     register_font();
     let png = stem.with_extension("png");
@@ -128,9 +197,7 @@ where
     root.fill(&WHITE)
         .map_err(|e| anyhow::anyhow!("chart: {e}"))?;
     let (plot, side) = root.split_horizontally(root.dim_in_pixel().0 - legend);
-    if legend > 0 {
-        draw_legend(&side, series)?;
-    }
+    draw_legend(&side, series)?;
     let root = plot;
     let (x0, x1) = bounds(series, |p| p.0, spec.log_x);
     let (y0, y1) = bounds(series, |p| p.1, spec.log_y);
@@ -153,7 +220,7 @@ where
                 .draw()
                 .map_err(|e| anyhow::anyhow!("chart: {e}"))?;
             for (i, s) in series.iter().enumerate() {
-                let color = series_color(i);
+                let (color, shape) = series_style(i);
                 let pts: Vec<(f64, f64)> = s
                     .points
                     .iter()
@@ -167,48 +234,52 @@ where
                     .collect();
                 chart
                     .draw_series(LineSeries::new(pts.clone(), color.stroke_width(2)))
-                    .map_err(|e| anyhow::anyhow!("chart: {e}"))?
-                    .label(s.name.clone())
-                    .legend(move |(x, y)| {
-                        PathElement::new(vec![(x, y), (x + 20, y)], color.stroke_width(2))
-                    });
-                chart
-                    .draw_series(pts.into_iter().map(|p| Circle::new(p, 3, color.filled())))
                     .map_err(|e| anyhow::anyhow!("chart: {e}"))?;
-            }
-            if legend == 0 {
-                chart
-                    .configure_series_labels()
-                    .background_style(WHITE.mix(0.85))
-                    .border_style(BLACK)
-                    .label_font(("sans-serif", 14))
-                    .draw()
-                    .map_err(|e| anyhow::anyhow!("chart: {e}"))?;
+                with_marker!(shape, color, |m| chart
+                    .draw_series(pts.iter().map(|&p| m(p)))
+                    .map(|_| ())
+                    .map_err(|e| anyhow::anyhow!("chart: {e}"))?);
             }
         }};
     }
     match (spec.log_x, spec.log_y) {
         (true, true) => {
-            finish!(builder.build_cartesian_2d((x0..x1).log_scale(), (y0..y1).log_scale()))
+            finish!(builder.build_cartesian_2d(log_axis(x0, x1), log_axis(y0, y1)))
         }
-        (true, false) => finish!(builder.build_cartesian_2d((x0..x1).log_scale(), y0..y1)),
-        (false, true) => finish!(builder.build_cartesian_2d(x0..x1, (y0..y1).log_scale())),
+        (true, false) => finish!(builder.build_cartesian_2d(log_axis(x0, x1), y0..y1)),
+        (false, true) => finish!(builder.build_cartesian_2d(x0..x1, log_axis(y0, y1))),
         (false, false) => finish!(builder.build_cartesian_2d(x0..x1, y0..y1)),
     }
     root.present().map_err(|e| anyhow::anyhow!("chart: {e}"))?;
     Ok(())
 }
 
-/// The palette's `i`-th colour, darkened where it is too pale to read on white.
-fn series_color(i: usize) -> RGBAColor {
-    let c = Palette99::pick(i).to_rgba();
-    let luma = 0.299 * f64::from(c.0) + 0.587 * f64::from(c.1) + 0.114 * f64::from(c.2);
-    if luma > 170.0 {
-        let dark = |v: u8| (f64::from(v) * 0.6) as u8;
-        RGBAColor(dark(c.0), dark(c.1), dark(c.2), c.3)
-    } else {
-        c
-    }
+/// Ten colours that stay apart on white (Tableau 10, its olive darkened).
+const PALETTE: [(u8, u8, u8); 10] = [
+    (31, 119, 180),
+    (255, 127, 14),
+    (44, 160, 44),
+    (214, 39, 40),
+    (148, 103, 189),
+    (140, 86, 75),
+    (227, 119, 194),
+    (127, 127, 127),
+    (150, 150, 20),
+    (23, 190, 207),
+];
+
+/// How many marker shapes [`with_marker`] draws.
+const MARKERS: usize = 4;
+
+/// The `i`-th series' colour and marker shape. The shape advances with every series
+/// and once more each time the colours come round, so the first 40 series all differ
+/// (a converge chart has 14).
+fn series_style(i: usize) -> (RGBAColor, usize) {
+    let (r, g, b) = PALETTE[i % PALETTE.len()];
+    (
+        RGBColor(r, g, b).to_rgba(),
+        (i + i / PALETTE.len()) % MARKERS,
+    )
 }
 
 /// One row per series, in the chart's colours, from the top of `area`.
@@ -221,13 +292,13 @@ where
 {
     let font = ("sans-serif", 14).into_font().color(&BLACK);
     for (i, s) in series.iter().enumerate() {
-        let color = series_color(i);
+        let (color, shape) = series_style(i);
         let y = 60 + 22 * i as i32;
         area.draw(&PathElement::new(
             vec![(5, y), (30, y)],
             color.stroke_width(2),
         ))
-        .and_then(|_| area.draw(&Circle::new((17, y), 3, color.filled())))
+        .and_then(|_| with_marker!(shape, color, |m| area.draw(&m((17, y)))))
         .and_then(|_| area.draw(&Text::new(s.name.clone(), (38, y - 8), font.clone())))
         .map_err(|e| anyhow::anyhow!("chart: {e}"))?;
     }
@@ -285,14 +356,16 @@ where
         .margin(15)
         .x_label_area_size(60)
         .y_label_area_size(80)
-        .build_cartesian_2d((0..n).into_segmented(), (y0..y1).log_scale())
+        // Integer ranges are inclusive: 0..n-1 is n slots, one per case, no empty
+        // slot (and unlabelled tick) after the last.
+        .build_cartesian_2d((0..n - 1).into_segmented(), log_axis(y0, y1))
         .map_err(err)?;
     debug_assert!(spec.log_y, "category charts have a logarithmic y axis");
     chart
         .configure_mesh()
         .x_desc(spec.x_label)
         .y_desc(spec.y_label)
-        .x_labels(categories.len() + 1)
+        .x_labels(categories.len())
         .label_style(("sans-serif", 13))
         .x_label_formatter(&label)
         .y_label_formatter(&|v| tick(*v))
@@ -300,7 +373,7 @@ where
         .draw()
         .map_err(err)?;
     for (k, s) in series.iter().enumerate() {
-        let color = Palette99::pick(k).to_rgba();
+        let color = series_style(k).0;
         let pts: Vec<(SegmentValue<i32>, f64)> = s
             .points
             .iter()
@@ -356,6 +429,33 @@ mod tests {
     use super::*;
 
     #[test]
+    fn series_styles_differ() {
+        let styles: Vec<_> = (0..40).map(series_style).collect();
+        for (i, a) in styles.iter().enumerate() {
+            for b in &styles[..i] {
+                assert!(a.0 != b.0 || a.1 != b.1, "series {i} repeats a style");
+            }
+        }
+    }
+
+    #[test]
+    fn log_ticks_label_below_the_first_decade() {
+        // A small-error range: plotters alone labels only 0.1 here.
+        let (bold, light) = log_ticks(0.02, 0.3);
+        assert_eq!(bold.len(), 4, "{bold:?}");
+        assert!((bold[0] - 0.02).abs() < 1e-12 && (bold[3] - 0.2).abs() < 1e-12);
+        assert!(light.iter().any(|v| (v - 0.03).abs() < 1e-12));
+        // Within one decade: every integer mantissa.
+        let (bold, _) = log_ticks(0.031, 0.07);
+        assert_eq!(bold.len(), 4, "{bold:?}");
+        // Wide ranges: powers of ten only, at most about eight.
+        let (bold, _) = log_ticks(1e-3, 1e3);
+        assert_eq!(bold.len(), 7, "{bold:?}");
+        let (bold, _) = log_ticks(1e-9, 1e9);
+        assert!((2..=10).contains(&bold.len()), "{bold:?}");
+    }
+
+    #[test]
     fn writes_png_and_svg() {
         let dir = tempfile::tempdir().unwrap();
         let stem = dir.path().join("c");
@@ -376,16 +476,12 @@ mod tests {
             log_x: true,
             log_y: true,
         };
-        write_chart(&stem, &spec, &s).unwrap();
-        let png = image::open(stem.with_extension("png")).unwrap();
-        assert_eq!(png.width(), 900);
-        let svg = std::fs::read_to_string(stem.with_extension("svg")).unwrap();
-        assert!(svg.contains("RMSE") && svg.contains("<svg"));
         // Beside the plot: the image widens by the legend column, whose names are there.
         write_chart_legend_outside(&stem, &spec, &s).unwrap();
         let png = image::open(stem.with_extension("png")).unwrap();
         assert!(png.width() > 900, "{}", png.width());
         let svg = std::fs::read_to_string(stem.with_extension("svg")).unwrap();
+        assert!(svg.contains("RMSE") && svg.contains("<svg"));
         let label = |name: &str| svg.lines().any(|l| l.trim() == name);
         assert!(label("a") && label("b"), "{svg}");
     }

@@ -6,7 +6,7 @@
 //! grow like N·log N; a traversal visits about one node per level, so the time per
 //! ray should grow like log N. The fits say how close each backend comes.
 
-use super::chart::{write_chart, ChartSpec, Series};
+use super::chart::{write_chart_legend_outside, ChartSpec, Series};
 use super::fit::{
     log2_fit_nonnegative, n_log_n_fit, power_law_fit, LinearFit, NLogNFit, PowerLawFit,
 };
@@ -432,9 +432,10 @@ impl ScalingReport {
                     })
                     .collect();
                 let title = format!(
-                    "{} vs triangle count: {} ({threads} threads)",
+                    "{} vs triangle count: {} ({})",
                     metric.title,
-                    mesh.name()
+                    mesh.name(),
+                    crate::image_metadata::thread_count(threads)
                 );
                 let spec = ChartSpec {
                     title: &title,
@@ -444,7 +445,7 @@ impl ScalingReport {
                     log_y: true,
                 };
                 let stem = out_dir.join(format!("{}_{}", mesh.slug(), metric.stem));
-                write_chart(&stem, &spec, &series)?;
+                write_chart_legend_outside(&stem, &spec, &series)?;
                 stems.push(stem);
             }
         }

@@ -530,9 +530,10 @@ impl RenderRun<'_> {
             "one path at a time".into()
         };
         format!(
-            "{}, {shows}, {spp}, seed {}, {threads} threads, {engine}",
+            "{}, {shows}, {spp}, seed {}, {}, {engine}",
             self.region(done.frame),
-            s.seed
+            s.seed,
+            ember::image_metadata::thread_count(threads)
         )
     }
 

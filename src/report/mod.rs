@@ -146,10 +146,11 @@ fn check_scene_names(scenes: &[PathBuf]) -> Result<()> {
 }
 
 fn intro(opts: &ReportOptions) -> Vec<String> {
-    let threads = rayon::current_num_threads();
+    let threads = crate::image_metadata::thread_count(rayon::current_num_threads());
     vec![format!(
-        "Made by `ember report{}` (ember {}, {}) on {} with {threads} threads, seed {}. \
-             Under every figure is the `ember` command that renders the same image bit for bit \
+        "Made by `ember report{}` (ember {}, {}) on {} with {threads}, seed {}. \
+             Under every figure is the `ember` command that renders the same pixels bit for bit, \
+             into a PNG that records the same settings \
              (the same seed gives the same image whatever the thread count); run it from the \
              folder `ember report` ran in.",
         if opts.quick { " --quick" } else { "" },
@@ -278,7 +279,10 @@ impl<'a> Maker<'a> {
                 self.ensure_job(r)?;
                 let (_, output, seconds) = &self.done[i];
                 let job = &self.job.as_ref().expect("ensured").1;
+                // What the printed command writes: the same keys in the same order
+                // (it renders in one pass, so no passes and `complete`).
                 let mut meta = ImageMetadata::for_render(&r.scene, job, &r.settings(), *seconds);
+                meta.push_samples(&output.samples, None, None);
                 set_command_line(&mut meta, &command);
                 write_png(&path, &r.scene, &output.image, &meta)?;
                 let mut figures = vec![figure(shot, &output.image, vec![command.clone()])];
@@ -390,20 +394,21 @@ fn shell_path(p: &Path) -> String {
 
 fn load(path: &Path, progress: &dyn Progress) -> Result<Scene> {
     let scene = collada::load(path)?;
+    // Each warning names the file already (the loader's messages start with it).
     for w in &scene.warnings {
-        progress.note(&format!("warning: {}: {w}", path.display()));
+        progress.note(&format!("warning: {w}"));
     }
     Ok(scene)
 }
 
-/// The image's `ember.command_line`: the command that renders it, not `ember report`.
+/// The image's `ember.command_line`: the command that renders it, not `ember report`,
+/// so that the figure's metadata has the keys the command's image has.
 fn set_command_line(meta: &mut ImageMetadata, command: &str) {
     for (k, v) in &mut meta.entries {
         if k == "ember.command_line" {
             *v = command.to_string();
         }
     }
-    meta.push("ember.made_by", "ember report");
 }
 
 fn write_png(path: &Path, scene: &Path, image: &Image, meta: &ImageMetadata) -> Result<()> {

@@ -60,7 +60,7 @@ impl Budget {
         }
     }
 
-    /// Small sizes and sample counts: every part, in a minute or two on two cores.
+    /// Small sizes and sample counts: every part, in about 5 to 10 seconds on two cores.
     pub fn quick() -> Budget {
         Budget {
             normals: (160, 120),
@@ -285,7 +285,7 @@ fn part2(scenes: &Scenes, b: &Budget, seed: u64) -> PlannedSection {
         id: "part2",
         title: "Part 2: Bounding volume hierarchy",
         items: vec![
-            Planned::Text("Meshes of tens of thousands of triangles, normal-shaded: with ember's BVH (binned surface-area heuristic, 16 children per node) each renders in a fraction of a second.".into()),
+            Planned::Text("Large meshes, normal-shaded (the table below gives each one's triangle count): with ember's BVH (binned surface-area heuristic, 16 children per node) each renders in a fraction of a second.".into()),
             Planned::Figures { caption: "Large meshes".into(), shots },
             Planned::BvhTable { scenes: scenes.meshes.clone() },
         ],

@@ -95,7 +95,7 @@ fn column(k: Backend) -> String {
 }
 
 fn caption(b: &Budget) -> String {
-    let threads = rayon::current_num_threads();
+    let threads = crate::image_metadata::thread_count(rayon::current_num_threads());
     let embree = match Backend::Embree.available() {
         true => " Embree's build includes creating its device, as a render's does.",
         false => " This build has no Embree (build ember with `--features embree` for its column).",
@@ -105,7 +105,7 @@ fn caption(b: &Budget) -> String {
         n => format!("the BVH and Embree renders are the median of {n} runs"),
     };
     format!(
-        "Render times of one normal-shaded image at {}×{}, 1 sample per pixel, on {} with {threads} threads \
+        "Render times of one normal-shaded image at {}×{}, 1 sample per pixel, on {} with {threads} \
          (loading excluded; {runs}).{embree}",
         b.timing.0,
         b.timing.1,
