@@ -274,7 +274,8 @@ pub fn run(
                     opts.repeats,
                 )?;
                 progress(Progress::Line(format!(
-                    "{name} / Embree modes / {threads} threads: done"
+                    "{name} / Embree modes / {}: done",
+                    crate::image_metadata::thread_count(threads)
                 )));
                 report.modes.extend(modes);
                 let variants = embree_modes::embree_variants(
@@ -286,7 +287,8 @@ pub fn run(
                     opts.repeats,
                 )?;
                 progress(Progress::Line(format!(
-                    "{name} / Embree variants / {threads} threads: done"
+                    "{name} / Embree variants / {}: done",
+                    crate::image_metadata::thread_count(threads)
                 )));
                 report.variants.extend(variants);
             }
