@@ -174,14 +174,6 @@ pub fn fnv1a64(bytes: &[u8]) -> u64 {
     })
 }
 
-/// "1 thread", "2 threads": for sentences that say how many threads ran.
-pub fn thread_count(n: usize) -> String {
-    match n {
-        1 => "1 thread".into(),
-        n => format!("{n} threads"),
-    }
-}
-
 /// The CPU model from /proc/cpuinfo, or "unknown".
 pub fn cpu_model() -> String {
     std::fs::read_to_string("/proc/cpuinfo")

@@ -77,6 +77,14 @@ macro_rules! display_from_table {
 }
 pub(crate) use display_from_table;
 
+/// "1 thread", "2 threads": for sentences that say how many threads ran.
+pub fn thread_count(n: usize) -> String {
+    match n {
+        1 => "1 thread".into(),
+        n => format!("{n} threads"),
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

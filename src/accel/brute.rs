@@ -82,10 +82,7 @@ pub fn slow_warning(prims: usize, rays: f64, threads: usize) -> Option<String> {
         s if s < 48.0 * 3600.0 => format!("{:.1} hours", s / 3600.0),
         s => format!("{:.0} days", s / 86400.0),
     };
-    let threads = match threads {
-        1 => "1 thread".to_string(),
-        n => format!("{n} threads"),
-    };
+    let threads = crate::names::thread_count(threads);
     Some(format!(
         "--accel none tests every ray against all {prims} primitives: up to {rays:.2e} rays would take \
          about {time} on {threads}; use --accel native (the BVH) unless measuring the brute force"

@@ -275,7 +275,7 @@ pub fn run(
                 )?;
                 progress(Progress::Line(format!(
                     "{name} / Embree modes / {}: done",
-                    crate::image_metadata::thread_count(threads)
+                    crate::names::thread_count(threads)
                 )));
                 report.modes.extend(modes);
                 let variants = embree_modes::embree_variants(
@@ -288,7 +288,7 @@ pub fn run(
                 )?;
                 progress(Progress::Line(format!(
                     "{name} / Embree variants / {}: done",
-                    crate::image_metadata::thread_count(threads)
+                    crate::names::thread_count(threads)
                 )));
                 report.variants.extend(variants);
             }

@@ -435,7 +435,7 @@ impl ScalingReport {
                     "{} vs triangle count: {} ({})",
                     metric.title,
                     mesh.name(),
-                    crate::image_metadata::thread_count(threads)
+                    crate::names::thread_count(threads)
                 );
                 let spec = ChartSpec {
                     title: &title,

@@ -533,7 +533,7 @@ impl RenderRun<'_> {
             "{}, {shows}, {spp}, seed {}, {}, {engine}",
             self.region(done.frame),
             s.seed,
-            ember::image_metadata::thread_count(threads)
+            ember::names::thread_count(threads)
         )
     }
 

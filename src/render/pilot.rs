@@ -6,7 +6,7 @@
 //! is deterministic: it does not depend on the clock, the thread count or the seed
 //! of the render it is for.
 
-use super::{pixels, splats, RenderJob, RenderSettings, StopToken};
+use super::{pixels, splats, Halves, RenderJob, RenderSettings, StopToken};
 use crate::accel::{Accel, BvhStats, TraversalStats};
 use crate::camera::Camera;
 use crate::geometry::Ray;
@@ -72,19 +72,8 @@ fn score(job: &RenderJob, s: &RenderSettings, camera: &Camera, e: Estimator) -> 
         rays: AtomicU64::new(0),
     };
     let [a, b] = PILOT_SEEDS.map(|seed| render(job, s, camera, &accel, e, seed));
-    let pixels = a.image.pixels.len().max(1) as f64;
-    let squares: f64 = a
-        .image
-        .pixels
-        .iter()
-        .zip(&b.image.pixels)
-        .map(|(x, y)| {
-            let d = crate::color::luminance(*x) as f64 - crate::color::luminance(*y) as f64;
-            0.25 * d * d
-        })
-        .sum();
     PilotScore {
-        variance: squares / pixels,
+        variance: Halves { a, b }.noise_per_pixel().powi(2),
         rays: accel.rays.into_inner(),
     }
 }

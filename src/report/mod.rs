@@ -146,7 +146,7 @@ fn check_scene_names(scenes: &[PathBuf]) -> Result<()> {
 }
 
 fn intro(opts: &ReportOptions) -> Vec<String> {
-    let threads = crate::image_metadata::thread_count(rayon::current_num_threads());
+    let threads = crate::names::thread_count(rayon::current_num_threads());
     vec![format!(
         "Made by `ember report{}` (ember {}, {}) on {} with {threads}, seed {}. \
              Under every figure is the `ember` command that renders the same pixels bit for bit, \

@@ -95,7 +95,7 @@ fn column(k: Backend) -> String {
 }
 
 fn caption(b: &Budget) -> String {
-    let threads = crate::image_metadata::thread_count(rayon::current_num_threads());
+    let threads = crate::names::thread_count(rayon::current_num_threads());
     let embree = match Backend::Embree.available() {
         true => " Embree's build includes creating its device, as a render's does.",
         false => " This build has no Embree (build ember with `--features embree` for its column).",
