@@ -51,7 +51,7 @@ const CASES: &[Case] = &[
         scene: "scenes/cs184/sky/CBspheres.dae",
         max_depth: 5,
         strategy: DirectStrategy::Light,
-        expected: 0xec78_2f78_f7b2_2afc,
+        expected: 0x3866_2701_a748_03fb,
     },
     Case {
         scene: "scenes/cs184/sky/CBbunny_microfacet_cu.dae",

@@ -500,3 +500,53 @@ fn bounces_do_not_share_their_numbers() {
         );
     }
 }
+
+/// Roulette must not read refraction's `(ηi/ηt)²` radiance factor as lost throughput:
+/// a ray through a clear refracting ball (transmittance 1) leaves it with the
+/// throughput it entered with, so with roulette from the first bounce every pixel
+/// must still see the emitter behind it exactly. Read naively (throughput 1/η² inside
+/// the ball), roulette would end most of those paths and scale the rest by η².
+#[test]
+fn roulette_ignores_the_radiance_factor_of_refraction() {
+    let le = 1.0;
+    let scene = Scene {
+        spheres: vec![
+            Sphere {
+                centre: Vec3::ZERO,
+                radius: 0.5,
+                material: 0,
+            },
+            Sphere {
+                centre: Vec3::ZERO,
+                radius: 4.0,
+                material: 1,
+            },
+        ],
+        materials: vec![
+            Material::refraction(1.5, Color::ONE),
+            Material::lambertian(Color::ZERO).with_emission(Color::splat(le), true),
+        ],
+        bounds: Aabb::new(Vec3::splat(-4.0), Vec3::splat(4.0)),
+        ..Default::default()
+    };
+    let mut cam = Camera::new(&scene.camera, &scene.bounds, 8, 8);
+    // Every camera ray passes through the ball (angular radius atan(0.5/√(1.5²−0.5²))).
+    (cam.eye, cam.forward, cam.up, cam.right) = (Vec3::Z * 1.5, -Vec3::Z, Vec3::Y, Vec3::X);
+    (cam.tan_half_x, cam.tan_half_y) = (0.2, 0.2);
+    let job = RenderJob::with_camera(scene, AccelKind::Native(BvhBuilder::Sah), cam).unwrap();
+    let s = RenderSettings {
+        spp: 16,
+        max_depth: 4,
+        strategy: Some(DirectStrategy::Light),
+        roulette: Roulette::Throughput {
+            start: 1,
+            min_prob: 0.05,
+        },
+        seed: 3,
+        ..Default::default()
+    };
+    let out = job.render(&s);
+    for p in &out.image.pixels {
+        assert!((p.y - le).abs() <= 1e-4, "pixel {p}, want {le}");
+    }
+}

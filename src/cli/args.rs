@@ -513,7 +513,7 @@ pub struct RenderArgs {
     #[arg(long, value_parser = integrator(), default_value = AUTO)]
     pub integrator: IntegratorChoice,
 
-    /// Russian roulette: off, throughput (continue with probability max(throughput), at least 0.05), or a fixed probability like 0.5.
+    /// Russian roulette: off, throughput (continue with probability max(throughput), at least 0.05, with refraction's (ηi/ηt)² factors left out), or a fixed probability like 0.5.
     #[arg(long, default_value = "throughput", value_name = "off|throughput|PROB")]
     pub rr: String,
 

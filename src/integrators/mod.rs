@@ -239,6 +239,9 @@ impl Estimator {
 pub enum Roulette {
     Off,
     /// From bounce `start` on, continue with probability `min(1, max channel of throughput)`, at least `min_prob`.
+    /// The throughput is read without refraction's `(ηi/ηt)²` radiance factors (as
+    /// pbrt-v4's `etaScale` and Mitsuba's `η²`): they cancel when the path leaves the
+    /// medium again, so they say nothing about what the path will carry.
     Throughput {
         start: u32,
         min_prob: f32,

@@ -211,6 +211,10 @@ struct Kernel<'k, 'a, L: Lanes> {
     stream: SampleStream<L>,
     rays: RayPacket,
     beta: V3<L::F>,
+    /// The product of `1 / radiance_scale` over the path's refractions: roulette
+    /// reads `beta · eta_scale`, so a path inside glass (whose radiance is compressed
+    /// by `(ηi/ηt)²` until it leaves again) is not ended for a factor that cancels.
+    eta_scale: L::F,
     radiance: V3<L::F>,
     /// Scattering events so far (small integers, exact as floats).
     bounces: L::F,
@@ -257,6 +261,7 @@ impl<'k, 'a, L: Lanes> Kernel<'k, 'a, L> {
             },
             rays: RayPacket::default(),
             beta: zero,
+            eta_scale: l.f(1.0),
             radiance: zero,
             bounces: l.f(0.0),
             pair_base: l.u(0),
@@ -363,6 +368,7 @@ impl<'k, 'a, L: Lanes> Kernel<'k, 'a, L> {
         self.set_rays(fresh, o, d, self.f(f32::INFINITY), l.u(NO_PRIM));
         let zero = V3::splat(l, Vec3::ZERO);
         self.beta = V3::select(m, V3::splat(l, Vec3::ONE), self.beta);
+        self.eta_scale = L::F::select(m, self.f(1.0), self.eta_scale);
         self.radiance = V3::select(m, zero, self.radiance);
         self.bounces = L::F::select(m, self.f(0.0), self.bounces);
         self.pair_base = L::U::select(m, l.u(0), self.pair_base);
@@ -861,11 +867,12 @@ impl<'k, 'a, L: Lanes> Kernel<'k, 'a, L> {
         ended |= lanes & !consistent.bits();
         let go = lanes & !ended;
         let beta = self.beta * bs.weight;
+        let eta_scale = self.eta_scale / bsdf.radiance_scale(l, wo, bs.wi);
         let q = self
             .it
             .s
             .roulette
-            .continue_prob_l(l, self.bounces, go, beta);
+            .continue_prob_l(l, self.bounces, go, beta * eta_scale);
         let play = go & q.lt(self.f(1.0)).bits();
         let mut survive = go & !(play & u_roulette.ge(q).bits());
         let beta = beta / q;
@@ -874,6 +881,7 @@ impl<'k, 'a, L: Lanes> Kernel<'k, 'a, L> {
         if survive != 0 {
             let m = self.mask(survive);
             self.beta = V3::select(m, beta, self.beta);
+            self.eta_scale = L::F::select(m, eta_scale, self.eta_scale);
             self.prev_p = V3::select(m, hit.p, self.prev_p);
             self.prev_pdf = L::F::select(m, bs.pdf, self.prev_pdf);
             self.has_prev |= survive;
