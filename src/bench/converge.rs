@@ -4,7 +4,9 @@
 //! one reference.
 //!
 //! Each point is a fresh render (its own seed) at a doubled sample count, timed
-//! render-only with all threads. Errors are measured against a reference: a given
+//! render-only with all threads; with `seeds` above 1 it is that many renders, their
+//! MSEs averaged and their times' median taken, so that one lucky seed cannot move
+//! a comparison. Errors are measured against a reference: a given
 //! EXR (e.g. the Mitsuba references, whose noise is negligible at their spp and
 //! is subtracted anyway when known) or ember's own high-spp render, rendered as
 //! two halves so that its own noise variance can be subtracted from every MSE.
@@ -46,6 +48,9 @@ pub struct ConvergeOptions {
     pub reference_spp: u32,
     pub out_dir: PathBuf,
     pub seed: u64,
+    /// Renders per point (each with its own seed): the point's MSE is their mean, its
+    /// time their median.
+    pub seeds: u32,
     /// Add the Embree backend as a method when this build has it.
     pub compare_backends: bool,
     /// Mitsuba 3 as peer methods, one curve per variant and sampler.
@@ -93,6 +98,8 @@ pub struct ConvergeReport {
     pub reference_note: String,
     /// What the peers said about their own images (Cycles' mean check at its highest spp).
     pub peer_notes: Vec<String>,
+    /// Renders per point.
+    pub seeds: u32,
 }
 
 /// What a method changes in the default settings.
@@ -242,6 +249,7 @@ pub fn run(opts: &ConvergeOptions, log: &mut dyn FnMut(&str)) -> Result<Converge
         points,
         reference_note: reference.note,
         peer_notes,
+        seeds: opts.seeds.max(1),
     })
 }
 
@@ -280,20 +288,25 @@ fn run_method(
     let mut out = Vec::new();
     let mut spp = 1;
     while spp <= opts.max_spp {
-        let s = RenderSettings {
-            spp,
-            seed: opts.seed.wrapping_add(1000 + spp as u64),
-            ..method.settings.clone()
-        };
-        let t = Instant::now();
-        let o = job.render(&s);
-        let seconds = t.elapsed().as_secs_f64();
-        let (rmse, rel_mse) = errors(&o.image, r);
+        let mut runs = Runs::default();
+        let mut samples = 0;
+        for k in 0..opts.seeds.max(1) {
+            let s = RenderSettings {
+                spp,
+                seed: point_seed(opts, spp, k),
+                ..method.settings.clone()
+            };
+            let t = Instant::now();
+            let o = job.render(&s);
+            runs.add(t.elapsed().as_secs_f64(), errors(&o.image, r));
+            samples = o.total_samples();
+        }
+        let (seconds, rmse, rel_mse) = runs.point();
         out.push(Point {
             method: method.name.clone(),
             peer: false,
             spp,
-            samples: o.total_samples(),
+            samples,
             seconds,
             rmse,
             rel_mse,
@@ -318,29 +331,67 @@ fn run_peer(
 ) -> Result<Vec<Point>> {
     let mut out = Vec::new();
     for &spp in counts {
-        let seed = opts.seed.wrapping_add(1000 + spp as u64);
-        let m = render(spp, seed, log)?;
-        let (rmse, rel_mse) = errors(&m.image, r);
+        let mut runs = Runs::default();
+        let mut spp_done = spp;
+        for k in 0..opts.seeds.max(1) {
+            let m = render(spp, point_seed(opts, spp, k), log)?;
+            runs.add(m.seconds, errors(&m.image, r));
+            spp_done = m.spp;
+        }
+        let (seconds, rmse, rel_mse) = runs.point();
         out.push(Point {
             method: name.to_string(),
             peer: true,
-            spp: m.spp,
-            samples: u64::from(m.spp) * u64::from(opts.width) * u64::from(opts.height),
-            seconds: m.seconds,
+            spp: spp_done,
+            samples: u64::from(spp_done) * u64::from(opts.width) * u64::from(opts.height),
+            seconds,
             rmse,
             rel_mse,
         });
-        if m.seconds > opts.max_seconds_per_point {
+        if seconds > opts.max_seconds_per_point {
             break;
         }
     }
     Ok(out)
 }
 
-/// RMSE and relMSE with the reference's own noise variance removed (never below 0).
+/// The seed of render `k` of the point at `spp`: render 0 keeps the seed a point
+/// had before there were several.
+fn point_seed(opts: &ConvergeOptions, spp: u32, k: u32) -> u64 {
+    opts.seed
+        .wrapping_add(1000 + spp as u64)
+        .wrapping_add(u64::from(k) << 32)
+}
+
+/// The renders of one point: their times and errors (MSE and relMSE, the
+/// reference's noise removed, not yet clamped).
+#[derive(Default)]
+struct Runs {
+    seconds: Vec<f64>,
+    mse: f64,
+    rel_mse: f64,
+}
+
+impl Runs {
+    fn add(&mut self, seconds: f64, (mse, rel_mse): (f64, f64)) {
+        self.seconds.push(seconds);
+        self.mse += mse;
+        self.rel_mse += rel_mse;
+    }
+
+    /// Median time, RMSE from the mean MSE, mean relMSE (errors never below 0).
+    fn point(mut self) -> (f64, f64, f64) {
+        let n = self.seconds.len() as f64;
+        let seconds = super::median(&mut self.seconds);
+        let rmse = (self.mse / n).max(0.0).sqrt();
+        (seconds, rmse, (self.rel_mse / n).max(0.0))
+    }
+}
+
+/// MSE and relMSE with the reference's own noise variance removed (may fall below 0
+/// for one render; [`Runs::point`] clamps their mean).
 fn errors(img: &Image, r: &Reference) -> (f64, f64) {
-    let mse = img.rmse(&r.image).powi(2);
-    let rmse = (mse - r.noise_var).max(0.0).sqrt();
+    let mse = img.rmse(&r.image).powi(2) - r.noise_var;
     let n = (3 * img.pixels.len()) as f64;
     let mut rel = 0.0;
     for (a, b) in img.pixels.iter().zip(&r.image.pixels) {
@@ -349,7 +400,7 @@ fn errors(img: &Image, r: &Reference) -> (f64, f64) {
             rel += ((a - b).powi(2) - r.noise_var) / (b * b + 0.01);
         }
     }
-    (rmse, (rel / n).max(0.0))
+    (mse, rel / n)
 }
 
 fn reference(
@@ -656,6 +707,12 @@ impl Report for ConvergeReport {
     /// the RMSEs at equal render time and at equal spp.
     fn summary(&self) -> String {
         let mut s = self.reference_note.clone();
+        if self.seeds > 1 {
+            s += &format!(
+                "\neach point: {} renders with their own seeds, RMSE from their mean MSE, their median time",
+                self.seeds
+            );
+        }
         for note in &self.peer_notes {
             s += &format!("\n{note}");
         }
@@ -718,6 +775,20 @@ mod tests {
         assert_eq!(rmse_at(&pts, "b", 1.0, false), None);
     }
 
+    /// Several renders make one point: the mean of their MSEs (one render's may fall
+    /// below zero once the reference's noise is removed) and the median of their times.
+    #[test]
+    fn a_points_renders_average_their_mse_and_take_the_median_time() {
+        let mut runs = Runs::default();
+        for (t, mse) in [(3.0, 4e-4), (1.0, -1e-4), (2.0, 3e-4)] {
+            runs.add(t, (mse, mse));
+        }
+        let (seconds, rmse, rel) = runs.point();
+        assert_eq!(seconds, 2.0);
+        assert!((rmse - 2e-4f64.sqrt()).abs() < 1e-12, "{rmse}");
+        assert!((rel - 2e-4).abs() < 1e-12, "{rel}");
+    }
+
     /// A peer whose error falls faster than 1/√time is compared where it was
     /// measured, not extrapolated from its efficiency: the ratio follows its curve.
     #[test]
@@ -740,6 +811,7 @@ mod tests {
             points: pts,
             reference_note: String::new(),
             peer_notes: Vec::new(),
+            seeds: 1,
         };
         let time = report.equal_time_table();
         // At 0.1 s the peer has rendered 16 spp: RMSE 0.01, the ratio 1.00; at 1.6 s,

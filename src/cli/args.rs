@@ -368,6 +368,9 @@ pub struct BenchConvergeArgs {
     /// Random seed.
     #[arg(long, default_value_t = 0)]
     pub seed: u64,
+    /// Renders per point, each with its own seed: a point's RMSE is that of their mean MSE, its time their median (for every method, peers included).
+    #[arg(long, default_value_t = 1, value_parser = at_least_one::<u32>)]
+    pub seeds: u32,
     /// Also run Mitsuba 3 as a method, through this Python (one that imports `mitsuba`; scripts/mitsuba-env creates one and prints its path). Each point is the warm, render-only time of its own process.
     #[arg(long, value_name = "PYTHON")]
     pub mitsuba: Option<PathBuf>,

@@ -399,6 +399,7 @@ pub(super) fn bench_converge_options(
         reference_spp: a.reference_spp,
         out_dir: a.out,
         seed: a.seed,
+        seeds: a.seeds,
         compare_backends: true,
         mitsuba: a.mitsuba.map(|python| bench::converge::MitsubaPeer {
             python,

@@ -49,6 +49,7 @@ pub(super) fn blocks(
         reference_spp: if opts.quick { 256 } else { 4096 },
         out_dir: out_dir.clone(),
         seed: opts.seed,
+        seeds: 1,
         compare_backends: true,
         mitsuba: mitsuba.clone(),
         cycles: None,
