@@ -482,7 +482,7 @@ fn help_lists_every_subcommand_in_one_line_each() {
             .lines()
             .find(|l| l.trim_start().starts_with("bench "))
             .unwrap();
-        for which in ["render", "accel", "converge", "stability"] {
+        for which in ["render", "accel", "converge", "stability", "estimators"] {
             assert!(bench.contains(which), "{bench}");
         }
     }
@@ -559,4 +559,44 @@ fn the_png_rate_map_has_a_legend_below_the_map() {
         (160, 120),
         "the EXR holds the counts only"
     );
+}
+
+/// `bench estimators` compares the two estimators where light tracing can show the
+/// image, and says why not elsewhere (mirrors and glass), with what auto runs and
+/// whether its rule or its pilot chose.
+#[cfg(feature = "bench")]
+#[test]
+fn bench_estimators_rows_say_what_auto_runs_and_why_light_tracing_is_left_out() {
+    let dir = tempfile::tempdir().unwrap();
+    let o = run(command()
+        .args([
+            "bench",
+            "estimators",
+            "-r",
+            "16",
+            "12",
+            "-s",
+            "2",
+            "--pairs",
+            "1",
+            "--out",
+        ])
+        .arg(dir.path())
+        .arg(repo("scenes/cs184/sky/CBempty.dae"))
+        .arg(repo("scenes/cs184/sky/CBspheres.dae"))
+        .arg(repo("scenes/cs184/sky/CBbunny.dae")))
+    .success();
+    let csv = std::fs::read_to_string(dir.path().join("estimators.csv")).unwrap();
+    let rows: Vec<&str> = csv.lines().skip(1).collect();
+    assert_eq!(rows.len(), 3, "{csv}");
+    let row = |name: &str| *rows.iter().find(|r| r.contains(name)).unwrap();
+    assert!(row("CBempty").contains("(pilot)"), "{csv}");
+    assert!(row("CBspheres").contains("path (rule)"), "{csv}");
+    assert!(row("CBspheres").contains("mirror or glass"), "{csv}");
+    assert!(row("CBbunny").contains("path (rule)"), "{csv}");
+    assert!(
+        !row("CBbunny").contains("—"),
+        "light tracing is measured: {csv}"
+    );
+    assert!(o.stdout().contains("| scene |"), "{}", o.stdout());
 }

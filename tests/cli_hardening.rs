@@ -582,7 +582,7 @@ fn every_subcommand(dir: &std::path::Path) -> Vec<Vec<String>> {
     let (exp, img) = (out("exp"), s(&image));
     cmds[3].extend(["--out", &exp]);
     cmds.push(vec!["info", &img]);
-    let (br, ba, bc, bs) = (out("br"), out("ba"), out("bc"), out("bs"));
+    let (br, ba, bc, bs, be) = (out("br"), out("ba"), out("bc"), out("bs"), out("be"));
     if cfg!(feature = "bench") {
         cmds.extend([
             vec![
@@ -639,6 +639,22 @@ fn every_subcommand(dir: &std::path::Path) -> Vec<Vec<String>> {
                 "0.001",
                 "--out",
                 &bs,
+            ],
+            vec![
+                "bench",
+                "estimators",
+                &scene,
+                "-t",
+                "1",
+                "-r",
+                "8",
+                "6",
+                "-s",
+                "1",
+                "--pairs",
+                "1",
+                "--out",
+                &be,
             ],
         ]);
     }

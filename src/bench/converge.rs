@@ -356,11 +356,11 @@ fn run_peer(
 }
 
 /// The seed of render `k` of the point at `spp`: render 0 keeps the seed a point
-/// had before there were several.
+/// had before there were several. Small numbers: Mitsuba takes 32-bit seeds.
 fn point_seed(opts: &ConvergeOptions, spp: u32, k: u32) -> u64 {
     opts.seed
         .wrapping_add(1000 + spp as u64)
-        .wrapping_add(u64::from(k) << 32)
+        .wrapping_add(u64::from(k) << 16)
 }
 
 /// The renders of one point: their times and errors (MSE and relMSE, the
@@ -475,11 +475,9 @@ fn own_reference(
         )?;
         let h = job.halves(&RenderSettings {
             spp: opts.reference_spp,
-            strategy: Some(if base.max_depth > 1 {
-                DirectStrategy::Mis
-            } else {
-                DirectStrategy::Light
-            }),
+            // MIS whatever the depth: light sampling alone (which this chose at `-m 1`)
+            // leaves a glossy scene's highlights noisy even at 8192 spp.
+            strategy: Some(DirectStrategy::Mis),
             roulette: Roulette::Off,
             // The halves' seeds 2·seed + 1 and 2·seed + 2 are 0xC0FFEE + 1 and + 2.
             seed: REFERENCE_SEED,

@@ -8,6 +8,7 @@ pub mod chart;
 pub mod converge;
 pub mod cycles;
 pub mod embree_modes;
+pub mod estimators;
 pub mod fit;
 pub mod measure;
 pub mod meshes;

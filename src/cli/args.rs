@@ -17,7 +17,7 @@ Examples:
   ember -s 64 -l 4 -m 5 -r 480 360 -f bunny.png scenes/cs184/sky/CBbunny.dae
   ember info scenes/cs184/sky/CBbunny.dae       what a scene holds, and the backends
   ember report --out write-up                   the CS184 write-up's figures as a page
-  ember bench render | accel | converge SCENE | stability    (see ember bench --help)
+  ember bench render | accel | converge SCENE | stability | estimators    (see ember bench --help)
 
 Stopping a render:
   Ctrl-C (or SIGTERM) stops within one pixel's time, writes the pixels finished so far
@@ -103,7 +103,7 @@ pub enum Command {
     /// semantics, for side-by-side measurements.
     #[command(allow_negative_numbers = true)]
     Export(ExportArgs),
-    /// Measure speed and accuracy: render, accel, converge, stability.
+    /// Measure speed and accuracy: render, accel, converge, stability, estimators.
     #[cfg(feature = "bench")]
     Bench {
         #[command(subcommand)]
@@ -265,6 +265,14 @@ pub enum BenchCommand {
     /// roulette. Writes stability.csv, stability.md and a chart.
     #[command(allow_negative_numbers = true)]
     Stability(BenchStabilityArgs),
+    /// Whether --integrator auto picks the more efficient of path tracing and light tracing, scene by scene.
+    ///
+    /// Each estimator renders each scene in pairs of seeds; noise² (of a pair's averaged pixel, from the two renders'
+    /// difference) times the pair's render time is its inefficiency. A row gives both, what auto runs (by the scene's
+    /// rule or its pilot) and the pick's inefficiency over the better one's. Default scenes: every scene ember ships.
+    /// Writes estimators.csv and estimators.md.
+    #[command(allow_negative_numbers = true)]
+    Estimators(BenchEstimatorsArgs),
 }
 
 #[cfg(feature = "bench")]
@@ -387,6 +395,34 @@ pub struct BenchConvergeArgs {
     /// image mean is checked against --reference's manifest.
     #[arg(long, value_name = "PYTHON")]
     pub cycles: Option<PathBuf>,
+    /// Worker threads (default: all cores).
+    #[arg(short = 't', value_name = "THREADS", value_parser = at_least_one::<usize>)]
+    pub threads: Option<usize>,
+}
+
+#[cfg(feature = "bench")]
+#[derive(Args, Debug)]
+pub struct BenchEstimatorsArgs {
+    /// The .dae scenes (default: every scene under the data folder's scenes/).
+    pub scenes: Vec<PathBuf>,
+    /// Max ray depth.
+    #[arg(short = 'm', default_value_t = 5)]
+    pub max_depth: u32,
+    /// Resolution.
+    #[arg(short = 'r', num_args = 2, action = clap::ArgAction::Set, value_names = ["WIDTH", "HEIGHT"], default_values_t = [160, 120])]
+    pub resolution: Vec<u32>,
+    /// Samples per pixel of each render.
+    #[arg(short = 's', default_value_t = 64, value_parser = at_least_one::<u32>)]
+    pub spp: u32,
+    /// Pairs of renders per estimator and scene (the medians are reported).
+    #[arg(long, default_value_t = 2, value_parser = at_least_one::<u32>)]
+    pub pairs: u32,
+    /// Random seed.
+    #[arg(long, default_value_t = 0)]
+    pub seed: u64,
+    /// Output folder.
+    #[arg(long, default_value = "bench-out/estimators")]
+    pub out: PathBuf,
     /// Worker threads (default: all cores).
     #[arg(short = 't', value_name = "THREADS", value_parser = at_least_one::<usize>)]
     pub threads: Option<usize>,

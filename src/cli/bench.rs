@@ -2,7 +2,8 @@
 
 use super::args::{BenchAccelArgs, BenchCommand};
 use super::convert::{
-    bench_accel_options, bench_converge_options, bench_render_options, bench_stability_options,
+    bench_accel_options, bench_converge_options, bench_estimators_options, bench_render_options,
+    bench_stability_options,
 };
 use anyhow::{Context, Result};
 use ember::bench::{self, Report};
@@ -12,6 +13,7 @@ use std::path::{Path, PathBuf};
 pub(super) fn run(which: BenchCommand) -> Result<()> {
     let threads = match &which {
         BenchCommand::Stability(a) => a.threads,
+        BenchCommand::Estimators(a) => a.threads,
         BenchCommand::Converge(a) => a.threads,
         BenchCommand::Render(a) => a.threads,
         BenchCommand::Accel(_) => None,
@@ -31,6 +33,12 @@ pub(super) fn run(which: BenchCommand) -> Result<()> {
         BenchCommand::Stability(a) => {
             let report = bench::stability::run_stability(&bench_stability_options(&a)?)?;
             finish(&report, &a.out)
+        }
+        BenchCommand::Estimators(a) => {
+            let out = a.out.clone();
+            let opts = bench_estimators_options(a)?;
+            let report = bench::estimators::run(&opts, &mut |m| ember::errln!("ember: {m}"))?;
+            finish(&report, &out)
         }
     })
 }

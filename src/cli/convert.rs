@@ -2,7 +2,8 @@
 
 #[cfg(feature = "bench")]
 use super::args::{
-    BenchAccelArgs, BenchConvergeArgs, BenchRenderArgs, BenchStabilityArgs, ReportArgs,
+    BenchAccelArgs, BenchConvergeArgs, BenchEstimatorsArgs, BenchRenderArgs, BenchStabilityArgs,
+    ReportArgs,
 };
 use super::args::{CameraPlacement, LensArgs, PlacementArgs, RenderArgs};
 use anyhow::{bail, Context, Result};
@@ -387,6 +388,12 @@ pub(super) fn bench_converge_options(
 ) -> Result<bench::converge::ConvergeOptions> {
     let (width, height) = (a.resolution[0], a.resolution[1]);
     check_resolution(width, height)?;
+    // Mitsuba takes 32-bit seeds; a point's seeds run up to this (bench::converge).
+    let last_seed = u64::from(a.max_spp) + 1000 + (u64::from(a.seeds - 1) << 16);
+    let most = u64::from(u32::MAX) - last_seed;
+    if a.mitsuba.is_some() && a.seed > most {
+        bail!("--seed {}: Mitsuba takes 32-bit seeds; with these --max-spp and --seeds, --seed must be at most {most}", a.seed);
+    }
     Ok(bench::converge::ConvergeOptions {
         scene: a.scene,
         reference: a.reference,
@@ -407,6 +414,32 @@ pub(super) fn bench_converge_options(
             samplers: a.mitsuba_samplers,
         }),
         cycles: a.cycles,
+    })
+}
+
+/// `ember bench estimators`'s flags as the benchmark's options (no scenes: every
+/// scene the data folder has).
+#[cfg(feature = "bench")]
+pub(super) fn bench_estimators_options(
+    a: BenchEstimatorsArgs,
+) -> Result<bench::estimators::EstimatorsOptions> {
+    let (width, height) = (a.resolution[0], a.resolution[1]);
+    check_resolution(width, height)?;
+    for scene in &a.scenes {
+        check_scene_file(scene)?;
+    }
+    let scenes = match a.scenes.is_empty() {
+        true => bench::estimators::scenes_under(&ember::data::root()?.join("scenes"))?,
+        false => a.scenes,
+    };
+    Ok(bench::estimators::EstimatorsOptions {
+        scenes,
+        max_depth: a.max_depth,
+        width,
+        height,
+        spp: a.spp,
+        pairs: a.pairs,
+        seed: a.seed,
     })
 }
 

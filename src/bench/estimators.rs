@@ -1,0 +1,324 @@
+//! `ember bench estimators`: does `--integrator auto` pick the more efficient of path
+//! tracing and light tracing, on every scene where both can render the image?
+//!
+//! Each estimator renders the scene in pairs with independent seeds. Its noise is the
+//! variance of one pixel of a pair's averaged image (from the two renders' difference,
+//! as the pilot measures it); its cost is the pair's render time; its inefficiency is
+//! their product, the error² it would reach in one second. auto's pick is what `ember`
+//! runs for the scene: its rule where the scene decides, else its pilot. The row says
+//! how much less efficient the pick is than the better estimator (1 when it picked it).
+
+use super::table::Table;
+use super::{create_out_dir, median, Report};
+use crate::accel::{AccelKind, BvhBuilder};
+use crate::integrators::{light_tracing, Estimator};
+use crate::names::Named;
+use crate::render::{Halves, RenderJob, RenderSettings};
+use crate::scene::collada;
+use anyhow::Result;
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+
+#[derive(Clone, Debug)]
+pub struct EstimatorsOptions {
+    pub scenes: Vec<PathBuf>,
+    pub max_depth: u32,
+    pub width: u32,
+    pub height: u32,
+    /// Samples per pixel of each render.
+    pub spp: u32,
+    /// Pairs of renders per estimator (each pair gives one noise estimate).
+    pub pairs: u32,
+    pub seed: u64,
+}
+
+/// One estimator on one scene: the noise² of a pair's averaged pixel and the pair's
+/// render time, each the median over the pairs.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Cost {
+    pub variance: f64,
+    pub seconds: f64,
+}
+
+impl Cost {
+    pub fn inefficiency(&self) -> f64 {
+        self.variance * self.seconds
+    }
+}
+
+#[derive(Clone, Debug)]
+pub struct Row {
+    pub scene: String,
+    pub lights: String,
+    /// What auto runs, and whether the scene's rule or the pilot chose it.
+    pub pick: Estimator,
+    pub by_pilot: bool,
+    pub path: Cost,
+    /// Where light tracing cannot show the image: why.
+    pub light: Result<Cost, String>,
+}
+
+impl Row {
+    /// The pick's inefficiency over the better estimator's (1: auto took the better).
+    pub fn pick_over_best(&self) -> f64 {
+        let Ok(light) = self.light else {
+            return 1.0;
+        };
+        let (p, l) = (self.path.inefficiency(), light.inefficiency());
+        let picked = match self.pick {
+            Estimator::Path => p,
+            Estimator::LightTracing => l,
+        };
+        if picked == p.min(l) {
+            return 1.0; // also for a black image, where both are 0
+        }
+        picked / p.min(l)
+    }
+}
+
+pub struct EstimatorsReport {
+    pub rows: Vec<Row>,
+    /// Scenes left out, and why (unlit, failed to load).
+    pub skipped: Vec<String>,
+    pub settings: String,
+}
+
+/// Every `.dae` under `dir` (recursively), sorted: the default scene list.
+pub fn scenes_under(dir: &Path) -> Result<Vec<PathBuf>> {
+    let mut out = Vec::new();
+    let mut stack = vec![dir.to_path_buf()];
+    while let Some(d) = stack.pop() {
+        for entry in std::fs::read_dir(&d)? {
+            let p = entry?.path();
+            if p.is_dir() {
+                stack.push(p);
+            } else if p.extension().is_some_and(|e| e.eq_ignore_ascii_case("dae")) {
+                out.push(p);
+            }
+        }
+    }
+    out.sort();
+    Ok(out)
+}
+
+pub fn run(opts: &EstimatorsOptions, log: &mut dyn FnMut(&str)) -> Result<EstimatorsReport> {
+    let mut rows = Vec::new();
+    let mut skipped = Vec::new();
+    for path in &opts.scenes {
+        let name = label(path);
+        let scene = match collada::load(path) {
+            Ok(s) => s,
+            Err(e) => {
+                skipped.push(format!("{name}: does not load: {e}"));
+                continue;
+            }
+        };
+        if scene.lights.is_empty() && !scene.materials.iter().any(|m| m.emits()) {
+            skipped.push(format!("{name}: unlit"));
+            continue;
+        }
+        log(&format!("scene: {name}"));
+        let lights = light_kinds(&scene);
+        let gaps = light_tracing::warnings(&scene, opts.max_depth);
+        let job = RenderJob::new(
+            scene,
+            AccelKind::Native(BvhBuilder::Sah),
+            opts.width,
+            opts.height,
+        )?;
+        // What `ember SCENE` runs: auto's estimator and direct-lighting strategy
+        // (`RenderSettings::default()` fixes path tracing with light sampling).
+        let base = RenderSettings {
+            spp: opts.spp,
+            max_depth: opts.max_depth,
+            estimator: None,
+            strategy: None,
+            ..Default::default()
+        };
+        let (pick, scores) = job.estimator_choice(&base);
+        let path = cost(&job, &base, Estimator::Path, opts);
+        let light = match gaps.first() {
+            Some(why) => Err(short_reason(why)),
+            None => Ok(cost(&job, &base, Estimator::LightTracing, opts)),
+        };
+        rows.push(Row {
+            scene: name,
+            lights,
+            pick,
+            by_pilot: scores.is_some(),
+            path,
+            light,
+        });
+    }
+    let settings = format!(
+        "{}x{}, {} spp per render, -m {}, {} pair(s) of renders per estimator, all threads",
+        opts.width, opts.height, opts.spp, opts.max_depth, opts.pairs
+    );
+    Ok(EstimatorsReport {
+        rows,
+        skipped,
+        settings,
+    })
+}
+
+/// The first clause of a light-tracing warning (`cannot connect mirror or glass
+/// surfaces to the pinhole camera`), for a table cell.
+fn short_reason(warning: &str) -> String {
+    let clause = warning.split(':').next().unwrap_or(warning);
+    clause.trim_start_matches("light tracing ").to_string()
+}
+
+/// A scene's name in the table: its path under a `scenes/` folder (`cs184/sky/CBempty.dae`),
+/// else as given.
+fn label(path: &Path) -> String {
+    let parts: Vec<_> = path.components().collect();
+    match parts.iter().rposition(|c| c.as_os_str() == "scenes") {
+        Some(i) if i + 1 < parts.len() => parts[i + 1..]
+            .iter()
+            .map(|c| c.as_os_str().to_string_lossy())
+            .collect::<Vec<_>>()
+            .join("/"),
+        _ => path.display().to_string(),
+    }
+}
+
+/// The lights of a scene by kind, as `2 point, 1 area`.
+fn light_kinds(scene: &crate::scene::Scene) -> String {
+    let mut kinds: Vec<(&str, usize)> = Vec::new();
+    for l in &scene.lights {
+        match kinds.iter_mut().find(|(k, _)| *k == l.kind()) {
+            Some((_, n)) => *n += 1,
+            None => kinds.push((l.kind(), 1)),
+        }
+    }
+    if scene.has_unsampled_emitters() {
+        kinds.push(("emissive surface", 1));
+    }
+    let parts: Vec<String> = kinds.iter().map(|(k, n)| format!("{n} {k}")).collect();
+    parts.join(", ")
+}
+
+fn cost(job: &RenderJob, base: &RenderSettings, e: Estimator, opts: &EstimatorsOptions) -> Cost {
+    let mut variances = Vec::new();
+    let mut seconds = Vec::new();
+    for k in 0..u64::from(opts.pairs.max(1)) {
+        let render = |i: u64| {
+            let s = RenderSettings {
+                estimator: Some(e),
+                seed: opts.seed.wrapping_add(2 * k + i),
+                ..base.clone()
+            };
+            let t = Instant::now();
+            let out = job.render(&s);
+            (out, t.elapsed().as_secs_f64())
+        };
+        let ((a, ta), (b, tb)) = (render(1), render(2));
+        variances.push(Halves { a, b }.noise_per_pixel().powi(2));
+        seconds.push(ta + tb);
+    }
+    Cost {
+        variance: median(&mut variances),
+        seconds: median(&mut seconds),
+    }
+}
+
+impl EstimatorsReport {
+    pub fn table(&self) -> Table {
+        let mut t = Table::new([
+            "scene",
+            "lights",
+            "auto runs",
+            "path: noise²",
+            "path: s",
+            "light tracing: noise²",
+            "light tracing: s",
+            "noise²·s, light tracing ÷ path",
+            "auto's pick ÷ the better (noise²·s)",
+        ]);
+        for r in &self.rows {
+            let how = if r.by_pilot { "pilot" } else { "rule" };
+            let (lv, ls, ratio) = match &r.light {
+                Ok(l) if r.path.inefficiency() == 0.0 => (
+                    format!("{:.3e}", l.variance),
+                    format!("{:.3}", l.seconds),
+                    "— (black image)".into(),
+                ),
+                Ok(l) => (
+                    format!("{:.3e}", l.variance),
+                    format!("{:.3}", l.seconds),
+                    format!("{:.3}", l.inefficiency() / r.path.inefficiency()),
+                ),
+                Err(why) => ("—".into(), "—".into(), format!("— ({why})")),
+            };
+            t.push(vec![
+                r.scene.clone(),
+                r.lights.clone(),
+                format!("{} ({how})", r.pick.name()),
+                format!("{:.3e}", r.path.variance),
+                format!("{:.3}", r.path.seconds),
+                lv,
+                ls,
+                ratio,
+                format!("{:.2}", r.pick_over_best()),
+            ]);
+        }
+        t
+    }
+}
+
+impl Report for EstimatorsReport {
+    fn write(&self, out_dir: &Path) -> Result<Vec<PathBuf>> {
+        create_out_dir(out_dir)?;
+        let stem = out_dir.join("estimators");
+        self.table().write(&stem)?;
+        Ok(vec![stem.with_extension("csv"), stem.with_extension("md")])
+    }
+
+    fn summary(&self) -> String {
+        let mut s = format!("{}\n\n{}", self.settings, self.table().to_markdown());
+        for skip in &self.skipped {
+            s += &format!("\nleft out: {skip}");
+        }
+        s
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn row(pick: Estimator, path: f64, light: f64) -> Row {
+        let c = |v| Cost {
+            variance: v,
+            seconds: 2.0,
+        };
+        Row {
+            scene: "s".into(),
+            lights: String::new(),
+            pick,
+            by_pilot: true,
+            path: c(path),
+            light: Ok(c(light)),
+        }
+    }
+
+    #[test]
+    fn scenes_are_named_by_their_path_under_scenes() {
+        assert_eq!(
+            label(Path::new("/x/ember/scenes/cs184/sky/CBempty.dae")),
+            "cs184/sky/CBempty.dae"
+        );
+        assert_eq!(label(Path::new("my/room.dae")), "my/room.dae");
+    }
+
+    #[test]
+    fn the_pick_is_compared_with_the_better_estimator() {
+        assert_eq!(row(Estimator::Path, 1.0, 4.0).pick_over_best(), 1.0);
+        assert_eq!(row(Estimator::LightTracing, 1.0, 4.0).pick_over_best(), 4.0);
+        assert_eq!(row(Estimator::LightTracing, 3.0, 1.5).pick_over_best(), 1.0);
+        assert_eq!(row(Estimator::Path, 0.0, 0.0).pick_over_best(), 1.0);
+        let mut only_path = row(Estimator::Path, 1.0, 0.1);
+        only_path.light = Err("mirrors".into());
+        assert_eq!(only_path.pick_over_best(), 1.0);
+    }
+}
