@@ -599,4 +599,11 @@ fn bench_estimators_rows_say_what_auto_runs_and_why_light_tracing_is_left_out() 
         "light tracing is measured: {csv}"
     );
     assert!(o.stdout().contains("| scene |"), "{}", o.stdout());
+    // A scene that does not load is an error naming it, not a row left out.
+    let missing = dir.path().join("missing.dae");
+    run(command()
+        .args(["bench", "estimators", "--out"])
+        .arg(dir.path())
+        .arg(&missing))
+    .fails_with("missing.dae");
 }

@@ -78,7 +78,7 @@ impl Row {
 
 pub struct EstimatorsReport {
     pub rows: Vec<Row>,
-    /// Scenes left out, and why (unlit, failed to load).
+    /// Scenes left out, and why (unlit).
     pub skipped: Vec<String>,
     pub settings: String,
 }
@@ -106,13 +106,7 @@ pub fn run(opts: &EstimatorsOptions, log: &mut dyn FnMut(&str)) -> Result<Estima
     let mut skipped = Vec::new();
     for path in &opts.scenes {
         let name = label(path);
-        let scene = match collada::load(path) {
-            Ok(s) => s,
-            Err(e) => {
-                skipped.push(format!("{name}: does not load: {e}"));
-                continue;
-            }
-        };
+        let scene = collada::load(path)?;
         if scene.lights.is_empty() && !scene.materials.iter().any(|m| m.emits()) {
             skipped.push(format!("{name}: unlit"));
             continue;
