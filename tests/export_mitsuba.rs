@@ -244,6 +244,36 @@ fn export_sampler_option_rounds_the_count_it_does_not_take() {
     assert_eq!(count.attribute("value"), Some("16"));
 }
 
+/// `--camera-placement` moves the exported camera as it moves ember's: on a course
+/// file, `auto` is the course's rule and `file` the camera node's own position.
+#[test]
+fn export_places_the_camera_as_the_render_flag_says() {
+    let scene = repo("scenes/cs184/sky/CBspheres_lambertian.dae");
+    let origin = |placement: &str| {
+        let dir = tempfile::tempdir().unwrap();
+        let out = dir.path().to_str().unwrap();
+        ember([
+            "export",
+            scene.to_str().unwrap(),
+            "--camera-placement",
+            placement,
+            "--out",
+            out,
+        ])
+        .success();
+        let text = std::fs::read_to_string(dir.path().join("CBspheres_lambertian.xml")).unwrap();
+        let doc = roxmltree::Document::parse(&text).unwrap();
+        let lookat = doc
+            .descendants()
+            .find(|n| n.has_tag_name("lookat"))
+            .unwrap();
+        lookat.attribute("origin").unwrap().to_string()
+    };
+    let (auto, course, file) = (origin("auto"), origin("course"), origin("file"));
+    assert_eq!(auto, course);
+    assert_ne!(course, file);
+}
+
 /// ember's idea of the counts each Mitsuba sampler takes (what `ember bench converge`
 /// renders and checks) is Mitsuba's own, asked of Mitsuba for the doubling sequence.
 #[test]

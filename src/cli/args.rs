@@ -181,7 +181,7 @@ pub struct LensArgs {
 }
 
 /// `--camera-placement`, for the commands that place the scene's camera (renders,
-/// `ember camera`, `ember info`).
+/// `ember camera`, `ember info`, `ember export`).
 #[derive(Args, Debug)]
 pub struct PlacementArgs {
     /// Where the camera's eye goes. auto: the course's rule for the course's files (they use its
@@ -227,6 +227,8 @@ pub struct ExportArgs {
     /// takes nearly any count. A count the sampler does not take is rounded up as Mitsuba would, with a warning.
     #[arg(long, value_parser = named::<MitsubaSampler>(), default_value_t = MitsubaSampler::default())]
     pub sampler: MitsubaSampler,
+    #[command(flatten)]
+    pub placement: PlacementArgs,
 }
 
 #[derive(Clone, Copy, Debug, ValueEnum)]

@@ -721,6 +721,7 @@ pub(super) fn export(a: ExportArgs) -> Result<()> {
     let (w, h) = (a.resolution[0], a.resolution[1]);
     check_resolution(w, h)?;
     let mut scene = load_scene(&a.scene)?;
+    convert::apply_placement(&mut scene, &a.placement);
     apply_env_map(a.env_map.as_deref(), &mut scene)?;
     let camera = ember::camera::Camera::new(&scene.camera, &scene.bounds, w, h);
     std::fs::create_dir_all(&a.out)
