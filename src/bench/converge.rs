@@ -195,6 +195,7 @@ struct Reference {
 }
 
 pub fn run(opts: &ConvergeOptions, log: &mut dyn FnMut(&str)) -> Result<ConvergeReport> {
+    check_peer_seeds(opts)?;
     let scene = collada::load(&opts.scene)?;
     let base = RenderSettings {
         max_depth: opts.max_depth,
@@ -356,11 +357,28 @@ fn run_peer(
 }
 
 /// The seed of render `k` of the point at `spp`: render 0 keeps the seed a point
-/// had before there were several. Small numbers: Mitsuba takes 32-bit seeds.
+/// had before there were several.
 fn point_seed(opts: &ConvergeOptions, spp: u32, k: u32) -> u64 {
-    opts.seed
-        .wrapping_add(1000 + spp as u64)
-        .wrapping_add(u64::from(k) << 16)
+    opts.seed.wrapping_add(seed_offset(spp, k))
+}
+
+/// How far past `--seed` render `k` of the point at `spp` takes its seed. Small
+/// numbers: Mitsuba takes 32-bit seeds.
+fn seed_offset(spp: u32, k: u32) -> u64 {
+    1000 + u64::from(spp) + (u64::from(k) << 16)
+}
+
+/// Mitsuba takes 32-bit seeds: refused before the long run if the largest point seed
+/// would not fit.
+fn check_peer_seeds(opts: &ConvergeOptions) -> Result<()> {
+    let most = u64::from(u32::MAX) - seed_offset(opts.max_spp, opts.seeds.max(1) - 1);
+    if opts.mitsuba.is_some() && opts.seed > most {
+        bail!(
+            "--seed {}: Mitsuba takes 32-bit seeds; with these --max-spp and --seeds, --seed must be at most {most}",
+            opts.seed
+        );
+    }
+    Ok(())
 }
 
 /// The renders of one point: their times and errors (MSE and relMSE, the

@@ -13,7 +13,7 @@ use super::{create_out_dir, median, Report};
 use crate::accel::{AccelKind, BvhBuilder};
 use crate::integrators::{light_tracing, Estimator};
 use crate::names::Named;
-use crate::render::{Halves, RenderJob, RenderSettings};
+use crate::render::{RenderJob, RenderSettings};
 use crate::scene::collada;
 use anyhow::Result;
 use std::path::{Path, PathBuf};
@@ -196,19 +196,17 @@ fn cost(job: &RenderJob, base: &RenderSettings, e: Estimator, opts: &EstimatorsO
     let mut variances = Vec::new();
     let mut seconds = Vec::new();
     for k in 0..u64::from(opts.pairs.max(1)) {
-        let render = |i: u64| {
-            let s = RenderSettings {
-                estimator: Some(e),
-                seed: opts.seed.wrapping_add(2 * k + i),
-                ..base.clone()
-            };
-            let t = Instant::now();
-            let out = job.render(&s);
-            (out, t.elapsed().as_secs_f64())
+        // Pair k: two renders of `base.spp` each, seeds 2(seed + k) + 1 and + 2.
+        let s = RenderSettings {
+            estimator: Some(e),
+            spp: base.spp.saturating_mul(2),
+            seed: opts.seed.wrapping_add(k),
+            ..base.clone()
         };
-        let ((a, ta), (b, tb)) = (render(1), render(2));
-        variances.push(Halves { a, b }.noise_per_pixel().powi(2));
-        seconds.push(ta + tb);
+        let t = Instant::now();
+        let pair = job.halves(&s);
+        seconds.push(t.elapsed().as_secs_f64());
+        variances.push(pair.noise_per_pixel().powi(2));
     }
     Cost {
         variance: median(&mut variances),

@@ -388,12 +388,6 @@ pub(super) fn bench_converge_options(
 ) -> Result<bench::converge::ConvergeOptions> {
     let (width, height) = (a.resolution[0], a.resolution[1]);
     check_resolution(width, height)?;
-    // Mitsuba takes 32-bit seeds; a point's seeds run up to this (bench::converge).
-    let last_seed = u64::from(a.max_spp) + 1000 + (u64::from(a.seeds - 1) << 16);
-    let most = u64::from(u32::MAX) - last_seed;
-    if a.mitsuba.is_some() && a.seed > most {
-        bail!("--seed {}: Mitsuba takes 32-bit seeds; with these --max-spp and --seeds, --seed must be at most {most}", a.seed);
-    }
     Ok(bench::converge::ConvergeOptions {
         scene: a.scene,
         reference: a.reference,
