@@ -10,7 +10,7 @@ use bvh_common::{builders, random_ray, scene_from};
 use common::{load, random_triangle_point};
 use ember::accel::{Accel, AccelKind, Bvh, BvhBuilder, HitPacket, RayPacket};
 use ember::geometry::Ray;
-use ember::integrators::{DirectStrategy, Roulette};
+use ember::integrators::{DirectStrategy, Estimator, Roulette};
 use ember::lanes::{instruction_set, limit_instruction_set, InstructionSet, LANES};
 use ember::render::{Engine, RenderJob, RenderSettings};
 use ember::sampling::{uniform_sphere, Rng};
@@ -186,7 +186,11 @@ fn packet_renders_are_the_scalar_renders_bit_for_bit() {
         seed: 99,
         ..RenderSettings::default()
     };
-    let cases: [(&str, RenderSettings); 6] = [
+    let light_tracing = RenderSettings {
+        estimator: Some(Estimator::LightTracing),
+        ..base.clone()
+    };
+    let cases: [(&str, RenderSettings); 9] = [
         ("scenes/cs184/sky/CBspheres_lambertian.dae", base.clone()),
         (
             "scenes/cs184/sky/CBspheres_lambertian.dae",
@@ -231,6 +235,21 @@ fn packet_renders_are_the_scalar_renders_bit_for_bit() {
                 ..base.clone()
             },
         ),
+        // Light paths from a point light and from an area light (their rays start on
+        // its surface), counting every bounce or only the last.
+        ("scenes/cs184/sky/CBempty.dae", light_tracing.clone()),
+        (
+            "scenes/cs184/sky/CBspheres_lambertian.dae",
+            light_tracing.clone(),
+        ),
+        (
+            "scenes/cs184/sky/CBbunny.dae",
+            RenderSettings {
+                accumulate: false,
+                max_depth: 3,
+                ..light_tracing
+            },
+        ),
     ];
     for (path, settings) in cases {
         assert_packet_matches_scalar(path, load(path), &settings);
@@ -263,7 +282,7 @@ fn packet_renders_are_the_scalar_renders_far_from_the_origin() {
 /// CBgems (glass).
 fn assert_packet_matches_scalar(path: &str, scene: Scene, settings: &RenderSettings) {
     let job = RenderJob::new(scene, AccelKind::Native(BvhBuilder::Sah), 64, 48).unwrap();
-    if let Some(why) = settings.packet_blocker(&job) {
+    if let Some(why) = settings.packet_blocker() {
         assert!(path.contains("CBgems"), "{path}: {why}");
         return;
     }

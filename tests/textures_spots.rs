@@ -264,7 +264,7 @@ fn textures_and_spots_render_in_packets_as_one_path_at_a_time_does() {
                 max_depth: 3,
                 ..direct(1, Estimator::Path)
             };
-            assert_eq!(s.packet_blocker(&job), None);
+            assert_eq!(s.packet_blocker(), None);
             job.render(&s).image.pixels
         };
         let (packets, one) = (render(Engine::Packet), render(Engine::Scalar));

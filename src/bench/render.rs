@@ -168,7 +168,7 @@ fn measure(path: &Path, opts: &RenderBenchOptions) -> Result<Vec<RenderBenchRow>
             // device lives: it must not outlive its own render).
             let job = RenderJob::new(scene, accel, WIDTH, HEIGHT)?;
             let build_s = t1.elapsed().as_secs_f64();
-            let ran = if settings.uses_packets(&job) {
+            let ran = if settings.uses_packets() {
                 format!("packets ({})", crate::lanes::instruction_set())
             } else {
                 "scalar".into()

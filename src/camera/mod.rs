@@ -8,7 +8,7 @@ pub mod course_file;
 
 use crate::geometry::{Aabb, Ray};
 use crate::lanes::math::sin_cos_turns;
-use crate::lanes::{Lanes, One, Real, V3};
+use crate::lanes::{LaneBits, LaneMask, Lanes, One, Real, V3};
 use crate::sampling::{SampleStream, LENS_PAIR, PIXEL_PAIR};
 use crate::scene::CameraDesc;
 use glam::{Vec2, Vec3};
@@ -187,6 +187,18 @@ impl Camera {
     }
 }
 
+/// [`CameraConnection`]s of a lane type's points: the lanes in `seen` see theirs.
+#[derive(Clone, Copy, Debug)]
+pub struct LensConnections<F: Real> {
+    pub seen: LaneBits,
+    pub u: F,
+    pub v: F,
+    pub origin: V3<F>,
+    pub to_eye: V3<F>,
+    pub dist: F,
+    pub importance: F,
+}
+
 /// The pixel that sees a scene point, for estimators that connect to the camera.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct CameraConnection {
@@ -209,47 +221,76 @@ impl Camera {
     /// pinhole): `None` behind the lens or outside the frame. The pixel is where the ray
     /// from the lens point through `p` crosses the focal plane, seen from the eye.
     pub fn connect(&self, p: Vec3, u_lens: Vec2) -> Option<CameraConnection> {
+        let c = self.connect_l(One, 1, p.into(), (u_lens.x, u_lens.y));
+        let (x, y) = self.pixel_at(c.u, c.v);
+        (c.seen != 0).then_some(CameraConnection {
+            x,
+            y,
+            origin: c.origin.vec3(),
+            to_eye: c.to_eye.vec3(),
+            dist: c.dist,
+            importance: c.importance,
+        })
+    }
+
+    /// [`connect`](Self::connect) for the points `p` of `lanes`: the lanes that see
+    /// theirs, and per lane where in the image `(u, v) ∈ [0,1)²` (`pixel_at` turns it
+    /// into the pixel), the lens point, the direction to it and the importance.
+    #[inline(always)]
+    pub fn connect_l<L: Lanes>(
+        &self,
+        l: L,
+        lanes: LaneBits,
+        p: V3<L::F>,
+        u_lens: (L::F, L::F),
+    ) -> LensConnections<L::F> {
+        let (zero, one) = (l.f(0.0), l.f(1.0));
         let pinhole = self.lens.is_pinhole();
+        let (right, up, eye) = (
+            V3::splat(l, self.right),
+            V3::splat(l, self.up),
+            V3::splat(l, self.eye),
+        );
         let origin = if pinhole {
-            self.eye
+            eye
         } else {
-            let (lx, ly) = self.lens_offset(One, (u_lens.x, u_lens.y));
-            self.eye + lx * self.right + ly * self.up
+            let (lx, ly) = self.lens_offset(l, u_lens);
+            (eye + right * lx) + up * ly
         };
         let d = p - origin;
         let dist = d.length();
-        if !(dist > 0.0 && dist.is_finite()) {
-            return None;
-        }
         let w = d / dist;
-        let cos = w.dot(self.forward);
-        if cos <= 0.0 {
-            return None;
-        }
+        let cos = w.dot(V3::splat(l, self.forward));
         // The crossing with the plane at depth 1 (the pinhole) or at the focal distance,
         // scaled to depth 1 (the lens).
         let q = if pinhole {
             w / cos
         } else {
-            (origin - self.eye) / self.lens.focal_distance + w / cos
+            (origin - eye) / l.f(self.lens.focal_distance) + w / cos
         };
-        let u = 0.5 * (q.dot(self.right) / self.tan_half_x + 1.0);
-        let v = 0.5 * (1.0 - q.dot(self.up) / self.tan_half_y);
-        if !((0.0..1.0).contains(&u) && (0.0..1.0).contains(&v)) {
-            return None;
-        }
-        let x = ((u * self.width as f32) as u32).min(self.width - 1);
-        let y = ((v * self.height as f32) as u32).min(self.height - 1);
-        let area = 4.0 * self.tan_half_x * self.tan_half_y;
-        let importance = 1.0 / (area * cos * cos * cos * dist * dist);
-        importance.is_finite().then_some(CameraConnection {
-            x,
-            y,
+        let half = l.f(0.5);
+        let u = half * (q.dot(right) / l.f(self.tan_half_x) + one);
+        let v = half * (one - q.dot(up) / l.f(self.tan_half_y));
+        let area = l.f(4.0 * self.tan_half_x * self.tan_half_y);
+        let importance = one / (area * cos * cos * cos * dist * dist);
+        let in_frame = u.ge(zero) & u.lt(one) & v.ge(zero) & v.lt(one);
+        let seen = dist.gt(zero) & dist.is_finite() & cos.gt(zero) & in_frame;
+        LensConnections {
+            seen: (seen & importance.is_finite()).bits() & lanes,
+            u,
+            v,
             origin,
             to_eye: -w,
             dist,
             importance,
-        })
+        }
+    }
+
+    /// The pixel at image position `(u, v) ∈ [0,1)²`.
+    pub fn pixel_at(&self, u: f32, v: f32) -> (u32, u32) {
+        let x = ((u * self.width as f32) as u32).min(self.width - 1);
+        let y = ((v * self.height as f32) as u32).min(self.height - 1);
+        (x, y)
     }
 }
 

@@ -217,7 +217,7 @@ impl RenderRequest {
             bail!("--shard/--spp-offset cannot be used with light tracing (the estimator for {}): its light paths splat anywhere in the image, so every band would trace all of them, and its paths are not numbered by sample; use --integrator path", self.scene_path.display());
         }
         if self.settings.engine == Engine::Packet {
-            if let Some(why) = self.settings.packet_blocker(&job) {
+            if let Some(why) = self.settings.packet_blocker() {
                 bail!(
                     "--engine packet: {} needs the scalar engine ({why}); use --engine auto or scalar",
                     self.scene_path.display()
@@ -524,7 +524,7 @@ impl RenderRun<'_> {
             ),
             other => format!("--shading {other}"),
         };
-        let engine = if s.uses_packets(self.job) {
+        let engine = if s.uses_packets() {
             format!("packets of 16 ({})", ember::lanes::instruction_set())
         } else {
             "one path at a time".into()
@@ -658,14 +658,7 @@ pub(super) fn info(path: &Path, w: u32, h: u32, placement: &PlacementArgs) -> Re
         auto.reason
     )?;
     // What the default render (`ember SCENE`) would run on, packets or single paths.
-    let camera = ember::camera::Camera::new(&scene.camera, &scene.bounds, w, h);
-    let defaults = RenderSettings {
-        estimator: None,
-        strategy: None,
-        ..RenderSettings::default()
-    };
-    let job = RenderJob::with_accel(scene, bvh, camera);
-    match defaults.packet_blocker(&job) {
+    match RenderSettings::default().packet_blocker() {
         None => ember::outln!(
             "--engine auto (the default) runs packets of 16 paths ({})",
             ember::lanes::instruction_set()

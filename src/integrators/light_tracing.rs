@@ -11,21 +11,30 @@
 //! (a mirror or glass vertex cannot be connected to a pinhole), and emissive
 //! surfaces that are not lights (nothing starts a path there).
 //!
+//! Written once over the lane type, as the path tracer is: one path at a time
+//! (`--engine scalar`) or sixteen, one per SIMD lane, with the same BSDF, light and
+//! hit code.
+//!
 //! Determinism: a render is `spp·W·H` light paths, numbered; each chunk of
-//! `CHUNK_PATHS` draws its numbers as one stratified set, and the render driver adds
-//! the splats chunk by chunk in order, so the image depends on the seed only.
+//! `CHUNK_PATHS` draws its numbers as one stratified set; a chunk's splats are put in
+//! path order whichever lanes traced them, and the render driver adds them chunk by
+//! chunk in order, so the image depends on the seed only.
 
+use super::path::{geometrically_consistent, occluded, trace};
 use super::Engine;
 use super::{PathIntegrator, PathSettings, SampleIntegrator, Splat, SplatIntegrator};
 use crate::accel::Accel;
 use crate::camera::Camera;
-use crate::color::is_finite;
-use crate::geometry::{Frame, Ray};
-use crate::lanes::One;
+use crate::geometry::{Frame, NO_PRIM};
+use crate::lanes::rays::{HitPacket, RayPacket};
+use crate::lanes::{
+    dispatch, each_lane, LaneBits, LaneMask, Lanes, One, Real, Simd, SimdTask, UInt, LANES, V3,
+};
+use crate::lights::emit::EmissionSample;
 use crate::lights::Light;
-use crate::materials::Material;
+use crate::materials::BsdfLanes;
 use crate::sampling::{pixel_key, SampleStream};
-use crate::scene::{Scene, SurfaceInteraction};
+use crate::scene::{Hits, Scene};
 use crate::Color;
 use glam::{Vec2, Vec3};
 
@@ -46,7 +55,10 @@ pub struct LightTracer<'a> {
     accel: &'a dyn Accel,
     camera: &'a Camera,
     s: PathSettings,
+    engine: Engine,
     seed: u64,
+    /// Per material: whether it scatters light at all.
+    scatters: Vec<bool>,
     /// Cumulative light-selection probabilities, proportional to emitted power.
     light_cdf: Vec<f32>,
     /// Emitters seen directly (0-bounce paths), which only camera rays can find.
@@ -91,19 +103,23 @@ impl<'a> LightTracer<'a> {
             accel,
             camera,
             s,
+            engine,
             seed,
+            scatters: scene.materials.iter().map(|m| m.scatters()).collect(),
             light_cdf,
             direct,
         }
     }
 
-    #[inline]
-    fn counts(&self, bounces: u32) -> bool {
-        if self.s.accumulate {
-            bounces <= self.s.max_depth
-        } else {
-            bounces == self.s.max_depth
-        }
+    /// A path's start: the point and direction drawn on the light chosen by `u_choice`,
+    /// and its throughput (divided by the light's selection probability); `None` when
+    /// it carries nothing.
+    fn emit(&self, u_choice: f32, u_pos: Vec2, u_dir: Vec2) -> Option<(EmissionSample, Color)> {
+        let (li, p_light) = self.pick_light(u_choice)?;
+        let es = self.scene.lights[li].sample_le(&self.scene.bounds, u_pos, u_dir)?;
+        let beta = es.beta / p_light;
+        let beta0 = beta.max_element();
+        (!beta0.is_nan() && beta0 > 0.0).then_some((es, beta))
     }
 
     /// A light index chosen in proportion to power, and its probability.
@@ -113,129 +129,392 @@ impl<'a> LightTracer<'a> {
         let p = self.light_cdf[i] - prev;
         (p > 0.0).then_some((i, p))
     }
+}
 
-    /// Traces one light path, pushing its camera connections to `splats`. Returns the
-    /// number of non-finite contributions dropped.
-    fn trace(&self, stream: &SampleStream<One>, splats: &mut Vec<Splat>) -> u32 {
-        let get = |pair: u32| {
-            let (x, y) = stream.get_2d(pair);
-            Vec2::new(x, y)
-        };
-        let Some((li, p_light)) = self.pick_light(get(CHOICE_PAIR).x) else {
-            return 0;
-        };
-        let (u_pos, u_dir) = (get(POSITION_PAIR), get(DIRECTION_PAIR));
-        let Some(es) = self.scene.lights[li].sample_le(&self.scene.bounds, u_pos, u_dir) else {
-            return 0;
-        };
-        let mut beta = es.beta / p_light;
-        let beta0 = beta.max_element();
-        if beta0.is_nan() || beta0 <= 0.0 {
-            return 0;
+/// Per lane: a light path's state between bounces. Lanes are refilled with the next
+/// paths as paths end; each lane does exactly what the path alone would, so the
+/// splats (put back in path order) do not depend on the lane type.
+struct LightKernel<'k, 'a, L: Lanes> {
+    l: L,
+    it: &'k LightTracer<'a>,
+    live: LaneBits,
+    /// The path number of each lane.
+    path: [u64; LANES],
+    stream: SampleStream<L>,
+    rays: RayPacket,
+    beta: V3<L::F>,
+    /// Each path's starting throughput, which roulette divides by.
+    beta0: L::F,
+    bounces: L::F,
+    /// The first dimension pair of the current bounce.
+    pair_base: L::U,
+    /// Where each ray's line starts (lanes of `has_from`): the point it left.
+    from: V3<L::F>,
+    has_from: LaneBits,
+    /// The range's first path, the next to start, and the end of the range.
+    first: u64,
+    next: u64,
+    end: u64,
+    /// Splats with their path number, and non-finite contributions dropped.
+    splats: Vec<(u64, Splat)>,
+    nonfinite: u32,
+}
+
+impl<'k, 'a, L: Lanes> LightKernel<'k, 'a, L> {
+    #[inline(always)]
+    fn new(l: L, it: &'k LightTracer<'a>, first: u64, count: u64) -> Self {
+        let zero = V3::splat(l, Vec3::ZERO);
+        LightKernel {
+            l,
+            it,
+            live: 0,
+            path: [0; LANES],
+            stream: SampleStream {
+                kind: it.s.sampler,
+                key: l.u(0),
+                index: l.u(0),
+            },
+            rays: RayPacket::default(),
+            beta: zero,
+            beta0: l.f(1.0),
+            bounces: l.f(0.0),
+            pair_base: l.u(0),
+            from: zero,
+            has_from: 0,
+            first,
+            next: first,
+            end: first + count,
+            splats: Vec::new(),
+            nonfinite: 0,
         }
-        let mut ray = Ray::new(es.origin, es.dir);
-        // Where the current ray's line starts, when its origin was moved off a surface.
-        let mut from = es.on_surface;
-        let mut bounces = 0u32;
-        let mut nonfinite = 0;
-        while let Some(hit) = self.accel.intersect(&ray) {
-            let mut si = self.scene.interaction(&ray, &hit);
-            if let Some(from) = from {
-                si = self.scene.on_line(&si, from, ray.d.normalize());
-            }
-            let material = &self.scene.material_at(&si);
-            if !material.scatters() || bounces >= self.s.max_depth {
-                break;
-            }
-            bounces += 1;
-            let base = DIRECTION_PAIR + 1 + (bounces - 1) * PAIRS_PER_BOUNCE;
-            let w_light = -ray.d.normalize();
-            let frame = Frame::from_normal(si.ns);
-            if !material.is_delta() && self.counts(bounces) {
-                let u_lens = get(base);
-                let vertex = (&si, &frame, material);
-                nonfinite += self.connect_to_camera(vertex, u_lens, w_light, beta, splats);
-            }
-            if bounces >= self.s.max_depth {
-                break;
-            }
-            let wl = frame.to_local(w_light);
-            let u_lobe = get(base + 2);
-            let Some(bs) = material.sample(wl, u_lobe.x, get(base + 1)) else {
-                break;
-            };
-            let w_next = frame.to_world(bs.wi);
-            let reflect = bs.wi.z * wl.z > 0.0;
-            if !geometrically_consistent(&si, w_light, w_next, reflect) {
-                break;
-            }
-            beta *= bs.weight * adjoint_factor(material, &si, wl, bs.wi, w_light, w_next);
-            let q = self.s.roulette.continue_prob(bounces, beta / beta0);
-            if q < 1.0 && u_lobe.y >= q {
-                break;
-            }
-            beta /= q;
-            if !is_finite(beta) || beta == Color::ZERO {
-                break;
-            }
-            ray = si.spawn_ray(w_next);
-            from = Some(si.p);
-        }
-        nonfinite
     }
 
-    /// Connects a non-specular vertex, lit along `w_light` with power `beta`, to the eye.
-    fn connect_to_camera(
-        &self,
-        (si, frame, m): (&SurfaceInteraction, &Frame, &Material),
-        u_lens: Vec2,
-        w_light: Vec3,
-        beta: Color,
-        splats: &mut Vec<Splat>,
-    ) -> u32 {
-        let Some(c) = self.camera.connect(si.p, u_lens) else {
-            return 0;
+    /// Traces every path of the range; its splats in path order.
+    #[inline(always)]
+    fn run(mut self, out: &mut Vec<Splat>) -> u32 {
+        let mut hits = HitPacket::default();
+        loop {
+            self.refill();
+            if self.live == 0 {
+                break;
+            }
+            trace(self.l, self.it.accel, &self.rays, self.live, &mut hits);
+            let ended = self.bounce(&hits);
+            self.live &= !ended;
+        }
+        if L::WIDTH == 1 {
+            out.extend(self.splats.iter().map(|&(_, splat)| splat));
+        } else {
+            in_path_order(&self.splats, self.first, self.end, out);
+        }
+        self.nonfinite
+    }
+
+    /// Starts the next paths in the free lanes: a light, a point and a direction.
+    #[inline(always)]
+    fn refill(&mut self) {
+        while self.live != self.l.all() && self.next < self.end {
+            let fresh = self.assign_paths();
+            self.start(fresh);
+        }
+    }
+
+    /// Gives the free lanes the next paths of the range and their streams: the lanes.
+    #[inline(always)]
+    fn assign_paths(&mut self) -> LaneBits {
+        let l = self.l;
+        let (mut fresh, mut key, mut index) = (0 as LaneBits, [0u32; LANES], [0u32; LANES]);
+        for i in each_lane(l.all() & !self.live) {
+            if self.next == self.end {
+                break;
+            }
+            let path = self.next;
+            self.next += 1;
+            self.path[i] = path;
+            key[i] = pixel_key(self.it.seed ^ LIGHT_PATHS, path / CHUNK_PATHS);
+            index[i] = (path % CHUNK_PATHS) as u32;
+            fresh |= 1 << i;
+        }
+        let stream = SampleStream {
+            kind: self.it.s.sampler,
+            key: l.u_from(key),
+            index: l.u_from(index),
         };
-        let (wl, wc) = (frame.to_local(w_light), frame.to_local(c.to_eye));
-        if !geometrically_consistent(si, c.to_eye, w_light, wl.z * wc.z > 0.0) {
-            return 0;
+        self.stream = SampleStream::select(l.mask(fresh), stream, self.stream);
+        fresh
+    }
+
+    /// Starts the paths of lanes `fresh` on the lights; a path that carries nothing
+    /// leaves its lane free.
+    #[inline(always)]
+    fn start(&mut self, fresh: LaneBits) {
+        let l = self.l;
+        let choice = self.pair_arrays(CHOICE_PAIR);
+        let pos = self.pair_arrays(POSITION_PAIR);
+        let dir = self.pair_arrays(DIRECTION_PAIR);
+        let [mut o, mut d, mut from, mut beta] = [[[0.0f32; LANES]; 3]; 4];
+        let mut beta0 = [1.0f32; LANES];
+        let (mut started, mut has_from) = (0 as LaneBits, 0 as LaneBits);
+        for i in each_lane(fresh) {
+            let u = |p: &([f32; LANES], [f32; LANES])| Vec2::new(p.0[i], p.1[i]);
+            let Some((es, b)) = self.it.emit(u(&choice).x, u(&pos), u(&dir)) else {
+                continue;
+            };
+            (o[0][i], o[1][i], o[2][i]) = es.origin.into();
+            (d[0][i], d[1][i], d[2][i]) = es.dir.into();
+            (beta[0][i], beta[1][i], beta[2][i]) = b.into();
+            beta0[i] = b.max_element();
+            if let Some(p) = es.on_surface {
+                (from[0][i], from[1][i], from[2][i]) = p.into();
+                has_from |= 1 << i;
+            }
+            started |= 1 << i;
         }
-        let f = m.eval(wc, wl);
-        if f == Color::ZERO {
-            return 0;
+        let m = l.mask(started);
+        self.set_rays(
+            started,
+            V3::from_arrays(l, &o),
+            V3::from_arrays(l, &d),
+            |_| NO_PRIM,
+        );
+        self.beta = V3::select(m, V3::from_arrays(l, &beta), self.beta);
+        self.beta0 = L::F::select(m, l.f_from(beta0), self.beta0);
+        self.bounces = L::F::select(m, l.f(0.0), self.bounces);
+        self.pair_base = L::U::select(m, l.u(DIRECTION_PAIR + 1), self.pair_base);
+        self.from = V3::select(m, V3::from_arrays(l, &from), self.from);
+        self.has_from = (self.has_from & !started) | has_from;
+        self.live |= started;
+    }
+
+    /// Rays `o + t·d`, `t` unbounded, in lanes `lanes`, lane `i`'s skipping `skip(i)`.
+    #[inline(always)]
+    fn set_rays(&mut self, lanes: LaneBits, o: V3<L::F>, d: V3<L::F>, skip: impl Fn(usize) -> u32) {
+        let (l, m) = (self.l, self.l.mask(lanes));
+        let rays = &mut self.rays;
+        rays.o = V3::select(m, o, V3::from_arrays(l, &rays.o)).to_arrays();
+        rays.d = V3::select(m, d, V3::from_arrays(l, &rays.d)).to_arrays();
+        for i in each_lane(lanes) {
+            rays.t_max[i] = f32::INFINITY;
+            rays.skip[i] = skip(i);
         }
+    }
+
+    /// Pair `pair` of every lane, as arrays. (A method, not a closure: a closure the
+    /// compiler does not inline loses the instruction set it was written for.)
+    #[inline(always)]
+    fn pair_arrays(&self, pair: u32) -> ([f32; LANES], [f32; LANES]) {
+        let (x, y) = self.stream.get_2d(self.l.u(pair));
+        (x.to_array(), y.to_array())
+    }
+
+    /// One vertex of every live lane: its connection to the camera, then the next
+    /// direction. The lanes whose path ended.
+    #[inline(always)]
+    fn bounce(&mut self, hits: &HitPacket) -> LaneBits {
+        let l = self.l;
+        let it = self.it;
+        let live = self.live;
+        let o = V3::from_arrays(l, &self.rays.o);
+        let d = V3::from_arrays(l, &self.rays.d);
+        let hit_lanes = !l.u_from(hits.prim).eq(l.u(NO_PRIM)).bits() & live;
+        let mut ended = live & !hit_lanes;
+        if hit_lanes == 0 {
+            return ended;
+        }
+        let w = d.normalize();
+        let mut hit = it.scene.hits(l, hit_lanes, o, d, hits);
+        let on_line = hit_lanes & self.has_from;
+        if on_line != 0 {
+            hit = hit.on_line(l, on_line, self.from, w);
+        }
+        let max_depth = l.f(it.s.max_depth as f32);
+        let dark = each_lane(hit_lanes)
+            .filter(|&i| !it.scatters[hit.material[i] as usize])
+            .fold(0, |m, i| m | 1 << i);
+        let stop = dark | (self.bounces.ge(max_depth).bits() & hit_lanes);
+        ended |= stop;
+        let lanes = hit_lanes & !stop;
+        if lanes == 0 {
+            return ended;
+        }
+        let uv = (hit.uv.0.to_array(), hit.uv.1.to_array());
+        let bsdf = BsdfLanes::gather(l, lanes, |i| {
+            it.scene
+                .bsdf_at(hit.material[i], Vec2::new(uv.0[i], uv.1[i]))
+        });
+        let m = l.mask(lanes);
+        self.bounces = L::F::select(m, self.bounces + l.f(1.0), self.bounces);
+        // The pairs of this bounce: the lens point, the BSDF direction, lobe and roulette.
+        let moved = m & self.bounces.gt(l.f(1.0));
+        let next_base = self.pair_base.wrapping_add(l.u(PAIRS_PER_BOUNCE));
+        self.pair_base = L::U::select(moved, next_base, self.pair_base);
+        let base = self.pair_base;
+        let w_light = -w;
+        let frame = Frame::around(hit.ns);
+        let wl = frame.local(w_light);
+        let counts = if it.s.accumulate {
+            self.bounces.le(max_depth)
+        } else {
+            self.bounces.eq(max_depth)
+        };
+        let connect = counts.bits() & lanes & !bsdf.delta;
+        if connect != 0 {
+            let u_lens = self.stream.get_2d(base);
+            self.connect_to_camera(connect, &hit, &bsdf, &frame, wl, w_light, u_lens);
+        }
+        ended |= self.bounces.ge(max_depth).bits() & lanes;
+        let lanes = lanes & !ended;
+        if lanes == 0 {
+            return ended;
+        }
+        ended | self.scatter(lanes, &hit, &bsdf, &frame, wl, w_light)
+    }
+
+    /// Samples each lane's BSDF from the light side, updates the power the path
+    /// carries, plays roulette and spawns the next rays: the lanes whose path ended.
+    #[allow(clippy::too_many_arguments)]
+    #[inline(always)]
+    fn scatter(
+        &mut self,
+        lanes: LaneBits,
+        hit: &Hits<L>,
+        bsdf: &BsdfLanes<L>,
+        frame: &Frame<L::F>,
+        wl: V3<L::F>,
+        w_light: V3<L::F>,
+    ) -> LaneBits {
+        let l = self.l;
+        let base = self.pair_base;
+        let u = self.stream.get_2d(base.wrapping_add(l.u(1)));
+        let (u_lobe, u_roulette) = self.stream.get_2d(base.wrapping_add(l.u(2)));
+        let bs = bsdf.sample(l, wl, u_lobe, u);
+        let w_next = frame.world(bs.wi);
+        let reflect = (bs.wi.z * wl.z).gt(l.f(0.0));
+        let consistent = geometrically_consistent(hit.ng, w_light, w_next, reflect);
+        let go = (bs.valid & consistent).bits() & lanes;
+        let adjoint = adjoint_factor(l, bsdf, hit, wl, bs.wi, w_light, w_next);
+        let beta = self.beta * (bs.weight * adjoint);
+        let roulette = &self.it.s.roulette;
+        let q = roulette.continue_prob_l(l, self.bounces, go, beta / self.beta0);
+        let play = go & q.lt(l.f(1.0)).bits();
+        let mut survive = go & !(play & u_roulette.ge(q).bits());
+        let beta = beta / q;
+        survive &= (beta.is_finite() & !beta.is_zero()).bits();
+        if survive != 0 {
+            let m = l.mask(survive);
+            self.beta = V3::select(m, beta, self.beta);
+            self.from = V3::select(m, hit.p, self.from);
+            self.has_from |= survive;
+            let origin = hit.spawn_origins(l, survive, w_next);
+            self.set_rays(survive, origin, w_next, |i| hit.prim[i]);
+        }
+        lanes & !survive
+    }
+
+    /// Connects the non-specular vertices of `lanes`, lit along `w_light` (`wl` in
+    /// the shading frame) with power `beta`, to the eye, splatting what it sees.
+    #[allow(clippy::too_many_arguments)]
+    #[inline(always)]
+    fn connect_to_camera(
+        &mut self,
+        lanes: LaneBits,
+        hit: &Hits<L>,
+        bsdf: &BsdfLanes<L>,
+        frame: &Frame<L::F>,
+        wl: V3<L::F>,
+        w_light: V3<L::F>,
+        u_lens: (L::F, L::F),
+    ) {
+        let l = self.l;
+        let camera = self.it.camera;
+        let c = camera.connect_l(l, lanes, hit.p, u_lens);
+        let seen = c.seen;
+        if seen == 0 {
+            return;
+        }
+        let zero = l.f(0.0);
+        let to_eye = c.to_eye;
+        let wc = frame.local(to_eye);
+        let consistent = geometrically_consistent(hit.ng, to_eye, w_light, (wl.z * wc.z).gt(zero));
+        let f = bsdf.eval(l, wc, wl);
         // The path tracer's |cos| is taken with the shading normal on the light side;
         // Veach's adjoint correction (thesis §5.3) turns the geometric cosine toward the
         // camera into that.
-        let cos = shading_correction(si, wl, w_light) * c.to_eye.dot(si.ng).abs();
-        let value = beta * f * (cos * c.importance);
-        if !is_finite(value) {
-            return 1;
+        let cos = shading_correction(hit, wl, w_light) * to_eye.dot(hit.ng).abs();
+        let value = self.beta * f * (cos * c.importance);
+        let ok = seen & (consistent & !f.is_zero()).bits();
+        let finite = value.is_finite().bits();
+        self.nonfinite += (ok & !finite).count_ones();
+        let ok = ok & finite & !value.is_zero().bits();
+        if ok == 0 {
+            return;
         }
-        if value == Color::ZERO {
-            return 0;
+        let eye = c.origin;
+        let origin = hit.spawn_origins(l, ok, eye - hit.p);
+        let shadow = RayPacket {
+            o: origin.to_arrays(),
+            d: (eye - origin).to_arrays(),
+            t_max: [1.0; LANES],
+            skip: hit.prim,
+        };
+        let lit = ok & !occluded(l, self.it.accel, &shadow, ok);
+        let value = value.to_arrays();
+        let (u, v) = (c.u.to_array(), c.v.to_array());
+        for i in each_lane(lit) {
+            let (x, y) = camera.pixel_at(u[i], v[i]);
+            let value = Color::new(value[0][i], value[1][i], value[2][i]);
+            self.splats.push((self.path[i], (x, y, value)));
         }
-        if self.accel.occluded(&si.spawn_segment(c.origin, 1.0)) {
-            return 0;
-        }
-        splats.push((c.x, c.y, value));
-        0
+    }
+}
+
+/// Appends `splats` (of paths `first..end`, lanes' paths interleaved) to `out` in the
+/// order one path at a time gives: by path, each path's in the order it made them (a
+/// counting sort, stable).
+fn in_path_order(splats: &[(u64, Splat)], first: u64, end: u64, out: &mut Vec<Splat>) {
+    let mut start = vec![0usize; (end - first) as usize + 1];
+    for &(path, _) in splats {
+        start[(path - first) as usize + 1] += 1;
+    }
+    for k in 1..start.len() {
+        start[k] += start[k - 1];
+    }
+    let base = out.len();
+    out.resize(base + splats.len(), (0, 0, Color::ZERO));
+    for &(path, splat) in splats {
+        let slot = &mut start[(path - first) as usize];
+        out[base + *slot] = splat;
+        *slot += 1;
+    }
+}
+
+/// The light path task, run with the best instruction set.
+struct PathsTask<'t, 'a> {
+    it: &'t LightTracer<'a>,
+    first: u64,
+    count: u64,
+    splats: &'t mut Vec<Splat>,
+}
+
+impl SimdTask for PathsTask<'_, '_> {
+    type Output = u32;
+    #[inline(always)]
+    fn run<S: Simd>(self, s: S) -> u32 {
+        LightKernel::new(s, self.it, self.first, self.count).run(self.splats)
     }
 }
 
 impl SplatIntegrator for LightTracer<'_> {
     fn trace_paths(&self, first: u64, count: u64, splats: &mut Vec<Splat>) -> u32 {
-        let mut nonfinite = 0;
-        for path in first..first + count {
-            let chunk = path / CHUNK_PATHS;
-            let stream = SampleStream::<One> {
-                kind: self.s.sampler,
-                key: pixel_key(self.seed ^ LIGHT_PATHS, chunk),
-                index: (path % CHUNK_PATHS) as u32,
-            };
-            nonfinite += self.trace(&stream, splats);
+        match self.engine {
+            Engine::Scalar => LightKernel::new(One, self, first, count).run(splats),
+            Engine::Auto | Engine::Packet => dispatch(PathsTask {
+                it: self,
+                first,
+                count,
+                splats,
+            }),
         }
-        nonfinite
     }
 
     fn camera_part(&self) -> Option<&dyn SampleIntegrator> {
@@ -247,45 +526,31 @@ impl SplatIntegrator for LightTracer<'_> {
 const LIGHT_PATHS: u64 = 0x4C54_0001;
 
 /// `|wl·ns|/|wl·ng|`: the shading-normal factor of the adjoint BSDF (0 when grazing).
-fn shading_correction(si: &SurfaceInteraction, wl_local: Vec3, w_light: Vec3) -> f32 {
-    let g = w_light.dot(si.ng).abs();
-    if g > 0.0 {
-        wl_local.z.abs() / g
-    } else {
-        0.0
-    }
+#[inline(always)]
+fn shading_correction<L: Lanes>(hit: &Hits<L>, wl_local: V3<L::F>, w_light: V3<L::F>) -> L::F {
+    let g = w_light.dot(hit.ng).abs();
+    let zero = g.splat_as(0.0);
+    L::F::select(g.gt(zero), wl_local.z.abs() / g, zero)
 }
 
 /// What turns a BSDF sample drawn from the light side (`wl`, its weight
 /// `f·|cos θ_next|/pdf` in the shading frame) into the adjoint transport of power:
 /// Veach's shading-normal correction `|wl·ns|·|w_next·ng| / (|wl·ng|·|w_next·ns|)`, and,
 /// for refraction, no `(ηi/ηt)²` radiance scaling (power is not compressed by refraction).
-fn adjoint_factor(
-    m: &Material,
-    si: &SurfaceInteraction,
-    wl: Vec3,
-    w_next_local: Vec3,
-    w_light: Vec3,
-    w_next: Vec3,
-) -> f32 {
+#[inline(always)]
+fn adjoint_factor<L: Lanes>(
+    l: L,
+    bsdf: &BsdfLanes<L>,
+    hit: &Hits<L>,
+    wl: V3<L::F>,
+    w_next_local: V3<L::F>,
+    w_light: V3<L::F>,
+    w_next: V3<L::F>,
+) -> L::F {
     let ns_next = w_next_local.z.abs();
-    if ns_next.is_nan() || ns_next <= 0.0 {
-        return 0.0;
-    }
-    let k = shading_correction(si, wl, w_light) * w_next.dot(si.ng).abs() / ns_next;
-    k / m.radiance_scale(wl, w_next_local)
-}
-
-/// The side of the geometric surface must agree with the shading frame's choice of
-/// reflection or transmission (as in the path tracer), so shading normals cannot leak.
-#[inline]
-fn geometrically_consistent(si: &SurfaceInteraction, a: Vec3, b: Vec3, reflect: bool) -> bool {
-    let (x, y) = (a.dot(si.ng), b.dot(si.ng));
-    if reflect {
-        x * y > 0.0
-    } else {
-        x * y < 0.0
-    }
+    let k = shading_correction(hit, wl, w_light) * w_next.dot(hit.ng).abs() / ns_next;
+    let k = k / bsdf.radiance_scale(l, wl, w_next_local);
+    L::F::select(ns_next.gt(l.f(0.0)), k, l.f(0.0))
 }
 
 /// Emitters a camera ray can see directly (they need the camera pass).

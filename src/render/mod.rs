@@ -129,21 +129,18 @@ impl RenderSettings {
             .unwrap_or_else(|| DirectStrategy::auto_for(scene))
     }
 
-    /// Why these settings must render `scene` one path at a time, if they must: every
-    /// path-traced radiance render runs in packets.
-    pub fn packet_blocker(&self, job: &RenderJob) -> Option<&'static str> {
+    /// Why these settings must render one path at a time, if they must: every radiance
+    /// render (path or light tracing) runs in packets.
+    pub fn packet_blocker(&self) -> Option<&'static str> {
         if self.shading != Shading::Radiance {
             return Some("debug shading (--shading)");
-        }
-        if job.estimator(self) != Estimator::Path {
-            return Some("light tracing");
         }
         None
     }
 
-    /// Whether `job` renders by packets with these settings.
-    pub fn uses_packets(&self, job: &RenderJob) -> bool {
-        self.engine != Engine::Scalar && self.packet_blocker(job).is_none()
+    /// Whether renders with these settings run in packets.
+    pub fn uses_packets(&self) -> bool {
+        self.engine != Engine::Scalar && self.packet_blocker().is_none()
     }
 
     pub fn path_settings(&self, scene: &Scene) -> PathSettings {
@@ -157,9 +154,9 @@ impl RenderSettings {
         }
     }
 
-    /// The engine that runs `job`'s camera paths with these settings.
-    fn engine_for(&self, job: &RenderJob) -> Engine {
-        if self.uses_packets(job) {
+    /// The engine that runs paths with these settings.
+    fn engine(&self) -> Engine {
+        if self.uses_packets() {
             Engine::Packet
         } else {
             Engine::Scalar
@@ -267,7 +264,7 @@ fn render_rect(
     stop: &StopToken,
 ) -> RenderOutput {
     let (scene, accel, camera) = (&job.scene, job.accel.as_ref(), &job.camera);
-    let engine = settings.engine_for(job);
+    let engine = settings.engine();
     let frame = (camera.width, camera.height);
     let view = match settings.shading {
         Shading::Radiance => None,

@@ -45,7 +45,7 @@ pub fn choose(job: &RenderJob, s: &RenderSettings) -> (Estimator, [PilotScore; 2
     let camera = pilot_camera(&job.camera);
     let path = score(job, s, &camera, Estimator::Path);
     let light = score(job, s, &camera, Estimator::LightTracing);
-    // Ties (a black image) go to path tracing, which runs in packets.
+    // Ties (a black image) go to path tracing.
     let pick = if light.inefficiency() < path.inefficiency() {
         Estimator::LightTracing
     } else {
@@ -88,9 +88,9 @@ fn render(
 ) -> RenderOutput {
     let path = s.path_settings(&job.scene);
     // The engines the render itself would run (the image is the same either way).
-    let engine = match (s.engine, e) {
-        (Engine::Scalar, _) | (_, Estimator::LightTracing) => Engine::Scalar,
-        _ => Engine::Packet,
+    let engine = match s.engine {
+        Engine::Scalar => Engine::Scalar,
+        Engine::Auto | Engine::Packet => Engine::Packet,
     };
     let rect = PixelRect::full(camera.width, camera.height);
     let (quiet, never) = (&|_| {}, &StopToken::never());
