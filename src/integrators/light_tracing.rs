@@ -395,11 +395,8 @@ impl<'k, 'a, L: Lanes> LightKernel<'k, 'a, L> {
         let adjoint = adjoint_factor(l, bsdf, hit, wl, bs.wi, w_light, w_next);
         let beta = self.beta * (bs.weight * adjoint);
         let roulette = &self.it.s.roulette;
-        let q = roulette.continue_prob_l(l, self.bounces, go, beta / self.beta0);
-        let play = go & q.lt(l.f(1.0)).bits();
-        let mut survive = go & !(play & u_roulette.ge(q).bits());
-        let beta = beta / q;
-        survive &= (beta.is_finite() & !beta.is_zero()).bits();
+        let read = beta / self.beta0;
+        let (survive, beta) = roulette.play_l(l, self.bounces, go, (beta, read), u_roulette);
         if survive != 0 {
             let m = l.mask(survive);
             self.beta = V3::select(m, beta, self.beta);

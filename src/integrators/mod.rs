@@ -299,4 +299,25 @@ impl Roulette {
         let playing = bounces.ge(l.f(start as f32)).bits() & lanes;
         L::F::select(l.mask(playing), q, one)
     }
+
+    /// Plays roulette for the paths of `lanes` after `bounces` scattering events, with
+    /// throughput `beta`, the probability read from `read` (the throughput as roulette
+    /// sees it) and the uniform numbers `u`: the lanes that go on with a finite,
+    /// non-zero throughput, and the throughput divided by the probability.
+    #[inline(always)]
+    pub fn play_l<L: crate::lanes::Lanes>(
+        &self,
+        l: L,
+        bounces: L::F,
+        lanes: crate::lanes::LaneBits,
+        (beta, read): (crate::lanes::V3<L::F>, crate::lanes::V3<L::F>),
+        u: L::F,
+    ) -> (crate::lanes::LaneBits, crate::lanes::V3<L::F>) {
+        use crate::lanes::LaneMask;
+        let q = self.continue_prob_l(l, bounces, lanes, read);
+        let play = lanes & q.lt(l.f(1.0)).bits();
+        let survive = lanes & !(play & u.ge(q).bits());
+        let beta = beta / q;
+        (survive & (beta.is_finite() & !beta.is_zero()).bits(), beta)
+    }
 }

@@ -868,15 +868,9 @@ impl<'k, 'a, L: Lanes> Kernel<'k, 'a, L> {
         let go = lanes & !ended;
         let beta = self.beta * bs.weight;
         let eta_scale = self.eta_scale / bsdf.radiance_scale(l, wo, bs.wi);
-        let q = self
-            .it
-            .s
-            .roulette
-            .continue_prob_l(l, self.bounces, go, beta * eta_scale);
-        let play = go & q.lt(self.f(1.0)).bits();
-        let mut survive = go & !(play & u_roulette.ge(q).bits());
-        let beta = beta / q;
-        survive &= (beta.is_finite() & !beta.is_zero()).bits();
+        let roulette = &self.it.s.roulette;
+        let read = beta * eta_scale;
+        let (survive, beta) = roulette.play_l(l, self.bounces, go, (beta, read), u_roulette);
         ended |= lanes & !survive;
         if survive != 0 {
             let m = self.mask(survive);
