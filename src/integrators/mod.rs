@@ -144,8 +144,9 @@ impl DirectStrategy {
     }
 }
 
-/// How camera paths run on the CPU. The image is the same bit for bit either way (the
-/// transport is one code over its lane type); only the speed differs.
+/// How paths (camera paths, or light paths for light tracing) run on the CPU. The image
+/// is the same bit for bit either way (the transport is one code over its lane type);
+/// only the speed differs.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
 pub enum Engine {
     /// Packets wherever the render allows them ([`crate::render::RenderSettings::packet_blocker`]).
@@ -164,7 +165,7 @@ impl Named for Engine {
         (
             Engine::Auto,
             "auto",
-            "Sixteen paths per SIMD pass for every path-traced render; light tracing and the debug views one at a time",
+            "Sixteen paths per SIMD pass for every path- or light-traced render; the debug views (--shading) one at a time",
         ),
         (Engine::Scalar, "scalar", "One path at a time (the same code at one lane)"),
         (
