@@ -352,12 +352,7 @@ impl<'k, 'a, L: Lanes> LightKernel<'k, 'a, L> {
         let w_light = -w;
         let frame = Frame::around(hit.ns);
         let wl = frame.local(w_light);
-        let counts = if it.s.accumulate {
-            self.bounces.le(max_depth)
-        } else {
-            self.bounces.eq(max_depth)
-        };
-        let connect = counts.bits() & lanes & !bsdf.delta;
+        let connect = it.s.counts_l(l, self.bounces).bits() & lanes & !bsdf.delta;
         if connect != 0 {
             let u_lens = self.stream.get_2d(base);
             self.connect_to_camera(connect, &hit, &bsdf, &frame, wl, w_light, u_lens);

@@ -78,6 +78,21 @@ pub struct PathSettings {
     pub sampler: SamplerKind,
 }
 
+impl PathSettings {
+    /// Lanes where light found after `bounces` scattering events counts (`bounces` are
+    /// small integers, exact as floats): up to `max_depth` when accumulating, else at
+    /// `max_depth` only (spec §7). The path and light tracers both ask this.
+    #[inline(always)]
+    pub fn counts_l<L: crate::lanes::Lanes>(&self, l: L, bounces: L::F) -> L::M {
+        let max = l.f(self.max_depth as f32);
+        if self.accumulate {
+            bounces.le(max)
+        } else {
+            bounces.eq(max)
+        }
+    }
+}
+
 /// Veach's power heuristic (β = 2) for `nf` samples of pdf `f` against `ng` of pdf `g`.
 #[inline(always)]
 pub fn power_heuristic<F: Real>(nf: F, f_pdf: F, ng: F, g_pdf: F) -> F {

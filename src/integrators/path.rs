@@ -321,13 +321,7 @@ impl<'k, 'a, L: Lanes> Kernel<'k, 'a, L> {
     /// Lanes of `lanes` where light found after `bounces` scattering events counts.
     #[inline(always)]
     fn counts(&self, lanes: LaneBits) -> LaneBits {
-        let max = self.f(self.it.s.max_depth as f32);
-        let ok = if self.it.s.accumulate {
-            self.bounces.le(max)
-        } else {
-            self.bounces.eq(max)
-        };
-        ok.bits() & lanes
+        self.it.s.counts_l(self.l, self.bounces).bits() & lanes
     }
 
     /// Lanes of `lanes` at the depth cap.

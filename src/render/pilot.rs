@@ -13,7 +13,7 @@ use crate::geometry::Ray;
 use crate::integrators::{Estimator, LightTracer, PathIntegrator};
 use crate::lanes::rays::{HitPacket, RayPacket};
 use crate::lanes::LaneBits;
-use crate::render::{Engine, PixelRect, RenderOutput};
+use crate::render::{PixelRect, RenderOutput};
 use crate::scene::PrimHit;
 use std::sync::atomic::{AtomicU64, Ordering};
 
@@ -87,11 +87,8 @@ fn render(
     seed: u64,
 ) -> RenderOutput {
     let path = s.path_settings(&job.scene);
-    // The engines the render itself would run (the image is the same either way).
-    let engine = match s.engine {
-        Engine::Scalar => Engine::Scalar,
-        Engine::Auto | Engine::Packet => Engine::Packet,
-    };
+    // The engine the render itself would run (the image is the same either way).
+    let engine = s.engine();
     let rect = PixelRect::full(camera.width, camera.height);
     let (quiet, never) = (&|_| {}, &StopToken::never());
     if e == Estimator::LightTracing {
