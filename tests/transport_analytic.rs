@@ -7,7 +7,9 @@ use common::polygon_irradiance;
 use ember::accel::{self, AccelKind, BvhBuilder};
 use ember::camera::Camera;
 use ember::geometry::Aabb;
-use ember::integrators::{DirectStrategy, Estimator, PathIntegrator, PathSettings, Roulette};
+use ember::integrators::{
+    DirectStrategy, Estimator, PathIntegrator, PathSettings, Roulette, Tracing,
+};
 use ember::lights::{AreaLight, Light};
 use ember::materials::Material;
 use ember::render::{Engine, RenderJob, RenderSettings};
@@ -228,14 +230,14 @@ fn area_light_irradiance_matches_closed_form() {
             sampler: SamplerKind::Independent,
         };
         let camera = Camera::new(&scene.camera, &scene.bounds, 1, 1);
-        let integ = PathIntegrator::new(
-            &scene,
-            accel.as_ref(),
-            &camera,
-            settings,
-            Engine::Scalar,
-            11,
-        );
+        let integ = PathIntegrator::new(Tracing {
+            scene: &scene,
+            accel: accel.as_ref(),
+            camera: &camera,
+            s: settings,
+            engine: Engine::Scalar,
+            seed: 11,
+        });
         for (k, &x) in points.iter().enumerate() {
             let want = albedo / std::f32::consts::PI
                 * polygon_irradiance(x, Vec3::Y, &quad, le as f64) as f32;

@@ -21,18 +21,16 @@
 //! chunk in order, so the image depends on the seed only.
 
 use super::path::{geometrically_consistent, occluded, trace};
+use super::vertex::{Depth, Scattering, Vertex};
 use super::Engine;
-use super::{PathIntegrator, PathSettings, SampleIntegrator, Splat, SplatIntegrator};
-use crate::accel::Accel;
-use crate::camera::Camera;
-use crate::geometry::{Frame, NO_PRIM};
+use super::{PathIntegrator, PathSettings, SampleIntegrator, Splat, SplatIntegrator, Tracing};
+use crate::geometry::NO_PRIM;
 use crate::lanes::rays::{HitPacket, RayPacket};
 use crate::lanes::{
     dispatch, each_lane, LaneBits, LaneMask, Lanes, One, Real, Simd, SimdTask, UInt, LANES, V3,
 };
 use crate::lights::emit::EmissionSample;
 use crate::lights::Light;
-use crate::materials::BsdfLanes;
 use crate::sampling::{pixel_key, SampleStream};
 use crate::scene::{Hits, Scene};
 use crate::Color;
@@ -51,14 +49,8 @@ const DIRECTION_PAIR: u32 = 2;
 const PAIRS_PER_BOUNCE: u32 = 3;
 
 pub struct LightTracer<'a> {
-    scene: &'a Scene,
-    accel: &'a dyn Accel,
-    camera: &'a Camera,
-    s: PathSettings,
-    engine: Engine,
-    seed: u64,
-    /// Per material: whether it scatters light at all.
-    scatters: Vec<bool>,
+    t: Tracing<'a>,
+    scattering: Scattering,
     /// Cumulative light-selection probabilities, proportional to emitted power.
     light_cdf: Vec<f32>,
     /// Emitters seen directly (0-bounce paths), which only camera rays can find.
@@ -66,14 +58,8 @@ pub struct LightTracer<'a> {
 }
 
 impl<'a> LightTracer<'a> {
-    pub fn new(
-        scene: &'a Scene,
-        accel: &'a dyn Accel,
-        camera: &'a Camera,
-        s: PathSettings,
-        engine: Engine,
-        seed: u64,
-    ) -> Self {
+    pub fn new(t: Tracing<'a>) -> Self {
+        let (scene, s) = (t.scene, t.s);
         let radius = 0.5 * scene.bounds.diagonal().length();
         let radius = if radius.is_finite() { radius } else { 1.0 };
         let power: Vec<f32> = scene.lights.iter().map(|l| l.power(radius)).collect();
@@ -96,16 +82,15 @@ impl<'a> LightTracer<'a> {
             ..s
         };
         let counts_zero = s.accumulate || s.max_depth == 0;
-        let direct = (counts_zero && has_visible_emitters(scene))
-            .then(|| PathIntegrator::new(scene, accel, camera, zero_bounces, engine, seed));
+        let direct = (counts_zero && has_visible_emitters(scene)).then(|| {
+            PathIntegrator::new(Tracing {
+                s: zero_bounces,
+                ..t
+            })
+        });
         LightTracer {
-            scene,
-            accel,
-            camera,
-            s,
-            engine,
-            seed,
-            scatters: scene.materials.iter().map(|m| m.scatters()).collect(),
+            t,
+            scattering: Scattering::of(scene),
             light_cdf,
             direct,
         }
@@ -116,7 +101,7 @@ impl<'a> LightTracer<'a> {
     /// it carries nothing.
     fn emit(&self, u_choice: f32, u_pos: Vec2, u_dir: Vec2) -> Option<(EmissionSample, Color)> {
         let (li, p_light) = self.pick_light(u_choice)?;
-        let es = self.scene.lights[li].sample_le(&self.scene.bounds, u_pos, u_dir)?;
+        let es = self.t.scene.lights[li].sample_le(&self.t.scene.bounds, u_pos, u_dir)?;
         let beta = es.beta / p_light;
         let beta0 = beta.max_element();
         (!beta0.is_nan() && beta0 > 0.0).then_some((es, beta))
@@ -145,9 +130,7 @@ struct LightKernel<'k, 'a, L: Lanes> {
     beta: V3<L::F>,
     /// Each path's starting throughput, which roulette divides by.
     beta0: L::F,
-    bounces: L::F,
-    /// The first dimension pair of the current bounce.
-    pair_base: L::U,
+    depth: Depth<L>,
     /// Where each ray's line starts (lanes of `has_from`): the point it left.
     from: V3<L::F>,
     has_from: LaneBits,
@@ -170,15 +153,14 @@ impl<'k, 'a, L: Lanes> LightKernel<'k, 'a, L> {
             live: 0,
             path: [0; LANES],
             stream: SampleStream {
-                kind: it.s.sampler,
+                kind: it.t.s.sampler,
                 key: l.u(0),
                 index: l.u(0),
             },
             rays: RayPacket::default(),
             beta: zero,
             beta0: l.f(1.0),
-            bounces: l.f(0.0),
-            pair_base: l.u(0),
+            depth: Depth::new(l),
             from: zero,
             has_from: 0,
             first,
@@ -198,7 +180,7 @@ impl<'k, 'a, L: Lanes> LightKernel<'k, 'a, L> {
             if self.live == 0 {
                 break;
             }
-            trace(self.l, self.it.accel, &self.rays, self.live, &mut hits);
+            trace(self.l, self.it.t.accel, &self.rays, self.live, &mut hits);
             let ended = self.bounce(&hits);
             self.live &= !ended;
         }
@@ -231,12 +213,12 @@ impl<'k, 'a, L: Lanes> LightKernel<'k, 'a, L> {
             let path = self.next;
             self.next += 1;
             self.path[i] = path;
-            key[i] = pixel_key(self.it.seed ^ LIGHT_PATHS, path / CHUNK_PATHS);
+            key[i] = pixel_key(self.it.t.seed ^ LIGHT_PATHS, path / CHUNK_PATHS);
             index[i] = (path % CHUNK_PATHS) as u32;
             fresh |= 1 << i;
         }
         let stream = SampleStream {
-            kind: self.it.s.sampler,
+            kind: self.it.t.s.sampler,
             key: l.u_from(key),
             index: l.u_from(index),
         };
@@ -271,32 +253,15 @@ impl<'k, 'a, L: Lanes> LightKernel<'k, 'a, L> {
             started |= 1 << i;
         }
         let m = l.mask(started);
-        self.set_rays(
-            started,
-            V3::from_arrays(l, &o),
-            V3::from_arrays(l, &d),
-            |_| NO_PRIM,
-        );
+        let (o, d) = (V3::from_arrays(l, &o), V3::from_arrays(l, &d));
+        self.rays
+            .set_lanes(l, started, o, d, l.f(f32::INFINITY), l.u(NO_PRIM));
         self.beta = V3::select(m, V3::from_arrays(l, &beta), self.beta);
         self.beta0 = L::F::select(m, l.f_from(beta0), self.beta0);
-        self.bounces = L::F::select(m, l.f(0.0), self.bounces);
-        self.pair_base = L::U::select(m, l.u(DIRECTION_PAIR + 1), self.pair_base);
+        self.depth.start(l, m, DIRECTION_PAIR + 1);
         self.from = V3::select(m, V3::from_arrays(l, &from), self.from);
         self.has_from = (self.has_from & !started) | has_from;
         self.live |= started;
-    }
-
-    /// Rays `o + t·d`, `t` unbounded, in lanes `lanes`, lane `i`'s skipping `skip(i)`.
-    #[inline(always)]
-    fn set_rays(&mut self, lanes: LaneBits, o: V3<L::F>, d: V3<L::F>, skip: impl Fn(usize) -> u32) {
-        let (l, m) = (self.l, self.l.mask(lanes));
-        let rays = &mut self.rays;
-        rays.o = V3::select(m, o, V3::from_arrays(l, &rays.o)).to_arrays();
-        rays.d = V3::select(m, d, V3::from_arrays(l, &rays.d)).to_arrays();
-        for i in each_lane(lanes) {
-            rays.t_max[i] = f32::INFINITY;
-            rays.skip[i] = skip(i);
-        }
     }
 
     /// Pair `pair` of every lane, as arrays. (A method, not a closure: a closure the
@@ -322,103 +287,70 @@ impl<'k, 'a, L: Lanes> LightKernel<'k, 'a, L> {
             return ended;
         }
         let w = d.normalize();
-        let mut hit = it.scene.hits(l, hit_lanes, o, d, hits);
+        let mut hit = it.t.scene.hits(l, hit_lanes, o, d, hits);
         let on_line = hit_lanes & self.has_from;
         if on_line != 0 {
             hit = hit.on_line(l, on_line, self.from, w);
         }
-        let max_depth = l.f(it.s.max_depth as f32);
-        let dark = each_lane(hit_lanes)
-            .filter(|&i| !it.scatters[hit.material[i] as usize])
-            .fold(0, |m, i| m | 1 << i);
-        let stop = dark | (self.bounces.ge(max_depth).bits() & hit_lanes);
+        let dark = it.scattering.dark(&hit.material, hit_lanes);
+        let stop = dark | self.depth.at_cap(l, &it.t.s, hit_lanes);
         ended |= stop;
         let lanes = hit_lanes & !stop;
         if lanes == 0 {
             return ended;
         }
-        let uv = (hit.uv.0.to_array(), hit.uv.1.to_array());
-        let bsdf = BsdfLanes::gather(l, lanes, |i| {
-            it.scene
-                .bsdf_at(hit.material[i], Vec2::new(uv.0[i], uv.1[i]))
-        });
-        let m = l.mask(lanes);
-        self.bounces = L::F::select(m, self.bounces + l.f(1.0), self.bounces);
+        // Its `wo` points back toward the light.
+        let v = Vertex::new(l, it.t.scene, lanes, hit, w);
         // The pairs of this bounce: the lens point, the BSDF direction, lobe and roulette.
-        let moved = m & self.bounces.gt(l.f(1.0));
-        let next_base = self.pair_base.wrapping_add(l.u(PAIRS_PER_BOUNCE));
-        self.pair_base = L::U::select(moved, next_base, self.pair_base);
-        let base = self.pair_base;
-        let w_light = -w;
-        let frame = Frame::around(hit.ns);
-        let wl = frame.local(w_light);
-        let connect = it.s.counts_l(l, self.bounces).bits() & lanes & !bsdf.delta;
+        self.depth.advance(l, l.mask(lanes), PAIRS_PER_BOUNCE);
+        let connect = self.depth.counts(l, &it.t.s, lanes) & !v.bsdf.delta;
         if connect != 0 {
-            let u_lens = self.stream.get_2d(base);
-            self.connect_to_camera(connect, &hit, &bsdf, &frame, wl, w_light, u_lens);
+            let u_lens = self.stream.get_2d(self.depth.pair_base);
+            self.connect_to_camera(connect, &v, u_lens);
         }
-        ended |= self.bounces.ge(max_depth).bits() & lanes;
+        ended |= self.depth.at_cap(l, &it.t.s, lanes);
         let lanes = lanes & !ended;
         if lanes == 0 {
             return ended;
         }
-        ended | self.scatter(lanes, &hit, &bsdf, &frame, wl, w_light)
+        ended | self.scatter(lanes, &v)
     }
 
     /// Samples each lane's BSDF from the light side, updates the power the path
     /// carries, plays roulette and spawns the next rays: the lanes whose path ended.
-    #[allow(clippy::too_many_arguments)]
     #[inline(always)]
-    fn scatter(
-        &mut self,
-        lanes: LaneBits,
-        hit: &Hits<L>,
-        bsdf: &BsdfLanes<L>,
-        frame: &Frame<L::F>,
-        wl: V3<L::F>,
-        w_light: V3<L::F>,
-    ) -> LaneBits {
+    fn scatter(&mut self, lanes: LaneBits, v: &Vertex<L>) -> LaneBits {
         let l = self.l;
-        let base = self.pair_base;
+        let base = self.depth.pair_base;
         let u = self.stream.get_2d(base.wrapping_add(l.u(1)));
         let (u_lobe, u_roulette) = self.stream.get_2d(base.wrapping_add(l.u(2)));
-        let bs = bsdf.sample(l, wl, u_lobe, u);
-        let w_next = frame.world(bs.wi);
-        let reflect = (bs.wi.z * wl.z).gt(l.f(0.0));
-        let consistent = geometrically_consistent(hit.ng, w_light, w_next, reflect);
-        let go = (bs.valid & consistent).bits() & lanes;
-        let adjoint = adjoint_factor(l, bsdf, hit, wl, bs.wi, w_light, w_next);
+        let (bs, w_next, go) = v.sample_next(l, lanes, u_lobe, u);
+        let adjoint = adjoint_factor(l, v, bs.wi, w_next);
         let beta = self.beta * (bs.weight * adjoint);
-        let roulette = &self.it.s.roulette;
+        let roulette = &self.it.t.s.roulette;
         let read = beta / self.beta0;
-        let (survive, beta) = roulette.play_l(l, self.bounces, go, (beta, read), u_roulette);
+        let bounces = self.depth.bounces;
+        let (survive, beta) = roulette.play_l(l, bounces, go, (beta, read), u_roulette);
         if survive != 0 {
             let m = l.mask(survive);
             self.beta = V3::select(m, beta, self.beta);
-            self.from = V3::select(m, hit.p, self.from);
+            self.from = V3::select(m, v.hit.p, self.from);
             self.has_from |= survive;
-            let origin = hit.spawn_origins(l, survive, w_next);
-            self.set_rays(survive, origin, w_next, |i| hit.prim[i]);
+            let origin = v.hit.spawn_origins(l, survive, w_next);
+            let (t_max, skip) = (l.f(f32::INFINITY), l.u_from(v.hit.prim));
+            self.rays.set_lanes(l, survive, origin, w_next, t_max, skip);
         }
         lanes & !survive
     }
 
     /// Connects the non-specular vertices of `lanes`, lit along `w_light` (`wl` in
     /// the shading frame) with power `beta`, to the eye, splatting what it sees.
-    #[allow(clippy::too_many_arguments)]
     #[inline(always)]
-    fn connect_to_camera(
-        &mut self,
-        lanes: LaneBits,
-        hit: &Hits<L>,
-        bsdf: &BsdfLanes<L>,
-        frame: &Frame<L::F>,
-        wl: V3<L::F>,
-        w_light: V3<L::F>,
-        u_lens: (L::F, L::F),
-    ) {
+    fn connect_to_camera(&mut self, lanes: LaneBits, v: &Vertex<L>, u_lens: (L::F, L::F)) {
         let l = self.l;
-        let camera = self.it.camera;
+        let (hit, bsdf, frame) = (&v.hit, &v.bsdf, &v.frame);
+        let (wl, w_light) = (v.wo, v.wo_world);
+        let camera = self.it.t.camera;
         let c = camera.connect_l(l, lanes, hit.p, u_lens);
         let seen = c.seen;
         if seen == 0 {
@@ -449,7 +381,7 @@ impl<'k, 'a, L: Lanes> LightKernel<'k, 'a, L> {
             t_max: [1.0; LANES],
             skip: hit.prim,
         };
-        let lit = ok & !occluded(l, self.it.accel, &shadow, ok);
+        let lit = ok & !occluded(l, self.it.t.accel, &shadow, ok);
         let value = value.to_arrays();
         let (u, v) = (c.u.to_array(), c.v.to_array());
         for i in each_lane(lit) {
@@ -498,7 +430,7 @@ impl SimdTask for PathsTask<'_, '_> {
 
 impl SplatIntegrator for LightTracer<'_> {
     fn trace_paths(&self, first: u64, count: u64, splats: &mut Vec<Splat>) -> u32 {
-        match self.engine {
+        match self.t.engine {
             Engine::Scalar => LightKernel::new(One, self, first, count).run(splats),
             Engine::Auto | Engine::Packet => dispatch(PathsTask {
                 it: self,
@@ -530,18 +462,11 @@ fn shading_correction<L: Lanes>(hit: &Hits<L>, wl_local: V3<L::F>, w_light: V3<L
 /// Veach's shading-normal correction `|wl·ns|·|w_next·ng| / (|wl·ng|·|w_next·ns|)`, and,
 /// for refraction, no `(ηi/ηt)²` radiance scaling (power is not compressed by refraction).
 #[inline(always)]
-fn adjoint_factor<L: Lanes>(
-    l: L,
-    bsdf: &BsdfLanes<L>,
-    hit: &Hits<L>,
-    wl: V3<L::F>,
-    w_next_local: V3<L::F>,
-    w_light: V3<L::F>,
-    w_next: V3<L::F>,
-) -> L::F {
+fn adjoint_factor<L: Lanes>(l: L, v: &Vertex<L>, w_next_local: V3<L::F>, w_next: V3<L::F>) -> L::F {
+    let (hit, wl) = (&v.hit, v.wo);
     let ns_next = w_next_local.z.abs();
-    let k = shading_correction(hit, wl, w_light) * w_next.dot(hit.ng).abs() / ns_next;
-    let k = k / bsdf.radiance_scale(l, wl, w_next_local);
+    let k = shading_correction(hit, wl, v.wo_world) * w_next.dot(hit.ng).abs() / ns_next;
+    let k = k / v.bsdf.radiance_scale(l, wl, w_next_local);
     L::F::select(ns_next.gt(l.f(0.0)), k, l.f(0.0))
 }
 

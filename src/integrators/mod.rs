@@ -14,13 +14,17 @@
 pub mod debug;
 pub mod light_tracing;
 pub mod path;
+mod vertex;
 
 pub use light_tracing::LightTracer;
 pub use path::PathIntegrator;
 
+use crate::accel::Accel;
+use crate::camera::Camera;
 use crate::lanes::{Lanes, Real};
 use crate::names::{display_from_table, Named};
 use crate::sampling::SamplerKind;
+use crate::scene::Scene;
 use crate::Color;
 
 /// Samples `first .. first + count` of pixel `(x, y)` (column from the left, row
@@ -65,6 +69,18 @@ pub trait SplatIntegrator: Sync {
     /// The pixel-sample integrator for what only camera rays can see (0-bounce paths:
     /// emitters seen directly), when the scene has any.
     fn camera_part(&self) -> Option<&dyn SampleIntegrator>;
+}
+
+/// What every estimator is given: the scene, its acceleration structure, the camera,
+/// the path settings, the engine that runs the lanes and the render's seed.
+#[derive(Clone, Copy)]
+pub struct Tracing<'a> {
+    pub scene: &'a Scene,
+    pub accel: &'a dyn Accel,
+    pub camera: &'a Camera,
+    pub s: PathSettings,
+    pub engine: Engine,
+    pub seed: u64,
 }
 
 /// The parameters of spec §7 that shape a path estimator.

@@ -12,25 +12,25 @@
 //! are handed back, in sample order, once all are done. Lanes whose materials differ
 //! run each kind present (`BsdfLanes`), masked.
 
+use super::vertex::{Depth, Scattering, Vertex};
 use super::Engine;
 use super::{
     power_heuristic, DirectStrategy, PathSettings, PixelSamples, SampleIntegrator, SampleValue,
+    Tracing,
 };
 use crate::accel::Accel;
-use crate::camera::Camera;
-use crate::geometry::{Frame, NO_PRIM};
+use crate::geometry::NO_PRIM;
 use crate::lanes::rays::{HitPacket, RayPacket};
 use crate::lanes::{
     dispatch, each_lane, per_lane, per_lane_v3, LaneBits, LaneMask, Lanes, One, Real, Simd,
     SimdTask, UInt, LANES, V3,
 };
 use crate::lights::Light;
-use crate::materials::BsdfLanes;
 use crate::sampling::warps::{uniform_hemisphere_l, uniform_hemisphere_pdf};
 use crate::sampling::{pixel_key, SampleStream, FIRST_PATH_PAIR};
-use crate::scene::{Hits, Scene, NO_LIGHT};
+use crate::scene::{Hits, NO_LIGHT};
 use crate::Color;
-use glam::{Vec2, Vec3};
+use glam::Vec3;
 
 /// Shadow rays stop this fraction short of the sampled light point, so the light's own
 /// surface does not occlude it; relative, so it works at every scene scale.
@@ -38,20 +38,14 @@ pub(super) const SHADOW_EPSILON: f32 = 1e-4;
 
 /// The path tracer over one scene, camera and set of settings.
 pub struct PathIntegrator<'a> {
-    scene: &'a Scene,
-    accel: &'a dyn Accel,
-    camera: &'a Camera,
-    s: PathSettings,
-    engine: Engine,
-    seed: u64,
+    t: Tracing<'a>,
     /// Samples per vertex of each light (one for delta lights).
     light_samples: Vec<u32>,
     layout: DimLayout,
     unsampled_emitters: bool,
     /// The triangles of area lights' surfaces, and their light.
     light_prims: Vec<(u32, u32)>,
-    /// Per material: whether it scatters light at all.
-    scatters: Vec<bool>,
+    scattering: Scattering,
 }
 
 /// Which dimension pair each number of a path comes from: the pixel position, the
@@ -69,14 +63,8 @@ const LOBE_PAIR: u32 = 1;
 const LIGHT_PAIRS: u32 = 2;
 
 impl<'a> PathIntegrator<'a> {
-    pub fn new(
-        scene: &'a Scene,
-        accel: &'a dyn Accel,
-        camera: &'a Camera,
-        s: PathSettings,
-        engine: Engine,
-        seed: u64,
-    ) -> Self {
+    pub fn new(t: Tracing<'a>) -> Self {
+        let (scene, s) = (t.scene, t.s);
         let n = s.light_samples.max(1);
         let light_samples: Vec<u32> = scene
             .lights
@@ -89,32 +77,30 @@ impl<'a> PathIntegrator<'a> {
             DirectStrategy::Bsdf => 0,
         };
         PathIntegrator {
-            scene,
-            accel,
-            camera,
-            engine,
-            seed,
+            t: Tracing {
+                s: PathSettings {
+                    light_samples: n,
+                    ..s
+                },
+                ..t
+            },
             light_samples,
             layout: DimLayout {
                 per_bounce: LIGHT_PAIRS + direct_pairs,
             },
             unsampled_emitters: scene.has_unsampled_emitters(),
-            scatters: scene.materials.iter().map(|m| m.scatters()).collect(),
+            scattering: Scattering::of(scene),
             light_prims: (0..scene.triangles.len() as u32)
                 .map(|i| (i, scene.triangles[i as usize].light))
                 .filter(|&(_, light)| light != NO_LIGHT)
                 .collect(),
-            s: PathSettings {
-                light_samples: n,
-                ..s
-            },
         }
     }
 
     /// Whether a BSDF-sampled ray leaving a non-delta vertex can add light: with MIS,
     /// or when the scene has emitters that light sampling cannot pick.
     fn bsdf_rays_find_light(&self) -> bool {
-        match self.s.strategy {
+        match self.t.s.strategy {
             DirectStrategy::Mis | DirectStrategy::Bsdf => true,
             DirectStrategy::Hemisphere => false,
             DirectStrategy::Light => self.unsampled_emitters,
@@ -154,7 +140,7 @@ impl SampleIntegrator for PathIntegrator<'_> {
             stop,
             done,
         };
-        match self.engine {
+        match self.t.engine {
             Engine::Scalar => task.run_lanes(One),
             Engine::Auto | Engine::Packet => dispatch(task),
         }
@@ -216,10 +202,7 @@ struct Kernel<'k, 'a, L: Lanes> {
     /// by `(ηi/ηt)²` until it leaves again) is not ended for a factor that cancels.
     eta_scale: L::F,
     radiance: V3<L::F>,
-    /// Scattering events so far (small integers, exact as floats).
-    bounces: L::F,
-    /// The first dimension pair of the current bounce.
-    pair_base: L::U,
+    depth: Depth<L>,
     /// Lanes whose ray left a surface vertex (else the camera), that vertex, the BSDF
     /// pdf of the ray's direction there, and whether it was a delta lobe.
     has_prev: LaneBits,
@@ -255,7 +238,7 @@ impl<'k, 'a, L: Lanes> Kernel<'k, 'a, L> {
             slot: [0; LANES],
             sample: [0; LANES],
             stream: SampleStream {
-                kind: it.s.sampler,
+                kind: it.t.s.sampler,
                 key: l.u(0),
                 index: l.u(0),
             },
@@ -263,8 +246,7 @@ impl<'k, 'a, L: Lanes> Kernel<'k, 'a, L> {
             beta: zero,
             eta_scale: l.f(1.0),
             radiance: zero,
-            bounces: l.f(0.0),
-            pair_base: l.u(0),
+            depth: Depth::new(l),
             has_prev: 0,
             prev_p: zero,
             prev_pdf: l.f(0.0),
@@ -291,7 +273,7 @@ impl<'k, 'a, L: Lanes> Kernel<'k, 'a, L> {
             if self.live == 0 {
                 break;
             }
-            trace(self.l, self.it.accel, &self.rays, self.live, &mut hits);
+            trace(self.l, self.it.t.accel, &self.rays, self.live, &mut hits);
             let ended = self.bounce(&hits);
             self.finish(ended, done);
         }
@@ -313,7 +295,8 @@ impl<'k, 'a, L: Lanes> Kernel<'k, 'a, L> {
     #[inline(always)]
     fn bounce_2d(&self, offset: u32) -> (L::F, L::F) {
         self.stream.get_2d(
-            self.pair_base
+            self.depth
+                .pair_base
                 .wrapping_add(self.l.u(offset + FIRST_PATH_PAIR)),
         )
     }
@@ -321,13 +304,13 @@ impl<'k, 'a, L: Lanes> Kernel<'k, 'a, L> {
     /// Lanes of `lanes` where light found after `bounces` scattering events counts.
     #[inline(always)]
     fn counts(&self, lanes: LaneBits) -> LaneBits {
-        self.it.s.counts_l(self.l, self.bounces).bits() & lanes
+        self.depth.counts(self.l, &self.it.t.s, lanes)
     }
 
     /// Lanes of `lanes` at the depth cap.
     #[inline(always)]
     fn at_depth_cap(&self, lanes: LaneBits) -> LaneBits {
-        self.bounces.ge(self.f(self.it.s.max_depth as f32)).bits() & lanes
+        self.depth.at_cap(self.l, &self.it.t.s, lanes)
     }
 
     /// `L += beta · c` in lanes `m`.
@@ -349,7 +332,7 @@ impl<'k, 'a, L: Lanes> Kernel<'k, 'a, L> {
         }
         let m = self.mask(fresh);
         let stream = SampleStream {
-            kind: self.it.s.sampler,
+            kind: self.it.t.s.sampler,
             key: l.u_from(key),
             index: l.u_from(index),
         };
@@ -357,15 +340,15 @@ impl<'k, 'a, L: Lanes> Kernel<'k, 'a, L> {
         let pixel = (l.f_from(xy[0]), l.f_from(xy[1]));
         let (o, d) = match self.first_ray {
             Some((o, d, _)) => (V3::splat(l, o), V3::splat(l, d)),
-            None => self.it.camera.sample_rays(l, pixel, &self.stream),
+            None => self.it.t.camera.sample_rays(l, pixel, &self.stream),
         };
-        self.set_rays(fresh, o, d, self.f(f32::INFINITY), l.u(NO_PRIM));
+        self.rays
+            .set_lanes(l, fresh, o, d, self.f(f32::INFINITY), l.u(NO_PRIM));
         let zero = V3::splat(l, Vec3::ZERO);
         self.beta = V3::select(m, V3::splat(l, Vec3::ONE), self.beta);
         self.eta_scale = L::F::select(m, self.f(1.0), self.eta_scale);
         self.radiance = V3::select(m, zero, self.radiance);
-        self.bounces = L::F::select(m, self.f(0.0), self.bounces);
-        self.pair_base = L::U::select(m, l.u(0), self.pair_base);
+        self.depth.start(l, m, 0);
         self.has_prev &= !fresh;
         self.prev_delta &= !fresh;
         self.met_surface &= !fresh;
@@ -377,7 +360,7 @@ impl<'k, 'a, L: Lanes> Kernel<'k, 'a, L> {
     #[allow(clippy::type_complexity)]
     #[inline(always)]
     fn assign_samples(&mut self) -> (LaneBits, [u32; LANES], [u32; LANES], [[f32; LANES]; 2]) {
-        let width = self.it.camera.width as u64;
+        let width = self.it.t.camera.width as u64;
         let all = self.l.all();
         let mut fresh: LaneBits = 0;
         let mut key = [0u32; LANES];
@@ -401,7 +384,7 @@ impl<'k, 'a, L: Lanes> Kernel<'k, 'a, L> {
                 self.slots.block[slot] = b;
                 self.slots.key[slot] = match self.first_ray {
                     Some((_, _, k)) => k,
-                    None => pixel_key(self.it.seed, block.y as u64 * width + block.x as u64),
+                    None => pixel_key(self.it.t.seed, block.y as u64 * width + block.x as u64),
                 };
                 self.slots.done[slot] = 0;
             }
@@ -447,17 +430,6 @@ impl<'k, 'a, L: Lanes> Kernel<'k, 'a, L> {
         self.live &= !ended;
     }
 
-    /// Rays `o + t·d`, `t ≤ t_max`, skipping `skip`, in lanes `lanes`.
-    #[inline(always)]
-    fn set_rays(&mut self, lanes: LaneBits, o: V3<L::F>, d: V3<L::F>, t_max: L::F, skip: L::U) {
-        let (l, m) = (self.l, self.mask(lanes));
-        let rays = &mut self.rays;
-        rays.o = V3::select(m, o, V3::from_arrays(l, &rays.o)).to_arrays();
-        rays.d = V3::select(m, d, V3::from_arrays(l, &rays.d)).to_arrays();
-        rays.t_max = L::F::select(m, t_max, l.f_from(rays.t_max)).to_array();
-        rays.skip = L::U::select(m, skip, l.u_from(rays.skip)).to_array();
-    }
-
     /// One bounce of every live lane, from its traced ray's `hits` (the body of the
     /// path loop): the lanes whose path ended.
     #[inline(always)]
@@ -485,7 +457,7 @@ impl<'k, 'a, L: Lanes> Kernel<'k, 'a, L> {
         if lanes == 0 {
             return ended;
         }
-        let scene = self.it.scene;
+        let scene = self.it.t.scene;
         let mut hit = scene.hits(l, lanes, o, d, hits);
         let from_prev = lanes & self.has_prev;
         if from_prev != 0 {
@@ -496,33 +468,20 @@ impl<'k, 'a, L: Lanes> Kernel<'k, 'a, L> {
             self.emitted(seen, &hit, w);
         }
         // Paths end at the depth cap and on surfaces that scatter nothing.
-        let dark = each_lane(lanes)
-            .filter(|&i| !self.it.scatters[hit.material[i] as usize])
-            .fold(0, |m, i| m | 1 << i);
-        let stop = self.at_depth_cap(lanes) | dark;
+        let stop = self.at_depth_cap(lanes) | self.it.scattering.dark(&hit.material, lanes);
         ended |= stop;
         let lanes = lanes & !stop;
         if lanes == 0 {
             return ended;
         }
-        let uv = (hit.uv.0.to_array(), hit.uv.1.to_array());
-        let bsdf = BsdfLanes::gather(l, lanes, |i| {
-            scene.bsdf_at(hit.material[i], Vec2::new(uv.0[i], uv.1[i]))
-        });
-        let m = self.mask(lanes);
-        self.bounces = L::F::select(m, self.bounces + self.f(1.0), self.bounces);
-        let next_base = self.pair_base.wrapping_add(l.u(self.it.layout.per_bounce));
-        // The first bounce's pairs start at the base; later ones move it on.
-        let moved = m & self.bounces.gt(self.f(1.0));
-        self.pair_base = L::U::select(moved, next_base, self.pair_base);
-        let frame = Frame::around(hit.ns);
-        let wo_world = -w;
-        let wo = frame.local(wo_world);
-        let direct = self.counts(lanes) & !bsdf.delta;
+        let v = Vertex::new(l, scene, lanes, hit, w);
+        self.depth
+            .advance(l, self.mask(lanes), self.it.layout.per_bounce);
+        let direct = self.counts(lanes) & !v.bsdf.delta;
         if direct != 0 {
-            self.direct(direct, &hit, &bsdf, &frame, wo);
+            self.direct(direct, &v);
         }
-        ended |= self.scatter(lanes, &hit, &bsdf, &frame, wo, wo_world);
+        ended |= self.scatter(lanes, &v);
         ended
     }
 
@@ -532,7 +491,7 @@ impl<'k, 'a, L: Lanes> Kernel<'k, 'a, L> {
     #[inline(always)]
     fn hit_weight(&self, lanes: LaneBits, light_pdf: Option<L::F>) -> L::F {
         let (zero, one) = (self.f(0.0), self.f(1.0));
-        let w = match (self.it.s.strategy, light_pdf) {
+        let w = match (self.it.t.s.strategy, light_pdf) {
             // The hemisphere estimator already counted every emitter the direction finds.
             (DirectStrategy::Hemisphere, _) => zero,
             // Nothing else estimates direct light: the BSDF-sampled ray counts in full.
@@ -541,7 +500,7 @@ impl<'k, 'a, L: Lanes> Kernel<'k, 'a, L> {
             (DirectStrategy::Mis, Some(pdf)) => power_heuristic(
                 one,
                 self.prev_pdf,
-                self.f(self.it.s.light_samples as f32),
+                self.f(self.it.t.s.light_samples as f32),
                 pdf,
             ),
         };
@@ -591,7 +550,7 @@ impl<'k, 'a, L: Lanes> Kernel<'k, 'a, L> {
         let mut best_t = self.f(f32::INFINITY);
         let mut best: LaneBits = 0;
         let mut best_light = l.u(0);
-        for (k, light) in self.it.scene.lights.iter().enumerate() {
+        for (k, light) in self.it.t.scene.lights.iter().enumerate() {
             let Light::Area(area) = light else {
                 continue;
             };
@@ -609,7 +568,7 @@ impl<'k, 'a, L: Lanes> Kernel<'k, 'a, L> {
         }
         let counted = self.counts(best);
         if counted != 0 {
-            let lights = &self.it.scene.lights;
+            let lights = &self.it.t.scene.lights;
             let ids = best_light.to_array();
             let area = |i: usize| lights[ids[i] as usize].as_area().expect("an area light");
             let le = per_lane_v3(w.x, |i| area(i).radiance);
@@ -631,7 +590,7 @@ impl<'k, 'a, L: Lanes> Kernel<'k, 'a, L> {
         }
         let l = self.l;
         let mut sum = V3::splat(l, Vec3::ZERO);
-        for light in &self.it.scene.lights {
+        for light in &self.it.t.scene.lights {
             if !light.is_environment() {
                 continue;
             }
@@ -646,7 +605,7 @@ impl<'k, 'a, L: Lanes> Kernel<'k, 'a, L> {
     /// rays (other vertices' were found on the line), and emissive materials.
     #[inline(always)]
     fn emitted(&mut self, lanes: LaneBits, hit: &Hits<L>, w: V3<L::F>) {
-        let scene = self.it.scene;
+        let scene = self.it.t.scene;
         let cos_out = (-w).dot(hit.ng).to_array();
         let on_light = !self.l.u_from(hit.light).eq(self.l.u(NO_LIGHT)).bits();
         let camera_on_light = lanes & on_light & !self.has_prev;
@@ -675,20 +634,11 @@ impl<'k, 'a, L: Lanes> Kernel<'k, 'a, L> {
 
     /// Direct light at the (non-delta) hits of `lanes` by the chosen strategy.
     #[inline(always)]
-    fn direct(
-        &mut self,
-        lanes: LaneBits,
-        hit: &Hits<L>,
-        bsdf: &BsdfLanes<L>,
-        frame: &Frame<L::F>,
-        wo: V3<L::F>,
-    ) {
-        let acc = match self.it.s.strategy {
+    fn direct(&mut self, lanes: LaneBits, v: &Vertex<L>) {
+        let acc = match self.it.t.s.strategy {
             DirectStrategy::Bsdf => return,
-            DirectStrategy::Hemisphere => self.direct_hemisphere(lanes, hit, bsdf, frame, wo),
-            DirectStrategy::Light | DirectStrategy::Mis => {
-                self.direct_lights(lanes, hit, bsdf, frame, wo)
-            }
+            DirectStrategy::Hemisphere => self.direct_hemisphere(lanes, v),
+            DirectStrategy::Light | DirectStrategy::Mis => self.direct_lights(lanes, v),
         };
         self.add_radiance(lanes, acc);
     }
@@ -696,25 +646,20 @@ impl<'k, 'a, L: Lanes> Kernel<'k, 'a, L> {
     /// Light sampling (with MIS weights when asked): each light's samples, one shadow
     /// packet each, averaged per light and summed over the lights.
     #[inline(always)]
-    fn direct_lights(
-        &mut self,
-        lanes: LaneBits,
-        hit: &Hits<L>,
-        bsdf: &BsdfLanes<L>,
-        frame: &Frame<L::F>,
-        wo: V3<L::F>,
-    ) -> V3<L::F> {
+    fn direct_lights(&mut self, lanes: LaneBits, v: &Vertex<L>) -> V3<L::F> {
         let l = self.l;
         let zero = self.f(0.0);
+        let (hit, bsdf, frame, wo) = (&v.hit, &v.bsdf, &v.frame, v.wo);
+        // (From the local `wo`, as it always was: `-w` can differ in the last bit.)
         let wo_world = frame.world(wo);
-        let mis = self.it.s.strategy == DirectStrategy::Mis;
+        let mis = self.it.t.s.strategy == DirectStrategy::Mis;
         let mut acc = V3::splat(l, Vec3::ZERO);
         let mut shadow = RayPacket {
             skip: hit.prim,
             ..RayPacket::default()
         };
         let mut pair = LIGHT_PAIRS;
-        for (light, &n) in self.it.scene.lights.iter().zip(&self.it.light_samples) {
+        for (light, &n) in self.it.t.scene.lights.iter().zip(&self.it.light_samples) {
             let nf = self.f(n as f32);
             for _ in 0..n {
                 let u = self.bounce_2d(pair);
@@ -744,7 +689,7 @@ impl<'k, 'a, L: Lanes> Kernel<'k, 'a, L> {
                 shadow.o = origin.to_arrays();
                 shadow.d = dir.to_arrays();
                 shadow.t_max = t_max.to_array();
-                let lit = ok & !occluded(l, self.it.accel, &shadow, ok);
+                let lit = ok & !occluded(l, self.it.t.accel, &shadow, ok);
                 if lit == 0 {
                     continue;
                 }
@@ -763,17 +708,11 @@ impl<'k, 'a, L: Lanes> Kernel<'k, 'a, L> {
     /// `-H`: `-l` uniform directions on the hemisphere of `wo`, counting whatever
     /// emission they find.
     #[inline(always)]
-    fn direct_hemisphere(
-        &mut self,
-        lanes: LaneBits,
-        hit: &Hits<L>,
-        bsdf: &BsdfLanes<L>,
-        frame: &Frame<L::F>,
-        wo: V3<L::F>,
-    ) -> V3<L::F> {
+    fn direct_hemisphere(&mut self, lanes: LaneBits, v: &Vertex<L>) -> V3<L::F> {
         let l = self.l;
-        let scene = self.it.scene;
-        let n = self.it.s.light_samples;
+        let scene = self.it.t.scene;
+        let n = self.it.t.s.light_samples;
+        let (hit, bsdf, frame, wo) = (&v.hit, &v.bsdf, &v.frame, v.wo);
         let wo_world = frame.world(wo);
         let mut acc = V3::splat(l, Vec3::ZERO);
         let mut rays = RayPacket::default();
@@ -795,7 +734,7 @@ impl<'k, 'a, L: Lanes> Kernel<'k, 'a, L> {
             rays.d = wi_world.to_arrays();
             rays.t_max = [f32::INFINITY; LANES];
             rays.skip = hit.prim;
-            trace(l, self.it.accel, &rays, ok, &mut found);
+            trace(l, self.it.t.accel, &rays, ok, &mut found);
             let met = !l.u_from(found.prim).eq(l.u(NO_PRIM)).bits() & ok;
             let mut le = V3::splat(l, Vec3::ZERO);
             for light in &scene.lights {
@@ -835,53 +774,37 @@ impl<'k, 'a, L: Lanes> Kernel<'k, 'a, L> {
     /// throughput, plays roulette and spawns the next rays: the lanes whose path ended.
     #[allow(clippy::too_many_arguments)]
     #[inline(always)]
-    fn scatter(
-        &mut self,
-        lanes: LaneBits,
-        hit: &Hits<L>,
-        bsdf: &BsdfLanes<L>,
-        frame: &Frame<L::F>,
-        wo: V3<L::F>,
-        wo_world: V3<L::F>,
-    ) -> LaneBits {
+    fn scatter(&mut self, lanes: LaneBits, v: &Vertex<L>) -> LaneBits {
         let l = self.l;
-        let zero = self.f(0.0);
         let u = self.bounce_2d(BSDF_PAIR);
         let (u_lobe, u_roulette) = self.bounce_2d(LOBE_PAIR);
-        let bs = bsdf.sample(l, wo, u_lobe, u);
-        let mut ended = lanes & !bs.valid.bits();
+        let (bs, wi_world, go) = v.sample_next(l, lanes, u_lobe, u);
+        let mut ended = lanes & !go;
         // At the depth cap only a strategy that weights the light a BSDF-sampled ray
         // finds still traces it, or a delta lobe (whose light nothing else finds).
         if !self.it.bsdf_rays_find_light() {
-            ended |= self.at_depth_cap(lanes) & !bsdf.delta;
+            ended |= self.at_depth_cap(lanes) & !v.bsdf.delta;
         }
-        let wi_world = frame.world(bs.wi);
-        let reflect = (bs.wi.z * wo.z).gt(zero);
-        let consistent = geometrically_consistent(hit.ng, wo_world, wi_world, reflect);
-        ended |= lanes & !consistent.bits();
         let go = lanes & !ended;
         let beta = self.beta * bs.weight;
-        let eta_scale = self.eta_scale / bsdf.radiance_scale(l, wo, bs.wi);
-        let roulette = &self.it.s.roulette;
+        let eta_scale = self.eta_scale / v.bsdf.radiance_scale(l, v.wo, bs.wi);
+        let roulette = &self.it.t.s.roulette;
         let read = beta * eta_scale;
-        let (survive, beta) = roulette.play_l(l, self.bounces, go, (beta, read), u_roulette);
+        let bounces = self.depth.bounces;
+        let (survive, beta) = roulette.play_l(l, bounces, go, (beta, read), u_roulette);
         ended |= lanes & !survive;
         if survive != 0 {
             let m = self.mask(survive);
             self.beta = V3::select(m, beta, self.beta);
             self.eta_scale = L::F::select(m, eta_scale, self.eta_scale);
-            self.prev_p = V3::select(m, hit.p, self.prev_p);
+            self.prev_p = V3::select(m, v.hit.p, self.prev_p);
             self.prev_pdf = L::F::select(m, bs.pdf, self.prev_pdf);
             self.has_prev |= survive;
-            self.prev_delta = (self.prev_delta & !survive) | (bsdf.delta & survive);
-            let origin = hit.spawn_origins(l, survive, wi_world);
-            self.set_rays(
-                survive,
-                origin,
-                wi_world,
-                self.f(f32::INFINITY),
-                l.u_from(hit.prim),
-            );
+            self.prev_delta = (self.prev_delta & !survive) | (v.bsdf.delta & survive);
+            let origin = v.hit.spawn_origins(l, survive, wi_world);
+            let (t_max, skip) = (self.f(f32::INFINITY), l.u_from(v.hit.prim));
+            self.rays
+                .set_lanes(l, survive, origin, wi_world, t_max, skip);
         }
         ended
     }

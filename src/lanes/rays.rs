@@ -7,7 +7,7 @@
 
 use crate::geometry::triangle::TriangleRays;
 use crate::geometry::{PrimHit, Ray, NO_PRIM};
-use crate::lanes::{F32s, LaneBits, Mask, Simd, U32s, Vec3s, LANES};
+use crate::lanes::{F32s, LaneBits, Lanes, Mask, Real, Simd, U32s, UInt, Vec3s, LANES, V3};
 
 /// Sixteen rays with `t_min = 0`, structure of arrays. Lane `i` is
 /// `o[·][i] + t·d[·][i]`, `t ∈ [0, t_max[i]]`, skipping primitive `skip[i]`
@@ -52,6 +52,25 @@ impl RayPacket {
         }
         self.t_max[i] = ray.t_max;
         self.skip[i] = ray.skip;
+    }
+
+    /// Rays `o + t·d`, `t ≤ t_max`, skipping `skip`, in lanes `lanes`; the other
+    /// lanes keep theirs.
+    #[inline(always)]
+    pub fn set_lanes<L: Lanes>(
+        &mut self,
+        l: L,
+        lanes: LaneBits,
+        o: V3<L::F>,
+        d: V3<L::F>,
+        t_max: L::F,
+        skip: L::U,
+    ) {
+        let m = l.mask(lanes);
+        self.o = V3::select(m, o, V3::from_arrays(l, &self.o)).to_arrays();
+        self.d = V3::select(m, d, V3::from_arrays(l, &self.d)).to_arrays();
+        self.t_max = L::F::select(m, t_max, l.f_from(self.t_max)).to_array();
+        self.skip = L::U::select(m, skip, l.u_from(self.skip)).to_array();
     }
 }
 

@@ -36,8 +36,9 @@ pub trait Real:
     const WIDTH: usize;
     /// One `T` per lane: `[T; 1]` or `[T; LANES]`.
     type Array<T: Copy>: Copy + Index<usize, Output = T> + IndexMut<usize>;
-    /// `f(i)` for each lane `i`.
-    fn array<T: Copy>(f: impl FnMut(usize) -> T) -> Self::Array<T>;
+    /// `x` in every lane, to be filled in by index. (Not from a closure: one the
+    /// compiler leaves out of line loses the instruction set of its caller.)
+    fn array_of<T: Copy>(x: T) -> Self::Array<T>;
     fn sqrt(self) -> Self;
     fn abs(self) -> Self;
     /// `if self < o { self } else { o }` (`o` when either is NaN).
@@ -108,8 +109,8 @@ impl Real for f32 {
     const WIDTH: usize = 1;
     type Array<T: Copy> = [T; 1];
     #[inline(always)]
-    fn array<T: Copy>(f: impl FnMut(usize) -> T) -> [T; 1] {
-        std::array::from_fn(f)
+    fn array_of<T: Copy>(x: T) -> [T; 1] {
+        [x]
     }
     #[inline(always)]
     fn sqrt(self) -> Self {
@@ -271,8 +272,8 @@ impl<S: Simd> Real for F32s<S> {
     const WIDTH: usize = LANES;
     type Array<T: Copy> = [T; LANES];
     #[inline(always)]
-    fn array<T: Copy>(f: impl FnMut(usize) -> T) -> [T; LANES] {
-        std::array::from_fn(f)
+    fn array_of<T: Copy>(x: T) -> [T; LANES] {
+        [x; LANES]
     }
     #[inline(always)]
     fn sqrt(self) -> Self {

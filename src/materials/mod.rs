@@ -15,7 +15,7 @@ pub mod lambertian;
 pub mod microfacet;
 pub mod specular;
 
-use crate::lanes::{LaneBits, LaneMask, Lanes, Real, LANES, V3};
+use crate::lanes::{each_lane, LaneBits, LaneMask, Lanes, Real, LANES, V3};
 use crate::Color;
 use glam::{Vec2, Vec3};
 pub use lambertian::Lambertian;
@@ -220,33 +220,35 @@ macro_rules! bsdfs {
             pub fn gather(l: L, lanes: LaneBits, bsdf: impl Fn(usize) -> Bsdf) -> Self {
                 let mut of_kind = [0 as LaneBits; KINDS];
                 let mut first = [usize::MAX; KINDS];
-                let all = <L::F as Real>::array(|i| {
-                    if lanes >> i & 1 == 0 {
-                        return None;
-                    }
+                let mut all = <L::F as Real>::array_of(None);
+                for i in each_lane(lanes) {
                     let b = bsdf(i);
                     let k = b.kind() as usize;
                     of_kind[k] |= 1 << i;
                     if first[k] == usize::MAX {
                         first[k] = i;
                     }
-                    Some(b)
-                });
+                    all[i] = Some(b);
+                }
                 let (mut delta, mut scattering, mut glossy) = (0, 0, 0);
                 $(#[allow(non_snake_case)] let $kind = {
                     let k = Kind::$kind as usize;
-                    (of_kind[k] != 0).then(|| {
+                    if of_kind[k] != 0 {
                         let Some(Bsdf::$kind(fill)) = all[first[k]] else { unreachable!() };
-                        let each = <L::F as Real>::array(|i| match all[i] {
-                            Some(Bsdf::$kind(b)) => b,
-                            _ => fill,
-                        });
+                        let mut each = <L::F as Real>::array_of(fill);
+                        for i in each_lane(of_kind[k]) {
+                            if let Some(Bsdf::$kind(b)) = all[i] {
+                                each[i] = b;
+                            }
+                        }
                         let flags = <$ty as Scatter<f32>>::FLAGS;
                         if flags.delta { delta |= of_kind[k]; }
                         if flags.glossy { glossy |= of_kind[k]; }
                         if flags.scatters() { scattering |= of_kind[k]; }
-                        (<$ty<L::F> as Scatter<L::F>>::gather(l, &each), l.mask(of_kind[k]))
-                    })
+                        Some((<$ty<L::F> as Scatter<L::F>>::gather(l, &each), l.mask(of_kind[k])))
+                    } else {
+                        None
+                    }
                 };)*
                 BsdfLanes { $($kind,)* delta, scattering, glossy }
             }

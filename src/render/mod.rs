@@ -24,7 +24,7 @@ use crate::film::{heat_map, Image};
 use crate::integrators::debug::{DebugView, View};
 use crate::integrators::{
     light_tracing, DirectStrategy, Estimator, LightTracer, PathIntegrator, PathSettings, Roulette,
-    SampleIntegrator,
+    SampleIntegrator, Tracing,
 };
 use crate::names::{display_from_table, Named};
 use crate::sampling::SamplerKind;
@@ -282,12 +282,19 @@ fn render_rect(
         };
         return pixels::render(&debug, settings, None, frame, rect, progress, stop);
     }
-    let path = settings.path_settings(scene);
+    let t = Tracing {
+        scene,
+        accel,
+        camera,
+        s: settings.path_settings(scene),
+        engine,
+        seed: settings.seed,
+    };
     if job.estimator(settings) == Estimator::LightTracing {
-        let tracer = LightTracer::new(scene, accel, camera, path, engine, settings.seed);
+        let tracer = LightTracer::new(t);
         return splats::render(&tracer, camera, settings.spp.max(1), rect, progress, stop);
     }
-    let integrator = PathIntegrator::new(scene, accel, camera, path, engine, settings.seed);
+    let integrator = PathIntegrator::new(t);
     let integrator: &dyn SampleIntegrator = &integrator;
     pixels::render(
         integrator,
