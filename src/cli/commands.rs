@@ -525,7 +525,11 @@ impl RenderRun<'_> {
             other => format!("--shading {other}"),
         };
         let engine = if s.uses_packets() {
-            format!("packets of 16 ({})", ember::lanes::instruction_set())
+            format!(
+                "packets of {} ({})",
+                ember::lanes::LANES,
+                ember::lanes::instruction_set()
+            )
         } else {
             "one path at a time".into()
         };
@@ -660,7 +664,8 @@ pub(super) fn info(path: &Path, w: u32, h: u32, placement: &PlacementArgs) -> Re
     // What the default render (`ember SCENE`) would run on, packets or single paths.
     match RenderSettings::default().packet_blocker() {
         None => ember::outln!(
-            "--engine auto (the default) runs packets of 16 paths ({})",
+            "--engine auto (the default) runs packets of {} paths ({})",
+            ember::lanes::LANES,
             ember::lanes::instruction_set()
         )?,
         Some(why) => ember::outln!("--engine auto (the default) runs one path at a time: {why}")?,
