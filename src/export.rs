@@ -227,6 +227,8 @@ fn integrator_xml(s: &MitsubaSettings) -> String {
     // ember plays roulette after sampling the BSDF at its `start`-th scattering vertex.
     // Mitsuba 3.9's path.cpp counts that vertex into `depth` after sampling its BSDF and
     // then plays when `depth >= rr_depth`: the same vertex when `rr_depth = start`.
+    // (ember spares the vertex at the depth cap; Mitsuba has no setting for that, so
+    // there the exported scene plays where ember does not.)
     let rr_depth = s.roulette_start.map_or(max_depth + 1, |b| b);
     format!(
         "  <integrator type=\"path\">\n    <integer name=\"max_depth\" value=\"{max_depth}\"/>\n    \

@@ -330,7 +330,7 @@ impl<'k, 'a, L: Lanes> LightKernel<'k, 'a, L> {
         let roulette = &self.it.t.s.roulette;
         let read = beta / self.beta0;
         let bounces = self.depth.bounces;
-        let (survive, beta) = roulette.play_l(l, bounces, go, (beta, read), u_roulette);
+        let (survive, beta) = roulette.play_l(l, bounces, (go, 0), (beta, read), u_roulette);
         if survive != 0 {
             let m = l.mask(survive);
             self.beta = V3::select(m, beta, self.beta);

@@ -334,19 +334,20 @@ impl Roulette {
 
     /// Plays roulette for the paths of `lanes` after `bounces` scattering events, with
     /// throughput `beta`, the probability read from `read` (the throughput as roulette
-    /// sees it) and the uniform numbers `u`: the lanes that go on with a finite,
-    /// non-zero throughput, and the throughput divided by the probability.
+    /// sees it) and the uniform numbers `u`, sparing the lanes of `spared` (they go on
+    /// for sure): the lanes that go on with a finite, non-zero throughput, and the
+    /// throughput divided by the probability.
     #[inline(always)]
     pub fn play_l<L: crate::lanes::Lanes>(
         &self,
         l: L,
         bounces: L::F,
-        lanes: crate::lanes::LaneBits,
+        (lanes, spared): (crate::lanes::LaneBits, crate::lanes::LaneBits),
         (beta, read): (crate::lanes::V3<L::F>, crate::lanes::V3<L::F>),
         u: L::F,
     ) -> (crate::lanes::LaneBits, crate::lanes::V3<L::F>) {
         use crate::lanes::LaneMask;
-        let q = self.continue_prob_l(l, bounces, lanes, read);
+        let q = self.continue_prob_l(l, bounces, lanes & !spared, read);
         let play = lanes & q.lt(l.f(1.0)).bits();
         let survive = lanes & !(play & u.ge(q).bits());
         let beta = beta / q;

@@ -791,7 +791,12 @@ impl<'k, 'a, L: Lanes> Kernel<'k, 'a, L> {
         let roulette = &self.it.t.s.roulette;
         let read = beta * eta_scale;
         let bounces = self.depth.bounces;
-        let (survive, beta) = roulette.play_l(l, bounces, go, (beta, read), u_roulette);
+        // At the depth cap the next ray only looks for emission (MIS, emitters light
+        // sampling cannot pick, delta lobes): ending it would save that one ray and
+        // nothing after it, at the cost of the variance roulette adds. It is spared.
+        let spared = self.at_depth_cap(go);
+        let played = (go, spared);
+        let (survive, beta) = roulette.play_l(l, bounces, played, (beta, read), u_roulette);
         ended |= lanes & !survive;
         if survive != 0 {
             let m = self.mask(survive);
