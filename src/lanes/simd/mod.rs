@@ -24,11 +24,11 @@ pub use portable::Portable;
 #[cfg(target_arch = "x86_64")]
 pub use x86::{Avx2, Avx512};
 
-/// Lanes per value. Sixteen on AVX2 too (two registers a value), measured against
-/// eight (one register, so a tracer's live values spill a quarter as often): whole
-/// renders, 8 ÷ 16 lanes, medians of alternating pairs (AMD EPYC Zen 3, 2 threads,
-/// 480×360, 64 spp): CBbunny -m 5 1.005, banana -m 3 1.005, CBspheres_lambertian
-/// -m 5 1.097. Images are the same at any width.
+/// Lanes per value. Sixteen on AVX2 too (two registers a value, and a quarter of the
+/// path kernel's instructions move registers to and from the stack), measured against
+/// eight (one register a value): whole renders, 8 ÷ 16 lanes, medians of alternating
+/// pairs (AMD EPYC Zen 3, 2 threads, 480×360, 64 spp): CBbunny -m 5 1.005, banana -m 3
+/// 1.005, CBspheres_lambertian -m 5 1.097. Images are the same at any width.
 pub const LANES: usize = 16;
 
 /// A lane mask as bits: bit `i` is lane `i`.
