@@ -558,7 +558,8 @@ pub struct RenderArgs {
     #[arg(long, default_value = "throughput", value_name = "off|throughput|PROB")]
     pub rr: String,
 
-    /// First bounce at which Russian roulette may end a path.
+    /// First bounce at which Russian roulette may end a path. It never plays at the -m cap, where
+    /// the last ray only looks for emission.
     #[arg(long, default_value_t = 3, value_name = "BOUNCE")]
     pub rr_start: u32,
 
