@@ -780,10 +780,11 @@ impl<'k, 'a, L: Lanes> Kernel<'k, 'a, L> {
         let (u_lobe, u_roulette) = self.bounce_2d(LOBE_PAIR);
         let (bs, wi_world, go) = v.sample_next(l, lanes, u_lobe, u);
         let mut ended = lanes & !go;
+        let cap = self.at_depth_cap(lanes);
         // At the depth cap only a strategy that weights the light a BSDF-sampled ray
         // finds still traces it, or a delta lobe (whose light nothing else finds).
         if !self.it.bsdf_rays_find_light() {
-            ended |= self.at_depth_cap(lanes) & !v.bsdf.delta;
+            ended |= cap & !v.bsdf.delta;
         }
         let go = lanes & !ended;
         let beta = self.beta * bs.weight;
@@ -794,8 +795,7 @@ impl<'k, 'a, L: Lanes> Kernel<'k, 'a, L> {
         // At the depth cap the next ray only looks for emission (MIS, emitters light
         // sampling cannot pick, delta lobes): ending it would save that one ray and
         // nothing after it, at the cost of the variance roulette adds. It is spared.
-        let spared = self.at_depth_cap(go);
-        let played = (go, spared);
+        let played = (go, cap & go);
         let (survive, beta) = roulette.play_l(l, bounces, played, (beta, read), u_roulette);
         ended |= lanes & !survive;
         if survive != 0 {

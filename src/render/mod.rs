@@ -20,6 +20,8 @@ pub use memory::{available_bytes, render_bytes};
 pub use progressive::{pass_seed, pass_spp, render_passes, Film};
 pub use stop::{StopReason, StopToken};
 
+use crate::accel::Accel;
+use crate::camera::Camera;
 use crate::film::{heat_map, Image};
 use crate::integrators::debug::{DebugView, View};
 use crate::integrators::{
@@ -154,6 +156,23 @@ impl RenderSettings {
         }
     }
 
+    /// What an estimator over `scene`, `accel` and `camera` is given with these settings.
+    pub fn tracing<'a>(
+        &self,
+        scene: &'a Scene,
+        accel: &'a dyn Accel,
+        camera: &'a Camera,
+    ) -> Tracing<'a> {
+        Tracing {
+            scene,
+            accel,
+            camera,
+            s: self.path_settings(scene),
+            engine: self.engine(),
+            seed: self.seed,
+        }
+    }
+
     /// The engine that runs paths with these settings.
     fn engine(&self) -> Engine {
         if self.uses_packets() {
@@ -264,7 +283,6 @@ fn render_rect(
     stop: &StopToken,
 ) -> RenderOutput {
     let (scene, accel, camera) = (&job.scene, job.accel.as_ref(), &job.camera);
-    let engine = settings.engine();
     let frame = (camera.width, camera.height);
     let view = match settings.shading {
         Shading::Radiance => None,
@@ -282,14 +300,7 @@ fn render_rect(
         };
         return pixels::render(&debug, settings, None, frame, rect, progress, stop);
     }
-    let t = Tracing {
-        scene,
-        accel,
-        camera,
-        s: settings.path_settings(scene),
-        engine,
-        seed: settings.seed,
-    };
+    let t = settings.tracing(scene, accel, camera);
     if job.estimator(settings) == Estimator::LightTracing {
         let tracer = LightTracer::new(t);
         return splats::render(&tracer, camera, settings.spp.max(1), rect, progress, stop);

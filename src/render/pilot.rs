@@ -10,7 +10,7 @@ use super::{pixels, splats, Halves, RenderJob, RenderSettings, StopToken};
 use crate::accel::{Accel, BvhStats, TraversalStats};
 use crate::camera::Camera;
 use crate::geometry::Ray;
-use crate::integrators::{Estimator, LightTracer, PathIntegrator, Tracing};
+use crate::integrators::{Estimator, LightTracer, PathIntegrator};
 use crate::lanes::rays::{HitPacket, RayPacket};
 use crate::lanes::LaneBits;
 use crate::render::{PixelRect, RenderOutput};
@@ -86,22 +86,6 @@ fn render(
     e: Estimator,
     seed: u64,
 ) -> RenderOutput {
-    let t = Tracing {
-        scene: &job.scene,
-        accel,
-        camera,
-        s: s.path_settings(&job.scene),
-        // The engine the render itself would run (the image is the same either way).
-        engine: s.engine(),
-        seed,
-    };
-    let rect = PixelRect::full(camera.width, camera.height);
-    let (quiet, never) = (&|_| {}, &StopToken::never());
-    if e == Estimator::LightTracing {
-        let tracer = LightTracer::new(t);
-        return splats::render(&tracer, camera, PILOT_SPP, rect, quiet, never);
-    }
-    let integrator = PathIntegrator::new(t);
     let settings = RenderSettings {
         spp: PILOT_SPP,
         spp_offset: 0,
@@ -109,6 +93,15 @@ fn render(
         seed,
         ..s.clone()
     };
+    // The engine the render itself would run (the image is the same either way).
+    let t = settings.tracing(&job.scene, accel, camera);
+    let rect = PixelRect::full(camera.width, camera.height);
+    let (quiet, never) = (&|_| {}, &StopToken::never());
+    if e == Estimator::LightTracing {
+        let tracer = LightTracer::new(t);
+        return splats::render(&tracer, camera, PILOT_SPP, rect, quiet, never);
+    }
+    let integrator = PathIntegrator::new(t);
     let frame = (camera.width, camera.height);
     pixels::render(&integrator, &settings, None, frame, rect, quiet, never)
 }
