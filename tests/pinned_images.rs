@@ -39,25 +39,25 @@ const CASES: &[Case] = &[
         scene: "scenes/cs184/sky/CBspheres_lambertian.dae",
         max_depth: 1,
         strategy: DirectStrategy::Light,
-        expected: 0x46e5_9c04_6ad1_ff18,
+        expected: 0x99df_b0d0_7e67_ecf0,
     },
     Case {
         scene: "scenes/cs184/sky/CBspheres_lambertian.dae",
         max_depth: 5,
         strategy: DirectStrategy::Mis,
-        expected: 0xa1b1_078f_83f2_c34c,
+        expected: 0x51db_a7d7_81ae_c8fc,
     },
     Case {
         scene: "scenes/cs184/sky/CBspheres.dae",
         max_depth: 5,
         strategy: DirectStrategy::Light,
-        expected: 0x3866_2701_a748_03fb,
+        expected: 0x72f2_f870_fb37_63cd,
     },
     Case {
         scene: "scenes/cs184/sky/CBbunny_microfacet_cu.dae",
         max_depth: 5,
         strategy: DirectStrategy::Mis,
-        expected: 0x699c_d3c1_99a5_3d1a,
+        expected: 0xf569_ad58_30e5_392d,
     },
 ];
 

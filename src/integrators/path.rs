@@ -27,7 +27,7 @@ use crate::lanes::{
 };
 use crate::lights::Light;
 use crate::sampling::warps::{uniform_hemisphere_l, uniform_hemisphere_pdf};
-use crate::sampling::{pixel_key, SampleStream, FIRST_PATH_PAIR};
+use crate::sampling::{pixel_key, SampleStream, FIRST_PATH_PAIR, PIXEL_PAIR};
 use crate::scene::{Hits, NO_LIGHT};
 use crate::Color;
 use glam::Vec3;
@@ -51,7 +51,8 @@ pub struct PathIntegrator<'a> {
 /// Which dimension pair each number of a path comes from: the pixel position, the
 /// lens, then per bounce its BSDF direction, its lobe choice with roulette, and its
 /// light samples (or hemisphere directions), so every number a path draws has a
-/// pair of its own, whatever the path does.
+/// pair of its own, whatever the path does. (A bounce's first light sample is drawn
+/// jointly with the pair that chose the arriving direction: `light_2d`.)
 #[derive(Clone, Copy, Debug)]
 struct DimLayout {
     per_bounce: u32,
@@ -299,6 +300,24 @@ impl<'k, 'a, L: Lanes> Kernel<'k, 'a, L> {
                 .pair_base
                 .wrapping_add(self.l.u(offset + FIRST_PATH_PAIR)),
         )
+    }
+
+    /// The point of the bounce's light (or hemisphere) sample `k`. The first is
+    /// stratified jointly with the pair that chose the direction arriving here (the
+    /// position in the pixel at the first vertex, the previous vertex's BSDF pair
+    /// after it): light reaching the pixel by one bounce is an integral over both.
+    #[inline(always)]
+    fn light_2d(&self, k: u32) -> (L::F, L::F) {
+        if k > 0 {
+            return self.bounce_2d(LIGHT_PAIRS + k);
+        }
+        let l = self.l;
+        let base = self.depth.pair_base;
+        let own = base.wrapping_add(l.u(FIRST_PATH_PAIR + LIGHT_PAIRS));
+        let back = (FIRST_PATH_PAIR + BSDF_PAIR).wrapping_sub(self.it.layout.per_bounce);
+        let first = self.depth.bounces.le(self.f(1.0));
+        let partner = L::U::select(first, l.u(PIXEL_PAIR), base.wrapping_add(l.u(back)));
+        self.stream.get_2d_coupled(partner, own)
     }
 
     /// Lanes of `lanes` where light found after `bounces` scattering events counts.
@@ -658,12 +677,12 @@ impl<'k, 'a, L: Lanes> Kernel<'k, 'a, L> {
             skip: hit.prim,
             ..RayPacket::default()
         };
-        let mut pair = LIGHT_PAIRS;
+        let mut k = 0;
         for (light, &n) in self.it.t.scene.lights.iter().zip(&self.it.light_samples) {
             let nf = self.f(n as f32);
             for _ in 0..n {
-                let u = self.bounce_2d(pair);
-                pair += 1;
+                let u = self.light_2d(k);
+                k += 1;
                 let ls = light.sample_incident(l, hit.p, u);
                 let wi = frame.local(ls.wi);
                 let reflect = (wi.z * wo.z).gt(zero);
@@ -718,7 +737,7 @@ impl<'k, 'a, L: Lanes> Kernel<'k, 'a, L> {
         let mut rays = RayPacket::default();
         let mut found = HitPacket::default();
         for k in 0..n {
-            let (u1, u2) = self.bounce_2d(LIGHT_PAIRS + k);
+            let (u1, u2) = self.light_2d(k);
             let mut wi = uniform_hemisphere_l(u1, u2);
             wi.z = L::F::select(wo.z.lt(self.f(0.0)), -wi.z, wi.z);
             let wi_world = frame.world(wi);

@@ -90,6 +90,16 @@ pub trait UInt: Copy + BitAnd<Output = Self> + BitOr<Output = Self> {
     fn to_array(self) -> [u32; LANES];
     fn array_like(self, a: [u32; LANES]) -> Self;
     fn lane(self, i: usize) -> u32;
+    /// `table[x & 0xff]` per lane.
+    #[inline(always)]
+    fn lookup_byte(self, table: &[u32; 256]) -> Self {
+        let a = self.to_array();
+        let mut out = [0u32; LANES];
+        for i in 0..LANES {
+            out[i] = table[(a[i] & 0xff) as usize];
+        }
+        self.array_like(out)
+    }
 }
 
 impl LaneMask for bool {
@@ -252,6 +262,10 @@ impl UInt for u32 {
     #[inline(always)]
     fn lane(self, _: usize) -> u32 {
         self
+    }
+    #[inline(always)]
+    fn lookup_byte(self, table: &[u32; 256]) -> Self {
+        table[(self & 0xff) as usize]
     }
 }
 

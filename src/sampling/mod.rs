@@ -15,7 +15,7 @@ pub use warps::{
 
 use crate::lanes::{Lanes, UInt};
 use crate::names::{display_from_table, Named};
-use sequence::{hash32, independent_2d, sobol_2d};
+use sequence::{hash32, independent_2d, sobol_2d, sobol_2d_upper};
 
 /// Which numbers pixel samples draw (`--sampler`).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
@@ -69,20 +69,43 @@ pub struct SampleStream<L: Lanes> {
     pub index: L::U,
 }
 
+/// The hash of a dimension pair's number, which seeds its set with the pixel's key.
+#[inline(always)]
+fn pair_hash<U: UInt>(pair: U) -> U {
+    hash32(
+        pair.wrapping_mul(pair.splat_as(0x9e37_79b9))
+            .wrapping_add(pair.splat_as(1)),
+    )
+}
+
 impl<L: Lanes> SampleStream<L> {
     /// The point of dimension pair `pair` (per lane).
     #[inline(always)]
     pub fn get_2d(&self, pair: L::U) -> (L::F, L::F) {
-        self.get_2d_hashed(hash32(
-            pair.wrapping_mul(pair.splat_as(0x9e37_79b9))
-                .wrapping_add(pair.splat_as(1)),
-        ))
+        self.get_2d_hashed(pair_hash(pair))
+    }
+
+    /// The point of pair `pair`, stratified jointly with pair `partner`: with
+    /// [`SamplerKind::Sobol`], dimensions 2 and 3 of the 4D Sobol set whose
+    /// dimensions 0 and 1 are `get_2d(partner)` (the same shuffled index). On its
+    /// own it is as uniform and as stratified as `get_2d(pair)`; `partner` must not
+    /// be coupled to another pair.
+    #[inline(always)]
+    pub fn get_2d_coupled(&self, partner: L::U, pair: L::U) -> (L::F, L::F) {
+        match self.kind {
+            SamplerKind::Sobol => sobol_2d_upper(
+                self.index,
+                hash32(self.key.xor(pair_hash(partner))),
+                hash32(self.key.xor(pair_hash(pair))),
+            ),
+            SamplerKind::Independent => self.get_2d(pair),
+        }
     }
 
     /// `get_2d` of the same pair in every lane.
     #[inline(always)]
     pub fn get_2d_at(&self, l: L, pair: u32) -> (L::F, L::F) {
-        self.get_2d_hashed(l.u(hash32(pair.wrapping_mul(0x9e37_79b9).wrapping_add(1))))
+        self.get_2d_hashed(l.u(pair_hash(pair)))
     }
 
     /// `get_2d` of the pair whose hash is `pair_hash`.
@@ -128,8 +151,11 @@ mod tests {
                     key: s.u_from(keys),
                     index: s.u_from(index),
                 };
+                let partners: [u32; LANES] = std::array::from_fn(|i| i as u32 % 3);
                 let (x, y) = lanes.get_2d(s.u_from(pairs));
                 let (x, y) = (x.to_array(), y.to_array());
+                let (cx, cy) = lanes.get_2d_coupled(s.u_from(partners), s.u_from(pairs));
+                let (cx, cy) = (cx.to_array(), cy.to_array());
                 for i in 0..LANES {
                     let one = SampleStream::<One> {
                         kind,
@@ -138,6 +164,11 @@ mod tests {
                     };
                     let (a, b) = one.get_2d(pairs[i]);
                     assert_eq!((a.to_bits(), b.to_bits()), (x[i].to_bits(), y[i].to_bits()));
+                    let (a, b) = one.get_2d_coupled(partners[i], pairs[i]);
+                    assert_eq!(
+                        (a.to_bits(), b.to_bits()),
+                        (cx[i].to_bits(), cy[i].to_bits())
+                    );
                 }
             }
         }
@@ -149,13 +180,23 @@ mod tests {
         LanesMatch.run(crate::lanes::simd::Portable);
     }
 
-    /// The pairs of one sample are independent: for the first 1024 samples of a
+    /// The pairs of one sample are independent: for the first 4096 samples of a
     /// pixel, the 4D points made of two pairs fill a 4×4×4×4 grid evenly (chi-square),
-    /// for neighbouring and distant pairs alike.
+    /// for neighbouring and distant pairs alike, and for a pair coupled to a third
+    /// (`Some(partner)`) against any other.
     #[test]
     fn pairs_of_a_sample_are_independent_of_each_other() {
         for kind in [SamplerKind::Sobol, SamplerKind::Independent] {
-            for (p, q) in [(0u32, 1u32), (2, 3), (5, 40), (7, 1000)] {
+            let cases = [
+                (0u32, 1u32, None),
+                (2, 3, None),
+                (5, 40, None),
+                (7, 1000, None),
+                (2, 4, Some(0)),
+                (0, 9, Some(2)),
+                (3, 4, Some(2)),
+            ];
+            for (p, q, partner) in cases {
                 let mut cells = [0u32; 256];
                 let n = 4096u32;
                 for i in 0..n {
@@ -165,7 +206,10 @@ mod tests {
                         index: i,
                     };
                     let (a, b) = s.get_2d(p);
-                    let (c, d) = s.get_2d(q);
+                    let (c, d) = match partner {
+                        Some(r) => s.get_2d_coupled(r, q),
+                        None => s.get_2d(q),
+                    };
                     let k = |v: f32| (v * 4.0) as usize;
                     cells[k(a) + 4 * k(b) + 16 * k(c) + 64 * k(d)] += 1;
                 }
@@ -174,7 +218,7 @@ mod tests {
                 // 255 degrees of freedom: mean 255, sd 22.6; 3.5 sd is p ≈ 2e-4.
                 assert!(
                     chi2 < 255.0 + 3.5 * 22.6,
-                    "{kind:?} pairs {p},{q}: χ² {chi2}"
+                    "{kind:?} pairs {p},{q} (coupled to {partner:?}): χ² {chi2}"
                 );
             }
         }

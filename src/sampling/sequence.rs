@@ -75,6 +75,92 @@ pub fn sobol_2d<U: UInt>(index: U, seed: U) -> (U::F, U::F) {
     (to_unit(x), to_unit(y))
 }
 
+/// Sobol's direction numbers for Joe and Kuo's (`s`, `a`, `m`), each bit reversed:
+/// bit `b` of the index XORs entry `b` into the reversed value.
+const fn reversed_columns(s: usize, a: u32, m: [u32; 3]) -> [u32; 32] {
+    let mut v = [0u32; 32];
+    let mut k = 0;
+    while k < 32 {
+        v[k] = if k < s {
+            m[k] << (31 - k)
+        } else {
+            let mut x = v[k - s] ^ (v[k - s] >> s);
+            let mut i = 1;
+            while i < s {
+                if (a >> (s - 1 - i)) & 1 != 0 {
+                    x ^= v[k - i];
+                }
+                i += 1;
+            }
+            x
+        };
+        k += 1;
+    }
+    let mut r = [0u32; 32];
+    while k > 0 {
+        k -= 1;
+        r[k] = v[k].reverse_bits();
+    }
+    r
+}
+
+/// Sobol dimensions 2 (x² + x + 1) and 3 (x³ + x + 1), reversed columns.
+pub const SOBOL_DIM2: [u32; 32] = reversed_columns(2, 1, [1, 3, 0]);
+pub const SOBOL_DIM3: [u32; 32] = reversed_columns(3, 1, [1, 3, 1]);
+
+/// Dimensions 2 and 3 at the indices of one byte (`0..256`), reversed, shifted to
+/// byte `byte` of a 16-bit index; dimension 2 in the low half, 3 in the high half.
+/// The first 16 columns of a Sobol dimension reach only the value's top 16 bits,
+/// so both reversed values of a 16-bit index fit in 16 bits.
+const fn sobol_23_table(byte: usize) -> [u32; 256] {
+    let mut t = [0u32; 256];
+    let mut x = 0;
+    while x < 256 {
+        let (mut d2, mut d3) = (0u32, 0u32);
+        let mut b = 0;
+        while b < 8 {
+            if x >> b & 1 != 0 {
+                d2 ^= SOBOL_DIM2[8 * byte + b];
+                d3 ^= SOBOL_DIM3[8 * byte + b];
+            }
+            b += 1;
+        }
+        t[x] = d2 | d3 << 16;
+        x += 1;
+    }
+    t
+}
+
+static SOBOL_23: [[u32; 256]; 2] = [sobol_23_table(0), sobol_23_table(1)];
+
+/// Sobol dimensions 2 and 3 at the low 16 bits of `j`, reversed: dimension 2 in
+/// the low half, 3 in the high half.
+#[inline(always)]
+pub fn sobol_23<U: UInt>(j: U) -> U {
+    j.lookup_byte(&SOBOL_23[0])
+        .xor(j.shr::<8>().lookup_byte(&SOBOL_23[1]))
+}
+
+/// Dimensions 2 and 3 of the 4D set whose dimensions 0 and 1 are
+/// `sobol_2d(index, partner_seed)`: the same shuffled index `j`, each dimension
+/// Owen-scrambled by its own hash of `seed`. Only `j`'s low 16 bits are used: below
+/// 2¹⁶ samples its high bits are the same for every sample of the set (the shuffle
+/// permutes aligned blocks), so dropping them XORs each dimension with a constant,
+/// a digital shift that keeps the net and that the scramble absorbs. Beyond 2¹⁶
+/// samples the points stay uniform, only less stratified.
+#[inline(always)]
+pub fn sobol_2d_upper<U: UInt>(index: U, partner_seed: U, seed: U) -> (U::F, U::F) {
+    let j = owen_scrambled(index.reverse_bits(), partner_seed);
+    let both = sobol_23(j);
+    let low = index.splat_as(0xffff);
+    let x = owen_scrambled(both & low, hash32(seed.xor(index.splat_as(0xa511_e9b3))));
+    let y = owen_scrambled(
+        both.shr::<16>(),
+        hash32(seed.xor(index.splat_as(0x63d8_3595))),
+    );
+    (to_unit(x), to_unit(y))
+}
+
 /// Two independent uniform numbers for the hash `h` of (pixel, sample, pair).
 #[inline(always)]
 pub fn independent_2d<U: UInt>(h: U) -> (U::F, U::F) {
@@ -98,6 +184,85 @@ mod tests {
                 .filter(|k| i >> k & 1 != 0)
                 .fold(0, |v, k| v ^ columns[k]);
             assert_eq!(sobol_pascal(i).reverse_bits(), direct, "index {i}");
+        }
+    }
+
+    /// Sobol's dimensions 2 and 3 as published (Joe and Kuo's listing, natural order).
+    #[test]
+    fn dimensions_2_and_3_are_sobols() {
+        let at = |cols: &[u32; 32], i: u32| {
+            (0..32)
+                .filter(|b| i >> b & 1 != 0)
+                .fold(0u32, |v, b| v ^ cols[b])
+                .reverse_bits() as f64
+                / 2f64.powi(32)
+        };
+        let d2: Vec<f64> = (0..8).map(|i| at(&SOBOL_DIM2, i)).collect();
+        let d3: Vec<f64> = (0..8).map(|i| at(&SOBOL_DIM3, i)).collect();
+        assert_eq!(d2, [0.0, 0.5, 0.75, 0.25, 0.375, 0.875, 0.625, 0.125]);
+        assert_eq!(d3, [0.0, 0.5, 0.75, 0.25, 0.125, 0.625, 0.875, 0.375]);
+        // The byte tables are the columns' sums.
+        for j in [0u32, 1, 0x80, 0x1234, 0xffff, 0xbeef] {
+            let both = sobol_23(j);
+            let direct = |cols: &[u32; 32]| {
+                (0..16)
+                    .filter(|b| j >> b & 1 != 0)
+                    .fold(0u32, |v, b| v ^ cols[b])
+            };
+            assert_eq!(both & 0xffff, direct(&SOBOL_DIM2), "{j:#x}");
+            assert_eq!(both >> 16, direct(&SOBOL_DIM3), "{j:#x}");
+        }
+    }
+
+    /// The smallest `t` for which `points` (2ᵐ of them, 4D) are a (t, m, 4)-net: every
+    /// elementary box of volume 2^(t−m) holds 2ᵗ points.
+    fn net_quality(points: &[[f32; 4]], m: u32) -> u32 {
+        let cell = |x: f32, q: u32| ((x as f64) * f64::from(1u32 << q)) as u32;
+        (0..=m)
+            .find(|&t| {
+                let k = m - t;
+                (0..=k).all(|q0| {
+                    (0..=k - q0).all(|q1| {
+                        (0..=k - q0 - q1).all(|q2| {
+                            let q = [q0, q1, q2, k - q0 - q1 - q2];
+                            let mut count = std::collections::HashMap::new();
+                            for p in points {
+                                let key: Vec<u32> = (0..4).map(|d| cell(p[d], q[d])).collect();
+                                *count.entry(key).or_insert(0u32) += 1;
+                            }
+                            count.len() == 1 << k && count.values().all(|&c| c == 1 << t)
+                        })
+                    })
+                })
+            })
+            .unwrap()
+    }
+
+    /// A pair drawn by `sobol_2d_upper` with a partner's seed makes, with the
+    /// partner's `sobol_2d`, the 4D Sobol net scrambled: t = 3 (Sobol's value for
+    /// four dimensions); two sets shuffled apart are not a net of any use.
+    #[test]
+    fn coupled_pairs_are_a_4d_net() {
+        let m = 8;
+        for (partner, own) in [(hash32(1u32), hash32(2u32)), (0xdead_beef, 0x1234_5678)] {
+            for block in [0u32, 3] {
+                let points = |coupled: bool| -> Vec<[f32; 4]> {
+                    (0..1u32 << m)
+                        .map(|i| {
+                            let i = block << m | i;
+                            let (a, b) = sobol_2d(i, partner);
+                            let (c, d) = if coupled {
+                                sobol_2d_upper(i, partner, own)
+                            } else {
+                                sobol_2d(i, own)
+                            };
+                            [a, b, c, d]
+                        })
+                        .collect()
+                };
+                assert_eq!(net_quality(&points(true), m), 3);
+                assert!(net_quality(&points(false), m) >= 6);
+            }
         }
     }
 
