@@ -15,7 +15,7 @@
 
 use super::chart::{write_chart_legend_outside, ChartSpec, Series};
 use super::cycles::CyclesRunner;
-use super::mitsuba::{MitsubaRunner, PeerRender};
+use super::mitsuba::{MitsubaRoulette, MitsubaRunner, PeerRender};
 use super::table::Table;
 use super::{create_out_dir, write_text, Report};
 use crate::accel::{AccelKind, BvhBuilder, EmbreeQuality};
@@ -66,6 +66,8 @@ pub struct MitsubaPeer {
     pub python: PathBuf,
     pub variants: Vec<String>,
     pub samplers: Vec<MitsubaSampler>,
+    /// Each sampler runs once per roulette start.
+    pub roulettes: Vec<MitsubaRoulette>,
 }
 
 /// One way of rendering the image.
@@ -215,14 +217,17 @@ pub fn run(opts: &ConvergeOptions, log: &mut dyn FnMut(&str)) -> Result<Converge
         let dir = opts.out_dir.join("mitsuba");
         for variant in &peer.variants {
             for &sampler in &peer.samplers {
-                let runner = MitsubaRunner::new(&peer.python, variant, sampler, &dir)?;
-                log(&format!("method: {}", runner.name()));
-                let render = |spp, seed, _: &mut dyn FnMut(&str)| {
-                    runner.render(&scene, &camera, opts.max_depth, spp, seed)
-                };
-                let counts = runner.sample_counts(opts.max_spp);
-                let name = runner.name();
-                points.extend(run_peer(&name, &counts, render, opts, &reference, log)?);
+                for &roulette in &peer.roulettes {
+                    let runner =
+                        MitsubaRunner::new(&peer.python, variant, sampler, roulette, &dir)?;
+                    log(&format!("method: {}", runner.name()));
+                    let render = |spp, seed, _: &mut dyn FnMut(&str)| {
+                        runner.render(&scene, &camera, opts.max_depth, spp, seed)
+                    };
+                    let counts = runner.sample_counts(opts.max_spp);
+                    let name = runner.name();
+                    points.extend(run_peer(&name, &counts, render, opts, &reference, log)?);
+                }
             }
         }
     }

@@ -16,12 +16,38 @@ use std::process::Command;
 /// The render script, embedded so the binary needs no source tree.
 const RENDER_SCRIPT: &str = include_str!("../../scripts/mitsuba-render.py");
 
-/// One Mitsuba variant and sampler driven through a Python interpreter.
+/// Where Mitsuba's Russian roulette starts (its `rr_depth`) in a benchmark.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum MitsubaRoulette {
+    /// At ember's own start (`Roulette::default()`), so both do the same work per
+    /// sample: the setting for comparing samples/s.
+    #[default]
+    Ember,
+    /// At this `rr_depth`. Mitsuba's own default is 5; where ember's earlier start
+    /// spends less time than it adds variance (many samples), Mitsuba at 5 has the
+    /// lower error at equal time, so comparisons of error run it too.
+    Depth(u32),
+}
+
+impl std::str::FromStr for MitsubaRoulette {
+    type Err = String;
+    fn from_str(s: &str) -> std::result::Result<Self, String> {
+        match s {
+            "ember" => Ok(MitsubaRoulette::Ember),
+            n => n.parse().map(MitsubaRoulette::Depth).map_err(|_| {
+                format!("'{s}' is not a roulette start: 'ember' or Mitsuba's rr_depth (a number)")
+            }),
+        }
+    }
+}
+
+/// One Mitsuba variant, sampler and roulette start driven through a Python interpreter.
 pub struct MitsubaRunner {
     python: PathBuf,
     script: PathBuf,
     variant: String,
     sampler: MitsubaSampler,
+    roulette: MitsubaRoulette,
     dir: PathBuf,
 }
 
@@ -37,7 +63,13 @@ pub struct PeerRender {
 impl MitsubaRunner {
     /// Checks that `python` imports Mitsuba with `variant` and writes the render
     /// script into `dir`.
-    pub fn new(python: &Path, variant: &str, sampler: MitsubaSampler, dir: &Path) -> Result<Self> {
+    pub fn new(
+        python: &Path,
+        variant: &str,
+        sampler: MitsubaSampler,
+        roulette: MitsubaRoulette,
+        dir: &Path,
+    ) -> Result<Self> {
         let probe = format!("import mitsuba as mi, numpy; mi.set_variant('{variant}')");
         let failed = format!("cannot use Mitsuba variant {variant}");
         let script = peer_script(
@@ -53,13 +85,20 @@ impl MitsubaRunner {
             script,
             variant: variant.to_string(),
             sampler,
+            roulette,
             dir: dir.to_path_buf(),
         })
     }
 
-    /// "Mitsuba 3 llvm_ad_rgb, multijitter".
+    /// "Mitsuba 3 llvm_ad_rgb, multijitter" (with ember's roulette start), or
+    /// "Mitsuba 3 llvm_ad_rgb, multijitter, rr_depth 5".
     pub fn name(&self) -> String {
-        format!("Mitsuba 3 {}, {}", self.variant, self.sampler)
+        match self.roulette {
+            MitsubaRoulette::Ember => format!("Mitsuba 3 {}, {}", self.variant, self.sampler),
+            MitsubaRoulette::Depth(d) => {
+                format!("Mitsuba 3 {}, {}, rr_depth {d}", self.variant, self.sampler)
+            }
+        }
     }
 
     /// The sample counts of the doubling sequence 1, 2, 4, … up to `max_spp` as
@@ -74,9 +113,10 @@ impl MitsubaRunner {
         v
     }
 
-    /// Exports `scene` as ember renders it (`-m max_depth`, default roulette) at
-    /// `spp` and renders it twice in one process, timing the second call. Fails
-    /// when Mitsuba renders another count than `spp` rounded for the sampler.
+    /// Exports `scene` as ember renders it (`-m max_depth`; roulette from ember's
+    /// start or the runner's `rr_depth`) at `spp` and renders it twice in one
+    /// process, timing the second call. Fails when Mitsuba renders another count
+    /// than `spp` rounded for the sampler.
     pub fn render(
         &self,
         scene: &Scene,
@@ -85,11 +125,12 @@ impl MitsubaRunner {
         spp: u32,
         seed: u64,
     ) -> Result<PeerRender> {
-        let stem = format!("scene_m{max_depth}_{spp}spp_{}", self.sampler);
-        let settings = MitsubaSettings {
-            sampler: self.sampler,
-            ..MitsubaSettings::for_ember(spp, max_depth, &Roulette::default())
+        let rr = match self.roulette {
+            MitsubaRoulette::Ember => String::new(),
+            MitsubaRoulette::Depth(d) => format!("_rr{d}"),
         };
+        let stem = format!("scene_m{max_depth}_{spp}spp_{}{rr}", self.sampler);
+        let settings = self.settings(spp, max_depth);
         let xml = export(scene, camera, &settings, &self.dir, &stem)?;
         let exr = self.dir.join(format!("{stem}_{}_{seed}.exr", self.variant));
         let out = Command::new(&self.python)
@@ -127,6 +168,21 @@ impl MitsubaRunner {
             spp: used,
             image,
         })
+    }
+}
+
+impl MitsubaRunner {
+    /// What the export of a render at `spp` and `-m max_depth` tells Mitsuba.
+    fn settings(&self, spp: u32, max_depth: u32) -> MitsubaSettings {
+        let ember = MitsubaSettings::for_ember(spp, max_depth, &Roulette::default());
+        MitsubaSettings {
+            sampler: self.sampler,
+            roulette_start: match self.roulette {
+                MitsubaRoulette::Ember => ember.roulette_start,
+                MitsubaRoulette::Depth(d) => Some(d),
+            },
+            ..ember
+        }
     }
 }
 
@@ -212,6 +268,42 @@ mod tests {
             "{}",
             texts[1]
         );
+    }
+
+    /// `ember` keeps ember's roulette start, a number becomes Mitsuba's `rr_depth`,
+    /// and the written scene says so.
+    #[test]
+    fn roulette_starts_parse_and_reach_the_export() {
+        assert_eq!("ember".parse(), Ok(MitsubaRoulette::Ember));
+        assert_eq!("5".parse(), Ok(MitsubaRoulette::Depth(5)));
+        assert!("five".parse::<MitsubaRoulette>().is_err());
+        let scene = crate::scene::collada::load(std::path::Path::new(&format!(
+            "{}/scenes/cs184/sky/CBempty.dae",
+            env!("CARGO_MANIFEST_DIR")
+        )))
+        .unwrap();
+        let camera = Camera::new(&scene.camera, &scene.bounds, 16, 12);
+        let dir = std::env::temp_dir().join(format!("ember-mitsuba-rr-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let ember_start = MitsubaSettings::for_ember(4, 5, &Roulette::default()).roulette_start;
+        for (roulette, start) in [
+            (MitsubaRoulette::Ember, ember_start.unwrap()),
+            (MitsubaRoulette::Depth(5), 5),
+        ] {
+            let runner = MitsubaRunner {
+                python: PathBuf::new(),
+                script: PathBuf::new(),
+                variant: "scalar_rgb".into(),
+                sampler: MitsubaSampler::Multijitter,
+                roulette,
+                dir: dir.clone(),
+            };
+            let xml = export(&scene, &camera, &runner.settings(4, 5), &dir, "rr").unwrap();
+            let text = std::fs::read_to_string(xml).unwrap();
+            let want = format!("<integer name=\"rr_depth\" value=\"{start}\"/>");
+            assert!(text.contains(&want), "{roulette:?}: {text}");
+        }
+        std::fs::remove_dir_all(&dir).unwrap();
     }
 
     #[test]

@@ -3,6 +3,7 @@
 use clap::builder::{PossibleValue, PossibleValuesParser, TypedValueParser};
 use clap::{Args, Parser, Subcommand, ValueEnum};
 use ember::accel::{Backend, BvhBuilder, EmbreeQuality};
+use ember::bench::mitsuba::MitsubaRoulette;
 use ember::export::MitsubaSampler;
 use ember::integrators::{DirectStrategy, Estimator};
 use ember::names::Named;
@@ -392,6 +393,12 @@ pub struct BenchConvergeArgs {
     #[arg(long, value_delimiter = ',', value_parser = named::<MitsubaSampler>(),
           default_value = "independent,stratified,multijitter,ldsampler,orthogonal")]
     pub mitsuba_samplers: Vec<MitsubaSampler>,
+    /// Where Mitsuba's Russian roulette starts, comma-separated: each sampler runs once per entry.
+    /// `ember`: at ember's own start (the same work per sample); a number: Mitsuba's `rr_depth` (its own
+    /// default is 5, which has the lower error at equal time when samples are many). The peer's best at
+    /// each time is the lowest of them all.
+    #[arg(long, value_delimiter = ',', default_value = "ember,5")]
+    pub mitsuba_rr: Vec<MitsubaRoulette>,
     /// Also run Blender Cycles as a method, through this Python (one that imports `bpy`; scripts/cycles-env
     /// creates one and prints its path). Scenes of Lambertian surfaces and rectangular area lights only; its
     /// image mean is checked against --reference's manifest.

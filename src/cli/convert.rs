@@ -406,6 +406,7 @@ pub(super) fn bench_converge_options(
             python,
             variants: a.mitsuba_variants,
             samplers: a.mitsuba_samplers,
+            roulettes: a.mitsuba_rr,
         }),
         cycles: a.cycles,
     })

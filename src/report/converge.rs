@@ -7,7 +7,7 @@ use super::plan::{stem, Budget, ConvergeCase};
 use super::recipe::shell_word;
 use super::{shell_path, Progress, ReportOptions};
 use crate::bench::converge::{self, ConvergeOptions, MitsubaPeer};
-use crate::bench::mitsuba::MitsubaRunner;
+use crate::bench::mitsuba::{MitsubaRoulette, MitsubaRunner};
 use crate::bench::Report;
 use crate::export::MitsubaSampler;
 use anyhow::Result;
@@ -111,6 +111,7 @@ fn mitsuba_peer(opts: &ReportOptions, dir: &Path) -> (Option<MitsubaPeer>, Strin
         python,
         MITSUBA_VARIANT,
         MitsubaSampler::default(),
+        MitsubaRoulette::Ember,
         &dir.join("mitsuba"),
     );
     match probe {
@@ -120,6 +121,7 @@ fn mitsuba_peer(opts: &ReportOptions, dir: &Path) -> (Option<MitsubaPeer>, Strin
                 variants: vec![MITSUBA_VARIANT.into()],
                 // Its best sampler only, to keep the report's time.
                 samplers: vec![MitsubaSampler::default()],
+                roulettes: vec![MitsubaRoulette::Ember],
             }),
             format!("Mitsuba 3 ({MITSUBA_VARIANT}) renders the same scene as a peer method on this machine."),
         ),
