@@ -128,7 +128,7 @@ impl ImageMetadata {
     }
 }
 
-/// `--rr` as a user reads it: `off`, `throughput from bounce 3, min 0.05`,
+/// `--rr` as a user reads it: `off`, `throughput from bounce 5, min 0.05`,
 /// `probability 0.5 from bounce 3`.
 pub fn roulette_text(r: &Roulette) -> String {
     match *r {
@@ -194,7 +194,7 @@ mod tests {
     #[test]
     fn settings_read_as_words_not_rust_syntax() {
         let default = roulette_text(&Roulette::default());
-        assert_eq!(default, "throughput from bounce 3, min 0.05");
+        assert_eq!(default, "throughput from bounce 5, min 0.05");
         let fixed = Roulette::Fixed {
             start: 2,
             prob: 0.5,

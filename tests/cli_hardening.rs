@@ -185,7 +185,7 @@ fn metadata_round_trips_through_info() {
             "ember.stopped: complete".into(),
             "ember.samples_per_pixel: mean 3.000, min 3, max 3".into(),
             "ember.pixels_rendered: 48 of 48".into(),
-            "ember.roulette: throughput from bounce 3, min 0.05".into(),
+            "ember.roulette: throughput from bounce 5, min 0.05".into(),
             "ember.adaptive: off".into(),
             "size: 8x6".into(),
         ] {

@@ -218,6 +218,9 @@ pub fn run(opts: &ConvergeOptions, log: &mut dyn FnMut(&str)) -> Result<Converge
         for variant in &peer.variants {
             for &sampler in &peer.samplers {
                 for &roulette in &peer.roulettes {
+                    if roulette.repeats_ember(&peer.roulettes) {
+                        continue;
+                    }
                     let runner =
                         MitsubaRunner::new(&peer.python, variant, sampler, roulette, &dir)?;
                     log(&format!("method: {}", runner.name()));

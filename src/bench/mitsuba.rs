@@ -29,6 +29,16 @@ pub enum MitsubaRoulette {
     Depth(u32),
 }
 
+impl MitsubaRoulette {
+    /// Whether this is `rr_depth` at ember's own start while `all` also has `Ember`:
+    /// the same renders twice.
+    pub fn repeats_ember(self, all: &[MitsubaRoulette]) -> bool {
+        let ember = Roulette::default().start();
+        matches!(self, MitsubaRoulette::Depth(d) if Some(d) == ember)
+            && all.contains(&MitsubaRoulette::Ember)
+    }
+}
+
 impl std::str::FromStr for MitsubaRoulette {
     type Err = String;
     fn from_str(s: &str) -> std::result::Result<Self, String> {
@@ -277,6 +287,11 @@ mod tests {
         assert_eq!("ember".parse(), Ok(MitsubaRoulette::Ember));
         assert_eq!("5".parse(), Ok(MitsubaRoulette::Depth(5)));
         assert!("five".parse::<MitsubaRoulette>().is_err());
+        let start = Roulette::default().start().unwrap();
+        let both = [MitsubaRoulette::Ember, MitsubaRoulette::Depth(start)];
+        assert!(both[1].repeats_ember(&both) && !both[0].repeats_ember(&both));
+        assert!(!MitsubaRoulette::Depth(start + 1).repeats_ember(&both));
+        assert!(!both[1].repeats_ember(&both[1..]));
         let scene = crate::scene::collada::load(std::path::Path::new(&format!(
             "{}/scenes/cs184/sky/CBempty.dae",
             env!("CARGO_MANIFEST_DIR")

@@ -5,7 +5,7 @@ use clap::{Args, Parser, Subcommand, ValueEnum};
 use ember::accel::{Backend, BvhBuilder, EmbreeQuality};
 use ember::bench::mitsuba::MitsubaRoulette;
 use ember::export::MitsubaSampler;
-use ember::integrators::{DirectStrategy, Estimator};
+use ember::integrators::{DirectStrategy, Estimator, Roulette};
 use ember::names::Named;
 use ember::render::{Engine, Shading};
 use ember::sampling::SamplerKind;
@@ -395,7 +395,8 @@ pub struct BenchConvergeArgs {
     pub mitsuba_samplers: Vec<MitsubaSampler>,
     /// Where Mitsuba's Russian roulette starts, comma-separated: each sampler runs once per entry.
     /// `ember`: at ember's own start (the same work per sample); a number: Mitsuba's `rr_depth` (its own
-    /// default is 5, which has the lower error at equal time when samples are many). The peer's best at
+    /// default is 5, which has the lower error at equal time when samples are many; a number equal to ember's
+    /// start runs once). The peer's best at
     /// each time is the lowest of them all.
     #[arg(long, value_delimiter = ',', default_value = "ember,5")]
     pub mitsuba_rr: Vec<MitsubaRoulette>,
@@ -567,7 +568,7 @@ pub struct RenderArgs {
 
     /// First bounce at which Russian roulette may end a path. It never plays at the -m cap, where
     /// the last ray only looks for emission.
-    #[arg(long, default_value_t = 3, value_name = "BOUNCE")]
+    #[arg(long, default_value_t = Roulette::DEFAULT_START, value_name = "BOUNCE")]
     pub rr_start: u32,
 
     /// Render for at most SECONDS (after loading), in passes of 1, 1, 2, 4, 8, 16, 16, ... samples per
