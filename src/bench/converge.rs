@@ -15,11 +15,12 @@
 
 use super::chart::{write_chart_legend_outside, ChartSpec, Series};
 use super::cycles::CyclesRunner;
-use super::mitsuba::{MitsubaRoulette, MitsubaRunner, PeerRender};
+use super::mitsuba::{MitsubaRunner, PeerRender};
 use super::table::Table;
 use super::{create_out_dir, write_text, Report};
 use crate::accel::{AccelKind, BvhBuilder, EmbreeQuality};
 use crate::camera::Camera;
+use crate::export::MitsubaRoulette;
 use crate::export::MitsubaSampler;
 use crate::film::Image;
 use crate::image_io::{read_image, write_image};

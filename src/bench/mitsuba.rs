@@ -4,7 +4,7 @@
 //! ever run as a separate process, never linked.
 
 use crate::camera::Camera;
-use crate::export::{write_mitsuba, MitsubaSampler, MitsubaSettings};
+use crate::export::{write_mitsuba, MitsubaRoulette, MitsubaSampler, MitsubaSettings};
 use crate::film::Image;
 use crate::image_io::read_image;
 use crate::integrators::Roulette;
@@ -15,41 +15,6 @@ use std::process::Command;
 
 /// The render script, embedded so the binary needs no source tree.
 const RENDER_SCRIPT: &str = include_str!("../../scripts/mitsuba-render.py");
-
-/// Where Mitsuba's Russian roulette starts (its `rr_depth`) in a benchmark.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
-pub enum MitsubaRoulette {
-    /// At ember's own start (`Roulette::default()`), so both do the same work per
-    /// sample: the setting for comparing samples/s.
-    #[default]
-    Ember,
-    /// At this `rr_depth`. Mitsuba's own default is 5; where ember's earlier start
-    /// spends less time than it adds variance (many samples), Mitsuba at 5 has the
-    /// lower error at equal time, so comparisons of error run it too.
-    Depth(u32),
-}
-
-impl MitsubaRoulette {
-    /// Whether this is `rr_depth` at ember's own start while `all` also has `Ember`:
-    /// the same renders twice.
-    pub fn repeats_ember(self, all: &[MitsubaRoulette]) -> bool {
-        let ember = Roulette::default().start();
-        matches!(self, MitsubaRoulette::Depth(d) if Some(d) == ember)
-            && all.contains(&MitsubaRoulette::Ember)
-    }
-}
-
-impl std::str::FromStr for MitsubaRoulette {
-    type Err = String;
-    fn from_str(s: &str) -> std::result::Result<Self, String> {
-        match s {
-            "ember" => Ok(MitsubaRoulette::Ember),
-            n => n.parse().map(MitsubaRoulette::Depth).map_err(|_| {
-                format!("'{s}' is not a roulette start: 'ember' or Mitsuba's rr_depth (a number)")
-            }),
-        }
-    }
-}
 
 /// One Mitsuba variant, sampler and roulette start driven through a Python interpreter.
 pub struct MitsubaRunner {
