@@ -65,6 +65,19 @@ impl MitsubaRunner {
         })
     }
 
+    /// What the export of a render at `spp` and `-m max_depth` tells Mitsuba.
+    fn settings(&self, spp: u32, max_depth: u32) -> MitsubaSettings {
+        let ember = MitsubaSettings::for_ember(spp, max_depth, &Roulette::default());
+        MitsubaSettings {
+            sampler: self.sampler,
+            roulette_start: match self.roulette {
+                MitsubaRoulette::Ember => ember.roulette_start,
+                MitsubaRoulette::Depth(d) => Some(d),
+            },
+            ..ember
+        }
+    }
+
     /// "Mitsuba 3 llvm_ad_rgb, multijitter" (with ember's roulette start), or
     /// "Mitsuba 3 llvm_ad_rgb, multijitter, rr_depth 5".
     pub fn name(&self) -> String {
@@ -143,21 +156,6 @@ impl MitsubaRunner {
             spp: used,
             image,
         })
-    }
-}
-
-impl MitsubaRunner {
-    /// What the export of a render at `spp` and `-m max_depth` tells Mitsuba.
-    fn settings(&self, spp: u32, max_depth: u32) -> MitsubaSettings {
-        let ember = MitsubaSettings::for_ember(spp, max_depth, &Roulette::default());
-        MitsubaSettings {
-            sampler: self.sampler,
-            roulette_start: match self.roulette {
-                MitsubaRoulette::Ember => ember.roulette_start,
-                MitsubaRoulette::Depth(d) => Some(d),
-            },
-            ..ember
-        }
     }
 }
 

@@ -395,8 +395,7 @@ pub struct BenchConvergeArgs {
     /// Where Mitsuba's Russian roulette starts, comma-separated: each sampler runs once per entry.
     /// `ember`: at ember's own start (the same work per sample); a number: Mitsuba's `rr_depth` (its own
     /// default is 5, which has the lower error at equal time when samples are many; a number equal to ember's
-    /// start runs once). The peer's best at
-    /// each time is the lowest of them all.
+    /// start runs once). The peer's best at each time is the lowest of them all.
     #[arg(long, value_delimiter = ',', default_value = "ember,5")]
     pub mitsuba_rr: Vec<ember::export::MitsubaRoulette>,
     /// Also run Blender Cycles as a method, through this Python (one that imports `bpy`; scripts/cycles-env

@@ -9,8 +9,7 @@ use super::{shell_path, Progress, ReportOptions};
 use crate::bench::converge::{self, ConvergeOptions, MitsubaPeer};
 use crate::bench::mitsuba::MitsubaRunner;
 use crate::bench::Report;
-use crate::export::MitsubaRoulette;
-use crate::export::MitsubaSampler;
+use crate::export::{MitsubaRoulette, MitsubaSampler};
 use anyhow::Result;
 use std::path::{Path, PathBuf};
 

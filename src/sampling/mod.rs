@@ -95,8 +95,8 @@ impl<L: Lanes> SampleStream<L> {
         match self.kind {
             SamplerKind::Sobol => sobol_2d_upper(
                 self.index,
-                hash32(self.key.xor(pair_hash(partner))),
-                hash32(self.key.xor(pair_hash(pair))),
+                self.pair_seed(pair_hash(partner)),
+                self.pair_seed(pair_hash(pair)),
             ),
             SamplerKind::Independent => self.get_2d(pair),
         }
@@ -111,13 +111,19 @@ impl<L: Lanes> SampleStream<L> {
     /// `get_2d` of the pair whose hash is `pair_hash`.
     #[inline(always)]
     fn get_2d_hashed(&self, pair_hash: L::U) -> (L::F, L::F) {
-        let pair_seed = hash32(self.key.xor(pair_hash));
+        let pair_seed = self.pair_seed(pair_hash);
         match self.kind {
             SamplerKind::Sobol => sobol_2d(self.index, pair_seed),
             SamplerKind::Independent => independent_2d(hash32(
                 pair_seed.xor(self.index.wrapping_mul(pair_seed.splat_as(0x85eb_ca6b))),
             )),
         }
+    }
+
+    /// The seed of the pixel's set of the pair whose hash is `pair_hash`.
+    #[inline(always)]
+    fn pair_seed(&self, pair_hash: L::U) -> L::U {
+        hash32(self.key.xor(pair_hash))
     }
 
     /// Lane `i` of `other` where `m`, else of `self`.

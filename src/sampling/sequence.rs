@@ -60,19 +60,30 @@ pub fn to_unit<U: UInt>(bits: U) -> U::F {
     f * f.splat_as(1.0 / (1u32 << 24) as f32)
 }
 
+/// The index of set `seed` shuffled within its aligned blocks: the nested uniform
+/// scramble of the index, `owen_scrambled` of its reversal. Pairs stratified
+/// jointly share it.
+#[inline(always)]
+fn shuffled_index<U: UInt>(index: U, seed: U) -> U {
+    owen_scrambled(index.reverse_bits(), seed)
+}
+
+/// Two dimensions' values (bits reversed), each Owen-scrambled by its own hash of
+/// `seed`, as a point in the unit square.
+#[inline(always)]
+fn scrambled_point<U: UInt>(x_reversed: U, y_reversed: U, seed: U) -> (U::F, U::F) {
+    let x = owen_scrambled(x_reversed, hash32(seed.xor(seed.splat_as(0xa511_e9b3))));
+    let y = owen_scrambled(y_reversed, hash32(seed.xor(seed.splat_as(0x63d8_3595))));
+    (to_unit(x), to_unit(y))
+}
+
 /// Point `index` of the stratified set seeded by `seed`: Sobol dimensions 0 and 1 at
 /// the index shuffled within its aligned blocks, each Owen-scrambled.
 #[inline(always)]
 pub fn sobol_2d<U: UInt>(index: U, seed: U) -> (U::F, U::F) {
-    // The nested uniform scramble of the index: `owen_scrambled` of its reversal.
-    let j = owen_scrambled(index.reverse_bits(), seed);
+    let j = shuffled_index(index, seed);
     // Dimension 0 (van der Corput) at j, bits reversed, is j itself.
-    let x = owen_scrambled(j, hash32(seed.xor(index.splat_as(0xa511_e9b3))));
-    let y = owen_scrambled(
-        sobol_pascal(j),
-        hash32(seed.xor(index.splat_as(0x63d8_3595))),
-    );
-    (to_unit(x), to_unit(y))
+    scrambled_point(j, sobol_pascal(j), seed)
 }
 
 /// Sobol's direction numbers for Joe and Kuo's (`s`, `a`, `m`), each bit reversed:
@@ -150,15 +161,8 @@ pub fn sobol_23<U: UInt>(j: U) -> U {
 /// samples the points stay uniform, only less stratified.
 #[inline(always)]
 pub fn sobol_2d_upper<U: UInt>(index: U, partner_seed: U, seed: U) -> (U::F, U::F) {
-    let j = owen_scrambled(index.reverse_bits(), partner_seed);
-    let both = sobol_23(j);
-    let low = index.splat_as(0xffff);
-    let x = owen_scrambled(both & low, hash32(seed.xor(index.splat_as(0xa511_e9b3))));
-    let y = owen_scrambled(
-        both.shr::<16>(),
-        hash32(seed.xor(index.splat_as(0x63d8_3595))),
-    );
-    (to_unit(x), to_unit(y))
+    let both = sobol_23(shuffled_index(index, partner_seed));
+    scrambled_point(both & both.splat_as(0xffff), both.shr::<16>(), seed)
 }
 
 /// Two independent uniform numbers for the hash `h` of (pixel, sample, pair).
