@@ -6,7 +6,8 @@
 //! Each point is a fresh render (its own seed) at a doubled sample count, timed
 //! render-only with all threads; with `seeds` above 1 it is that many renders, their
 //! MSEs averaged and their times' median taken, so that one lucky seed cannot move
-//! a comparison. Errors are measured against a reference: a given
+//! a comparison. The methods take turns render by render (`interleave`), so a
+//! change in the machine's speed during the run falls on all of them alike. Errors are measured against a reference: a given
 //! EXR (e.g. the Mitsuba references, whose noise is negligible at their spp and
 //! is subtracted anyway when known) or ember's own high-spp render, rendered as
 //! two halves so that its own noise variance can be subtracted from every MSE.
@@ -208,54 +209,35 @@ pub fn run(opts: &ConvergeOptions, log: &mut dyn FnMut(&str)) -> Result<Converge
     let camera = Camera::new(&scene.camera, &scene.bounds, opts.width, opts.height);
     let mut peer_notes = Vec::new();
     let cycles = cycles_peer(opts, &scene, &camera, log, &mut peer_notes)?;
-    let mut points = Vec::new();
+    let mitsuba = mitsuba_runners(opts)?;
+    let mut curves = Vec::new();
     for method in methods(&base, &scene, opts.compare_backends) {
-        log(&format!("method: {}", method.name));
-        points.extend(run_method(&scene, &method, opts, &reference)?);
+        curves.push(ember_curve(&scene, method, opts)?);
     }
-    if let Some(peer) = &opts.mitsuba {
-        let dir = opts.out_dir.join("mitsuba");
-        for variant in &peer.variants {
-            for &sampler in &peer.samplers {
-                for &roulette in &peer.roulettes {
-                    if roulette.repeats_ember(&peer.roulettes) {
-                        continue;
-                    }
-                    let runner =
-                        MitsubaRunner::new(&peer.python, variant, sampler, roulette, &dir)?;
-                    log(&format!("method: {}", runner.name()));
-                    let render = |spp, seed, _: &mut dyn FnMut(&str)| {
-                        runner.render(&scene, &camera, opts.max_depth, spp, seed)
-                    };
-                    let counts = runner.sample_counts(opts.max_spp);
-                    let name = runner.name();
-                    points.extend(run_peer(&name, &counts, render, opts, &reference, log)?);
-                }
-            }
-        }
+    for runner in &mitsuba {
+        let render = |spp, seed, _: &mut dyn FnMut(&str)| {
+            runner.render(&scene, &camera, opts.max_depth, spp, seed)
+        };
+        let counts = runner.sample_counts(opts.max_spp);
+        curves.push(Curve::peer(runner.name(), counts, render, opts));
     }
-    if let Some(runner) = cycles {
-        log(&format!("method: {}", runner.name()));
+    if let Some(runner) = &cycles {
         let render = |spp, seed, log: &mut dyn FnMut(&str)| {
             runner.render(&scene, &camera, opts.max_depth, spp, seed, log)
         };
-        // The summary keeps the check of the highest spp; the log has every one.
-        let mut note = |m: &str| {
-            log(m);
-            peer_notes = vec![m.to_string()];
-        };
         let counts = runner.sample_counts(opts.max_spp);
-        let name = runner.name();
-        points.extend(run_peer(
-            &name, &counts, render, opts, &reference, &mut note,
-        )?);
+        let mut curve = Curve::peer(runner.name(), counts, render, opts);
+        // Cycles' check of its own mean: the summary keeps the highest spp's.
+        curve.notes = true;
+        curves.push(curve);
     }
+    interleave(&mut curves, opts, &reference, log, &mut peer_notes)?;
     Ok(ConvergeReport {
         scene: scene_stem(&opts.scene),
         max_depth: opts.max_depth,
         width: opts.width,
         height: opts.height,
-        points,
+        points: curves.into_iter().flat_map(|c| c.points).collect(),
         reference_note: reference.note,
         peer_notes,
         seeds: opts.seeds.max(1),
@@ -287,81 +269,193 @@ fn cycles_peer(
     })
 }
 
-fn run_method(
-    scene: &Scene,
-    method: &Method,
-    opts: &ConvergeOptions,
-    r: &Reference,
-) -> Result<Vec<Point>> {
+/// Mitsuba's runners, one per variant, sampler and roulette start (a start equal to
+/// ember's runs once).
+fn mitsuba_runners(opts: &ConvergeOptions) -> Result<Vec<MitsubaRunner>> {
+    let Some(peer) = &opts.mitsuba else {
+        return Ok(Vec::new());
+    };
+    let dir = opts.out_dir.join("mitsuba");
+    let mut v = Vec::new();
+    for variant in &peer.variants {
+        for &sampler in &peer.samplers {
+            for &roulette in &peer.roulettes {
+                if !roulette.repeats_ember(&peer.roulettes) {
+                    v.push(MitsubaRunner::new(
+                        &peer.python,
+                        variant,
+                        sampler,
+                        roulette,
+                        &dir,
+                    )?);
+                }
+            }
+        }
+    }
+    Ok(v)
+}
+
+/// One render of a curve's point.
+struct Rendered {
+    seconds: f64,
+    spp: u32,
+    samples: u64,
+    image: Image,
+}
+
+/// Renders one image of a curve: `render(spp, seed, log)`.
+type RenderFn<'a> = Box<dyn Fn(u32, u64, &mut dyn FnMut(&str)) -> Result<Rendered> + 'a>;
+
+/// One method's curve: the sample counts it has still to render, and its points.
+struct Curve<'a> {
+    name: String,
+    /// Rendered by a peer (Mitsuba, Cycles), not by ember.
+    peer: bool,
+    /// Ascending; a count leaves when its point is measured.
+    pending: Vec<u32>,
+    render: RenderFn<'a>,
+    /// What its renders log are the report's peer notes (the last one kept).
+    notes: bool,
+    points: Vec<Point>,
+}
+
+impl<'a> Curve<'a> {
+    fn peer(
+        name: String,
+        counts: Vec<u32>,
+        render: impl Fn(u32, u64, &mut dyn FnMut(&str)) -> Result<PeerRender> + 'a,
+        opts: &ConvergeOptions,
+    ) -> Curve<'a> {
+        let pixels = u64::from(opts.width) * u64::from(opts.height);
+        Curve {
+            name,
+            peer: true,
+            pending: counts,
+            render: Box::new(move |spp, seed, log| {
+                let m = render(spp, seed, log)?;
+                Ok(Rendered {
+                    seconds: m.seconds,
+                    spp: m.spp,
+                    samples: u64::from(m.spp) * pixels,
+                    image: m.image,
+                })
+            }),
+            notes: false,
+            points: Vec::new(),
+        }
+    }
+}
+
+/// ember's `method` at 1, 2, 4, … up to `--max-spp`, timed render-only.
+fn ember_curve<'a>(scene: &Scene, method: Method, opts: &ConvergeOptions) -> Result<Curve<'a>> {
     let job = RenderJob::new(scene.clone(), method.accel, opts.width, opts.height)?;
-    let mut out = Vec::new();
-    let mut spp = 1;
-    while spp <= opts.max_spp {
-        let mut runs = Runs::default();
-        let mut samples = 0;
-        for k in 0..opts.seeds.max(1) {
+    let counts = std::iter::successors(Some(1u32), |n| n.checked_mul(2))
+        .take_while(|&n| n <= opts.max_spp)
+        .collect();
+    let settings = method.settings;
+    Ok(Curve {
+        name: method.name,
+        peer: false,
+        pending: counts,
+        render: Box::new(move |spp, seed, _| {
             let s = RenderSettings {
                 spp,
-                seed: point_seed(opts, spp, k),
-                ..method.settings.clone()
+                seed,
+                ..settings.clone()
             };
             let t = Instant::now();
             let o = job.render(&s);
-            runs.add(t.elapsed().as_secs_f64(), errors(&o.image, r));
-            samples = o.total_samples();
-        }
-        let (seconds, rmse, rel_mse) = runs.point();
-        out.push(Point {
-            method: method.name.clone(),
-            peer: false,
-            spp,
-            samples,
-            seconds,
-            rmse,
-            rel_mse,
-        });
-        if seconds > opts.max_seconds_per_point {
-            break;
-        }
-        spp *= 2;
-    }
-    Ok(out)
+            Ok(Rendered {
+                seconds: t.elapsed().as_secs_f64(),
+                spp,
+                samples: o.total_samples(),
+                image: o.image,
+            })
+        }),
+        notes: false,
+        points: Vec::new(),
+    })
 }
 
-/// A peer's points at `counts` (its own version of the doubling sequence), each
-/// rendered in its own process by `render(spp, seed, log)`.
-fn run_peer(
-    name: &str,
-    counts: &[u32],
-    render: impl Fn(u32, u64, &mut dyn FnMut(&str)) -> Result<PeerRender>,
+/// Renders every curve's points with the methods interleaved, as `farm-bench` times
+/// two commands: in the round of `n` spp, seed by seed, each curve renders its counts
+/// up to `n`, so a drift in the machine's speed falls on every method alike rather
+/// than on the one that happened to run then. A curve stops once a point's median
+/// time exceeds `--max-seconds`.
+fn interleave(
+    curves: &mut [Curve],
     opts: &ConvergeOptions,
     r: &Reference,
     log: &mut dyn FnMut(&str),
-) -> Result<Vec<Point>> {
-    let mut out = Vec::new();
-    for &spp in counts {
-        let mut runs = Runs::default();
-        let mut spp_done = spp;
-        for k in 0..opts.seeds.max(1) {
-            let m = render(spp, point_seed(opts, spp, k), log)?;
-            runs.add(m.seconds, errors(&m.image, r));
-            spp_done = m.spp;
+    peer_notes: &mut Vec<String>,
+) -> Result<()> {
+    let seeds = opts.seeds.max(1);
+    let mut round = 1u32;
+    while curves.iter().any(|c| !c.pending.is_empty()) {
+        let due: Vec<Vec<u32>> = curves
+            .iter()
+            .map(|c| {
+                c.pending
+                    .iter()
+                    .copied()
+                    .take_while(|&n| n <= round)
+                    .collect()
+            })
+            .collect();
+        if due.iter().any(|d| !d.is_empty()) {
+            log(&format!(
+                "round of {round} spp: {} methods",
+                due.iter().filter(|d| !d.is_empty()).count()
+            ));
         }
-        let (seconds, rmse, rel_mse) = runs.point();
-        out.push(Point {
-            method: name.to_string(),
-            peer: true,
-            spp: spp_done,
-            samples: u64::from(spp_done) * u64::from(opts.width) * u64::from(opts.height),
-            seconds,
-            rmse,
-            rel_mse,
-        });
-        if seconds > opts.max_seconds_per_point {
-            break;
+        let mut runs: Vec<Vec<(Runs, u32, u64)>> = due
+            .iter()
+            .map(|d| d.iter().map(|_| (Runs::default(), 0, 0)).collect())
+            .collect();
+        for k in 0..seeds {
+            for (i, curve) in curves.iter().enumerate() {
+                for (j, &spp) in due[i].iter().enumerate() {
+                    let mut messages = Vec::new();
+                    let m = (curve.render)(spp, point_seed(opts, spp, k), &mut |line| {
+                        messages.push(line.to_string())
+                    })
+                    .with_context(|| format!("{}: {spp} spp", curve.name))?;
+                    for line in &messages {
+                        log(line);
+                    }
+                    if let Some(last) = messages.last().filter(|_| curve.notes) {
+                        *peer_notes = vec![last.clone()];
+                    }
+                    let run = &mut runs[i][j];
+                    run.0.add(m.seconds, errors(&m.image, r));
+                    (run.1, run.2) = (m.spp, m.samples);
+                }
+            }
         }
+        for ((curve, due), runs) in curves.iter_mut().zip(&due).zip(runs) {
+            curve.pending.drain(..due.len());
+            for (runs, spp, samples) in runs {
+                let (seconds, rmse, rel_mse) = runs.point();
+                curve.points.push(Point {
+                    method: curve.name.clone(),
+                    peer: curve.peer,
+                    spp,
+                    samples,
+                    seconds,
+                    rmse,
+                    rel_mse,
+                });
+                if seconds > opts.max_seconds_per_point {
+                    curve.pending.clear();
+                }
+            }
+        }
+        round = match round.checked_mul(2) {
+            Some(n) => n,
+            None => break,
+        };
     }
-    Ok(out)
+    Ok(())
 }
 
 /// The seed of render `k` of the point at `spp`: render 0 keeps the seed a point
@@ -751,6 +845,90 @@ impl Report for ConvergeReport {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// A curve whose renders take `seconds` each and write down what they rendered.
+    fn fake<'a>(
+        name: &str,
+        counts: Vec<u32>,
+        seconds: f64,
+        order: &'a std::cell::RefCell<Vec<String>>,
+    ) -> Curve<'a> {
+        let tag = name.to_string();
+        Curve {
+            name: name.to_string(),
+            peer: false,
+            pending: counts,
+            render: Box::new(move |spp, seed, _| {
+                order.borrow_mut().push(format!("{tag}{spp}/{seed}"));
+                Ok(Rendered {
+                    seconds,
+                    spp,
+                    samples: u64::from(spp),
+                    image: Image::new(1, 1),
+                })
+            }),
+            notes: false,
+            points: Vec::new(),
+        }
+    }
+
+    /// Methods take turns seed by seed within each round of spp, counts a sampler
+    /// rounds up (9) wait for the round that reaches them, and a curve stops after
+    /// the first point over the time limit.
+    #[test]
+    fn curves_are_rendered_in_turn_and_stop_at_the_time_limit() {
+        let order = std::cell::RefCell::new(Vec::new());
+        let mut curves = vec![
+            fake("a", vec![1, 2, 4, 8, 16], 0.1, &order),
+            fake("b", vec![1, 4, 9, 16], 0.1, &order),
+            fake("slow", vec![1, 2, 4], 9.0, &order),
+        ];
+        let opts = ConvergeOptions {
+            scene: PathBuf::new(),
+            reference: None,
+            reference_noise: None,
+            width: 1,
+            height: 1,
+            max_depth: 1,
+            max_spp: 16,
+            max_seconds_per_point: 8.0,
+            reference_spp: 1,
+            out_dir: PathBuf::new(),
+            seed: 0,
+            seeds: 2,
+            compare_backends: false,
+            mitsuba: None,
+            cycles: None,
+        };
+        let r = Reference {
+            image: Image::new(1, 1),
+            noise_var: 0.0,
+            note: String::new(),
+        };
+        let mut notes = Vec::new();
+        interleave(&mut curves, &opts, &r, &mut |_| {}, &mut notes).unwrap();
+        let seed = |spp: u32, k: u32| point_seed(&opts, spp, k);
+        let mut want = Vec::new();
+        // Round by round (1, 2, 4, 8, 16 spp): what each curve has due.
+        for due in [
+            vec![("a", 1), ("b", 1), ("slow", 1)],
+            vec![("a", 2)],
+            vec![("a", 4), ("b", 4)],
+            vec![("a", 8)],
+            vec![("a", 16), ("b", 9), ("b", 16)],
+        ] {
+            for k in 0..2 {
+                for &(name, spp) in &due {
+                    want.push(format!("{name}{spp}/{}", seed(spp, k)));
+                }
+            }
+        }
+        assert_eq!(*order.borrow(), want);
+        let spps = |c: &Curve| c.points.iter().map(|p| p.spp).collect::<Vec<_>>();
+        assert_eq!(spps(&curves[0]), [1, 2, 4, 8, 16]);
+        assert_eq!(spps(&curves[1]), [1, 4, 9, 16]);
+        assert_eq!(spps(&curves[2]), [1]);
+    }
 
     fn pt(method: &str, peer: bool, spp: u32, seconds: f64, rmse: f64) -> Point {
         Point {
