@@ -7,10 +7,11 @@
 //! render-only with all threads; with `seeds` above 1 it is that many renders, their
 //! MSEs averaged and their times' median taken, so that one lucky seed cannot move
 //! a comparison. The methods take turns render by render (`interleave`), so a
-//! change in the machine's speed during the run falls on all of them alike. Errors are measured against a reference: a given
-//! EXR (e.g. the Mitsuba references, whose noise is negligible at their spp and
-//! is subtracted anyway when known) or ember's own high-spp render, rendered as
-//! two halves so that its own noise variance can be subtracted from every MSE.
+//! change in the machine's speed during the run falls on all of them alike. Errors
+//! are measured against a reference: a given EXR (e.g. the Mitsuba references, whose
+//! noise is negligible at their spp and is subtracted anyway when known) or ember's
+//! own high-spp render, rendered as two halves so that its own noise variance can be
+//! subtracted from every MSE.
 //! Methods are compared by reading each curve as measured (log-log interpolation
 //! at common render times and sample counts), never by assuming MSE ∝ 1/time.
 
@@ -29,6 +30,7 @@ use crate::render::{average, Adaptive, RenderJob, RenderSettings};
 use crate::scene::{collada, Scene};
 use anyhow::{bail, Context, Result};
 use std::path::{Path, PathBuf};
+use std::rc::Rc;
 use std::time::Instant;
 
 #[derive(Clone, Debug)]
@@ -211,8 +213,24 @@ pub fn run(opts: &ConvergeOptions, log: &mut dyn FnMut(&str)) -> Result<Converge
     let cycles = cycles_peer(opts, &scene, &camera, log, &mut peer_notes)?;
     let mitsuba = mitsuba_runners(opts)?;
     let mut curves = Vec::new();
+    // One job per accelerator, shared by the methods that use it: a large scene is
+    // held once, not once per method.
+    let mut jobs: Vec<(AccelKind, Rc<RenderJob>)> = Vec::new();
     for method in methods(&base, &scene, opts.compare_backends) {
-        curves.push(ember_curve(&scene, method, opts)?);
+        let job = match jobs.iter().find(|(kind, _)| *kind == method.accel) {
+            Some((_, job)) => Rc::clone(job),
+            None => {
+                let job = Rc::new(RenderJob::new(
+                    scene.clone(),
+                    method.accel,
+                    opts.width,
+                    opts.height,
+                )?);
+                jobs.push((method.accel, Rc::clone(&job)));
+                job
+            }
+        };
+        curves.push(ember_curve(job, method, opts));
     }
     for runner in &mitsuba {
         let render = |spp, seed, _: &mut dyn FnMut(&str)| {
@@ -347,13 +365,12 @@ impl<'a> Curve<'a> {
 }
 
 /// ember's `method` at 1, 2, 4, … up to `--max-spp`, timed render-only.
-fn ember_curve<'a>(scene: &Scene, method: Method, opts: &ConvergeOptions) -> Result<Curve<'a>> {
-    let job = RenderJob::new(scene.clone(), method.accel, opts.width, opts.height)?;
+fn ember_curve<'a>(job: Rc<RenderJob>, method: Method, opts: &ConvergeOptions) -> Curve<'a> {
     let counts = std::iter::successors(Some(1u32), |n| n.checked_mul(2))
         .take_while(|&n| n <= opts.max_spp)
         .collect();
     let settings = method.settings;
-    Ok(Curve {
+    Curve {
         name: method.name,
         peer: false,
         pending: counts,
@@ -374,7 +391,7 @@ fn ember_curve<'a>(scene: &Scene, method: Method, opts: &ConvergeOptions) -> Res
         }),
         notes: false,
         points: Vec::new(),
-    })
+    }
 }
 
 /// Renders every curve's points with the methods interleaved, as `farm-bench` times
@@ -389,63 +406,24 @@ fn interleave(
     log: &mut dyn FnMut(&str),
     peer_notes: &mut Vec<String>,
 ) -> Result<()> {
-    let seeds = opts.seeds.max(1);
     let mut round = 1u32;
     while curves.iter().any(|c| !c.pending.is_empty()) {
-        let due: Vec<Vec<u32>> = curves
+        let due: Vec<usize> = curves
             .iter()
-            .map(|c| {
-                c.pending
-                    .iter()
-                    .copied()
-                    .take_while(|&n| n <= round)
-                    .collect()
-            })
+            .map(|c| c.pending.iter().take_while(|&&n| n <= round).count())
             .collect();
-        if due.iter().any(|d| !d.is_empty()) {
-            log(&format!(
-                "round of {round} spp: {} methods",
-                due.iter().filter(|d| !d.is_empty()).count()
-            ));
+        let methods = due.iter().filter(|&&n| n > 0).count();
+        if methods > 0 {
+            log(&format!("round of {round} spp: {methods} methods"));
         }
-        let mut runs: Vec<Vec<(Runs, u32, u64)>> = due
-            .iter()
-            .map(|d| d.iter().map(|_| (Runs::default(), 0, 0)).collect())
-            .collect();
-        for k in 0..seeds {
-            for (i, curve) in curves.iter().enumerate() {
-                for (j, &spp) in due[i].iter().enumerate() {
-                    let mut messages = Vec::new();
-                    let m = (curve.render)(spp, point_seed(opts, spp, k), &mut |line| {
-                        messages.push(line.to_string())
-                    })
-                    .with_context(|| format!("{}: {spp} spp", curve.name))?;
-                    for line in &messages {
-                        log(line);
-                    }
-                    if let Some(last) = messages.last().filter(|_| curve.notes) {
-                        *peer_notes = vec![last.clone()];
-                    }
-                    let run = &mut runs[i][j];
-                    run.0.add(m.seconds, errors(&m.image, r));
-                    (run.1, run.2) = (m.spp, m.samples);
-                }
-            }
-        }
-        for ((curve, due), runs) in curves.iter_mut().zip(&due).zip(runs) {
-            curve.pending.drain(..due.len());
-            for (runs, spp, samples) in runs {
-                let (seconds, rmse, rel_mse) = runs.point();
-                curve.points.push(Point {
-                    method: curve.name.clone(),
-                    peer: curve.peer,
-                    spp,
-                    samples,
-                    seconds,
-                    rmse,
-                    rel_mse,
-                });
-                if seconds > opts.max_seconds_per_point {
+        let runs = render_round(curves, &due, opts, r, log, peer_notes)?;
+        for ((curve, due), runs) in curves.iter_mut().zip(due).zip(runs) {
+            curve.pending.drain(..due);
+            for runs in runs {
+                let point = runs.point(curve);
+                let over = point.seconds > opts.max_seconds_per_point;
+                curve.points.push(point);
+                if over {
                     curve.pending.clear();
                 }
             }
@@ -456,6 +434,66 @@ fn interleave(
         };
     }
     Ok(())
+}
+
+/// One round's renders, seed by seed and curve by curve: curve `i` renders the first
+/// `due[i]` of its pending counts. The runs of each curve's points, in that order.
+fn render_round(
+    curves: &[Curve],
+    due: &[usize],
+    opts: &ConvergeOptions,
+    r: &Reference,
+    log: &mut dyn FnMut(&str),
+    peer_notes: &mut Vec<String>,
+) -> Result<Vec<Vec<PointRuns>>> {
+    let mut runs: Vec<Vec<PointRuns>> = due
+        .iter()
+        .map(|&n| (0..n).map(|_| PointRuns::default()).collect())
+        .collect();
+    for k in 0..opts.seeds.max(1) {
+        for ((curve, &n), runs) in curves.iter().zip(due).zip(&mut runs) {
+            for (&spp, run) in curve.pending[..n].iter().zip(runs.iter_mut()) {
+                let mut messages = Vec::new();
+                let m = (curve.render)(spp, point_seed(opts, spp, k), &mut |line| {
+                    messages.push(line.to_string())
+                })
+                .with_context(|| format!("{}: {spp} spp", curve.name))?;
+                for line in &messages {
+                    log(line);
+                }
+                if let Some(last) = messages.last().filter(|_| curve.notes) {
+                    *peer_notes = vec![last.clone()];
+                }
+                run.runs.add(m.seconds, errors(&m.image, r));
+                (run.spp, run.samples) = (m.spp, m.samples);
+            }
+        }
+    }
+    Ok(runs)
+}
+
+/// A point's renders so far, and the counts its renderer reports for them.
+#[derive(Default)]
+struct PointRuns {
+    runs: Runs,
+    spp: u32,
+    samples: u64,
+}
+
+impl PointRuns {
+    /// The point of `curve`, at the count its renderer reports.
+    fn point(self, curve: &Curve) -> Point {
+        let (seconds, rmse, rel_mse) = self.runs.point();
+        Point {
+            method: curve.name.clone(),
+            peer: curve.peer,
+            spp: self.spp,
+            samples: self.samples,
+            seconds,
+            rmse,
+            rel_mse,
+        }
+    }
 }
 
 /// The seed of render `k` of the point at `spp`: render 0 keeps the seed a point
