@@ -21,7 +21,7 @@ pub use path::PathIntegrator;
 
 use crate::accel::Accel;
 use crate::camera::Camera;
-use crate::lanes::{Lanes, Real};
+use crate::lanes::Real;
 use crate::names::{display_from_table, Named};
 use crate::sampling::SamplerKind;
 use crate::scene::Scene;
@@ -310,14 +310,9 @@ impl Roulette {
         }
     }
 
-    /// Continuation probability after `bounces` scattering events with throughput `beta`.
-    pub fn continue_prob(&self, bounces: u32, beta: Color) -> f32 {
-        let playing = crate::lanes::One.all();
-        self.continue_prob_l(crate::lanes::One, bounces as f32, playing, beta.into())
-    }
-
-    /// [`continue_prob`](Self::continue_prob) per lane: 1 where the lane is not in
-    /// `lanes` (`bounces` are small integers, exact as floats).
+    /// Continuation probability after `bounces` scattering events with throughput
+    /// `beta`, per lane: 1 where the lane is not in `lanes` (`bounces` are small
+    /// integers, exact as floats).
     #[inline(always)]
     pub fn continue_prob_l<L: crate::lanes::Lanes>(
         &self,
