@@ -212,26 +212,7 @@ pub fn run(opts: &ConvergeOptions, log: &mut dyn FnMut(&str)) -> Result<Converge
     let mut peer_notes = Vec::new();
     let cycles = cycles_peer(opts, &scene, &camera, log, &mut peer_notes)?;
     let mitsuba = mitsuba_runners(opts)?;
-    let mut curves = Vec::new();
-    // One job per accelerator, shared by the methods that use it: a large scene is
-    // held once, not once per method.
-    let mut jobs: Vec<(AccelKind, Rc<RenderJob>)> = Vec::new();
-    for method in methods(&base, &scene, opts.compare_backends) {
-        let job = match jobs.iter().find(|(kind, _)| *kind == method.accel) {
-            Some((_, job)) => Rc::clone(job),
-            None => {
-                let job = Rc::new(RenderJob::new(
-                    scene.clone(),
-                    method.accel,
-                    opts.width,
-                    opts.height,
-                )?);
-                jobs.push((method.accel, Rc::clone(&job)));
-                job
-            }
-        };
-        curves.push(ember_curve(job, method, opts));
-    }
+    let mut curves = ember_curves(&scene, methods(&base, &scene, opts.compare_backends), opts)?;
     for runner in &mitsuba {
         let render = |spp, seed, _: &mut dyn FnMut(&str)| {
             runner.render(&scene, &camera, opts.max_depth, spp, seed)
@@ -364,11 +345,32 @@ impl<'a> Curve<'a> {
     }
 }
 
+/// ember's methods as curves. One job per accelerator is shared by the methods that
+/// use it: a large scene is held once, not once per method.
+fn ember_curves<'a>(
+    scene: &Scene,
+    methods: Vec<Method>,
+    opts: &ConvergeOptions,
+) -> Result<Vec<Curve<'a>>> {
+    let mut jobs: Vec<(AccelKind, Rc<RenderJob>)> = Vec::new();
+    let mut curves = Vec::new();
+    for method in methods {
+        let job = match jobs.iter().find(|(kind, _)| *kind == method.accel) {
+            Some((_, job)) => Rc::clone(job),
+            None => {
+                let job = RenderJob::new(scene.clone(), method.accel, opts.width, opts.height)?;
+                jobs.push((method.accel, Rc::new(job)));
+                Rc::clone(&jobs[jobs.len() - 1].1)
+            }
+        };
+        curves.push(ember_curve(job, method, opts));
+    }
+    Ok(curves)
+}
+
 /// ember's `method` at 1, 2, 4, … up to `--max-spp`, timed render-only.
 fn ember_curve<'a>(job: Rc<RenderJob>, method: Method, opts: &ConvergeOptions) -> Curve<'a> {
-    let counts = std::iter::successors(Some(1u32), |n| n.checked_mul(2))
-        .take_while(|&n| n <= opts.max_spp)
-        .collect();
+    let counts = super::doubling(1, opts.max_spp).collect();
     let settings = method.settings;
     Curve {
         name: method.name,

@@ -54,9 +54,7 @@ impl CyclesRunner {
     /// 2, 4, … up to `max_spp`: the script subtracts a 1-spp render as fixed cost,
     /// so a 1-spp point has no time of its own.
     pub fn sample_counts(&self, max_spp: u32) -> Vec<u32> {
-        std::iter::successors(Some(2u32), |n| n.checked_mul(2))
-            .take_while(|&n| n <= max_spp)
-            .collect()
+        super::doubling(2, max_spp).collect()
     }
 
     /// Whether the script can translate `scene` exactly (`Err` says what it cannot),

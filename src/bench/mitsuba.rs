@@ -92,8 +92,7 @@ impl MitsubaRunner {
     /// The sample counts of the doubling sequence 1, 2, 4, … up to `max_spp` as
     /// this sampler takes them (rounded up as Mitsuba does, repeats dropped).
     pub fn sample_counts(&self, max_spp: u32) -> Vec<u32> {
-        let mut v: Vec<u32> = std::iter::successors(Some(1u32), |n| n.checked_mul(2))
-            .take_while(|&n| n <= max_spp)
+        let mut v: Vec<u32> = super::doubling(1, max_spp)
             .map(|n| self.sampler.sample_count(n))
             .filter(|&n| n <= max_spp)
             .collect();

@@ -297,9 +297,8 @@ impl Default for Roulette {
 impl Roulette {
     /// The default first bounce of roulette: 5, as Mitsuba's `rr_depth`. With
     /// stratified samples roulette's variance falls more slowly with the sample count
-    /// than the rest of the error, so an early start pays only for few samples: from
-    /// bounce 3 instead, MSE × time was 0.88 / 1.01 / 1.33× this on CBbunny -m 5 and
-    /// 1.03 / 1.06 / 1.11× on CBspheres -m 8 at 16 / 64 / 256 spp (BENCHMARKS §3).
+    /// than the rest of the error, so an early start pays only for few samples (the
+    /// measurements: docs/scene-semantics.md, "Russian roulette").
     pub const DEFAULT_START: u32 = 5;
 
     /// The first bounce at which roulette may end a path; `None` when it is off.
