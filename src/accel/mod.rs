@@ -556,6 +556,8 @@ pub fn tracing_pool(
 /// shadow and camera rays faster than robust Embree on every mesh measured, 12k to
 /// 4M triangles, at 1 and 2 threads: there is no crossover to switch at. (The
 /// earlier 8-wide tree fell behind from about 10k–250k primitives; this was 85,000.)
+/// scripts/test runs only the backend's own tests in the Embree builds because of
+/// this `None`: with a crossover, every render test would depend on the feature.
 pub const AUTO_EMBREE_MIN_PRIMS: Option<usize> = None;
 
 /// What `--accel auto` picks for a scene, and why (for `ember info`).

@@ -680,22 +680,4 @@ mod tests {
         let back = rows_from_table(&Table::from_csv(&t.to_csv()).expect("csv")).expect("rows");
         assert_eq!(back, rows);
     }
-
-    #[cfg(any(feature = "embree", feature = "embree4"))]
-    #[test]
-    fn every_mode_gets_a_row() {
-        let scene = crate::bench::meshes::displaced_sphere(2_000);
-        let camera = tiled_camera_rays(&scene, 32, 16);
-        let pool = crate::accel::tracing_pool(Some(1)).expect("pool");
-        let builder = AccelBuilder::new(1);
-        let rows = embree_modes(&scene, "sphere", &camera, &pool, &builder, 1).expect("Embree");
-        assert_eq!(rows.len(), 2 * 3 * 4);
-        assert_eq!(
-            rows.iter().filter(|r| r.scene_flags == "ROBUST").count(),
-            12
-        );
-        assert!(rows
-            .iter()
-            .all(|r| r.camera_mrays > 0.0 && r.build_ms > 0.0));
-    }
 }
