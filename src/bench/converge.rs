@@ -359,8 +359,9 @@ fn ember_curves<'a>(
             Some((_, job)) => Rc::clone(job),
             None => {
                 let job = RenderJob::new(scene.clone(), method.accel, opts.width, opts.height)?;
-                jobs.push((method.accel, Rc::new(job)));
-                Rc::clone(&jobs[jobs.len() - 1].1)
+                let job = Rc::new(job);
+                jobs.push((method.accel, Rc::clone(&job)));
+                job
             }
         };
         curves.push(ember_curve(job, method, opts));

@@ -40,13 +40,13 @@ pub fn write_text(path: &Path, text: &str) -> Result<()> {
     std::fs::write(path, text).with_context(|| format!("{}: cannot write", path.display()))
 }
 
-/// Median of `samples` (mean of the middle two for an even count); 0 when empty.
 /// The doubling sequence `first`, 2·`first`, 4·`first`, … up to `max`: the sample
 /// counts of the converge bench's points.
 pub(crate) fn doubling(first: u32, max: u32) -> impl Iterator<Item = u32> {
     std::iter::successors(Some(first), |n| n.checked_mul(2)).take_while(move |&n| n <= max)
 }
 
+/// Median of `samples` (mean of the middle two for an even count); 0 when empty.
 pub fn median(samples: &mut [f64]) -> f64 {
     if samples.is_empty() {
         return 0.0;
