@@ -142,6 +142,7 @@ mod tests {
     use super::*;
     use crate::lanes::{One, SimdTask};
 
+    #[derive(Clone)]
     struct LanesMatch;
 
     impl SimdTask for LanesMatch {
@@ -182,8 +183,7 @@ mod tests {
 
     #[test]
     fn lanes_draw_what_one_path_draws() {
-        crate::lanes::dispatch(LanesMatch);
-        LanesMatch.run(crate::lanes::simd::Portable);
+        crate::lanes::simd::run_each(LanesMatch);
     }
 
     /// The pairs of one sample are independent: for the first 4096 samples of a

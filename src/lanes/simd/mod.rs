@@ -496,6 +496,9 @@ pub fn limit_instruction_set(widest: InstructionSet) {
 /// The instruction set [`dispatch`] runs with now: the widest this CPU has,
 /// within [`limit_instruction_set`]'s cap.
 pub fn instruction_set() -> InstructionSet {
+    if cfg!(test) {
+        return InstructionSet::Portable;
+    }
     let limit = LIMIT.load(Ordering::Relaxed);
     #[cfg(target_arch = "x86_64")]
     {
@@ -511,6 +514,7 @@ pub fn instruction_set() -> InstructionSet {
 }
 
 /// Runs `task` with [`instruction_set`].
+#[cfg(not(test))]
 #[inline]
 pub fn dispatch<T: SimdTask>(task: T) -> T::Output {
     match instruction_set() {
@@ -530,6 +534,34 @@ pub fn dispatch<T: SimdTask>(task: T) -> T::Output {
     }
 }
 
+/// The library's unit tests run tasks portable only: compiled for three instruction
+/// sets, the kernels doubled that build's time. [`run_each`] runs every set there,
+/// and the integration tests (tests/packet_engine.rs) compare them through the
+/// real `dispatch`.
+#[cfg(test)]
+pub fn dispatch<T: SimdTask>(task: T) -> T::Output {
+    task.run(Portable)
+}
+
+/// Runs `task` with every instruction set this CPU has, portable first.
+#[cfg(test)]
+pub(crate) fn run_each<T: SimdTask + Clone>(task: T) -> Vec<T::Output> {
+    #[allow(unused_mut)]
+    let mut out = vec![task.clone().run(Portable)];
+    #[cfg(target_arch = "x86_64")]
+    {
+        if let Some(s) = Avx2::detect() {
+            // SAFETY: detected.
+            out.push(unsafe { run_avx2(task.clone(), s) });
+        }
+        if let Some(s) = Avx512::detect() {
+            // SAFETY: detected.
+            out.push(unsafe { run_avx512(task, s) });
+        }
+    }
+    out
+}
+
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx512f,avx512dq,avx512bw,avx512vl,avx2,bmi1,bmi2,lzcnt,popcnt")]
 unsafe fn run_avx512<T: SimdTask>(task: T, s: Avx512) -> T::Output {
@@ -545,8 +577,6 @@ unsafe fn run_avx2<T: SimdTask>(task: T, s: Avx2) -> T::Output {
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    struct Check;
 
     /// Every operation against the scalar expression it stands for, bit for bit.
     fn check_ops<S: Simd>(s: S) {
@@ -666,6 +696,9 @@ mod tests {
         }
     }
 
+    #[derive(Clone)]
+    struct Check;
+
     impl SimdTask for Check {
         type Output = &'static str;
         fn run<S: Simd>(self, s: S) -> &'static str {
@@ -676,18 +709,12 @@ mod tests {
 
     #[test]
     fn every_instruction_set_computes_what_the_scalar_code_does() {
-        check_ops(Portable);
+        let ran = run_each(Check);
+        assert_eq!(ran[0], std::any::type_name::<Portable>());
         #[cfg(target_arch = "x86_64")]
-        {
-            if let Some(s) = Avx2::detect() {
-                // SAFETY: detected.
-                unsafe { run_avx2(Check, s) };
-            }
-            if let Some(s) = Avx512::detect() {
-                // SAFETY: detected.
-                unsafe { run_avx512(Check, s) };
-            }
-        }
-        assert!(!dispatch(Check).is_empty());
+        assert_eq!(
+            ran.len(),
+            1 + Avx2::detect().is_some() as usize + Avx512::detect().is_some() as usize
+        );
     }
 }
