@@ -497,6 +497,7 @@ pub fn limit_instruction_set(widest: InstructionSet) {
 /// within [`limit_instruction_set`]'s cap.
 pub fn instruction_set() -> InstructionSet {
     if cfg!(test) {
+        // What the unit tests' `dispatch` runs.
         return InstructionSet::Portable;
     }
     let limit = LIMIT.load(Ordering::Relaxed);
@@ -535,7 +536,7 @@ pub fn dispatch<T: SimdTask>(task: T) -> T::Output {
 }
 
 /// The library's unit tests run tasks portable only: compiled for three instruction
-/// sets, the kernels doubled that build's time. [`run_each`] runs every set there,
+/// sets, the kernels were most of that build's time. [`run_each`] runs every set there,
 /// and the integration tests (tests/packet_engine.rs) compare them through the
 /// real `dispatch`.
 #[cfg(test)]
