@@ -1,11 +1,16 @@
 //! The Embree backend's own contract, in builds with Embree: hit records in the
 //! native convention, no self-hit at t = 0, bad input as an error, packet queries
-//! equal to single-ray ones, and the benchmark tables that only such a build fills.
-//! (Integration tests rather than unit tests, so that the Embree stages of
-//! scripts/test build the library once instead of twice.)
+//! equal to single-ray ones, the command line's `--accel` flags, and the benchmark
+//! and report tables that only such a build fills. (Integration tests rather than
+//! unit tests, and in one file rather than in the CLI's, benches' and report's, so
+//! that the Embree stages of scripts/test build the library once and run only what
+//! depends on the backend.)
 
 #![cfg(any(feature = "embree", feature = "embree4"))]
 
+mod common;
+
+use common::{command, repo, run};
 use ember::accel::embree::{info, EmbreeAccel, EmbreeDevice, EmbreeMode, PacketWidth};
 use ember::accel::{Accel, AccelBuilder, Backend, EmbreeQuality};
 use ember::bench::meshes::{displaced_sphere, geometry_scene};
@@ -150,4 +155,111 @@ fn render_bench_auto_compares_native_with_embree() {
             AccelKind::embree(EmbreeQuality::Medium)
         ]
     );
+}
+
+/// `--accel embree` renders; `ember info` counts the primitives the native BVH
+/// holds when auto picks it; flags that only mean something to the native BVH are
+/// refused with Embree.
+#[test]
+fn the_command_line_renders_with_embree_and_refuses_native_only_flags() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("e.png");
+    run(command()
+        .args(["--accel", "embree", "-r", "8", "6", "-f"])
+        .arg(&out)
+        .arg(repo("scenes/cs184/sky/CBempty.dae")))
+    .success();
+    assert_eq!(image::open(&out).unwrap().width(), 8);
+
+    let spheres = repo("scenes/cs184/sky/CBspheres_lambertian.dae");
+    let text = run(command().arg("info").arg(&spheres)).success().stdout();
+    let line = text.lines().find(|l| l.starts_with("--accel auto"));
+    let line = line.unwrap_or_else(|| panic!("no auto line in {text}"));
+    assert!(
+        line.contains("picks native SAH") && line.contains("14 primitives"),
+        "{line}"
+    );
+
+    for args in [
+        &["--shading", "bvh-cost", "--accel", "embree"][..],
+        &["--bvh", "midpoint", "--accel", "embree"],
+    ] {
+        let o = run(command().args(args).arg(&spheres)).fails_with("ember: error: --");
+        assert_eq!(o.code(), Some(1), "{args:?}: {}", o.stderr());
+    }
+}
+
+/// `ember bench accel` measures robust and fast Embree beside the two native builders
+/// (the modes table, left out here, has every other Embree setting).
+#[test]
+fn bench_accel_has_embree_rows() {
+    let dir = tempfile::tempdir().unwrap();
+    let bench = [
+        "bench",
+        "accel",
+        "mesh:2000",
+        "--no-embree-modes",
+        "-t",
+        "1",
+    ];
+    let few = ["--rays", "2000", "--repeats", "1", "--out"];
+    run(command().args(bench).args(few).arg(dir.path())).success();
+    let csv = std::fs::read_to_string(dir.path().join("accel.csv")).unwrap();
+    let rows: Vec<&str> = csv.lines().skip(1).collect();
+    assert_eq!(rows.len(), 4, "{csv}");
+    let backend = |row: &&str| row.split(',').nth(3).unwrap_or("").to_string();
+    let embree = rows.iter().filter(|r| backend(r).starts_with("Embree"));
+    assert_eq!(embree.count(), 2, "{csv}");
+}
+
+/// `ember bench accel --scaling` gives Embree a row at each of its three qualities.
+#[test]
+fn scaling_has_a_row_per_embree_quality() {
+    use ember::bench::scaling::{run_scaling, ScalingOptions};
+    let opts = ScalingOptions {
+        sizes: vec![1_000],
+        rays: 2_000,
+        threads: 1,
+        repeats: 1,
+        ..ScalingOptions::default()
+    };
+    let report = run_scaling(&opts, |_| ()).unwrap();
+    let embree: Vec<_> = report.rows.iter().filter(|r| r.is_embree).collect();
+    assert_eq!(report.rows.len(), 2 * 5);
+    assert_eq!(embree.len(), 2 * 3);
+    for r in embree {
+        let m = &r.measured;
+        let figures = [
+            m.build_ms,
+            m.camera_mrays,
+            m.incoherent_mrays,
+            m.shadow_mrays,
+        ];
+        for v in figures {
+            assert!(v.is_finite() && v > 0.0, "{r:?}");
+        }
+    }
+}
+
+/// The write-up's timing table has an Embree column, and the command it prints for
+/// that column renders.
+#[test]
+fn report_times_embree_with_a_command_that_renders() {
+    use ember::report::plan::{timed_backends, timing_recipe, Budget};
+    assert_eq!(
+        timed_backends(),
+        [Backend::Native, Backend::Embree, Backend::None]
+    );
+    let dir = tempfile::tempdir().unwrap();
+    let scene = repo("scenes/cs184/sky/CBempty.dae");
+    let recipe = timing_recipe(&scene, &Budget::quick(), Backend::Embree, 0);
+    let out = dir.path().join("t.png");
+    let o = run(command()
+        .args(recipe.flags())
+        .arg("-f")
+        .arg(&out)
+        .arg(&scene))
+    .success();
+    assert!(o.stdout().contains("Embree") || o.stderr().contains("Embree"));
+    assert!(image::open(&out).unwrap().width() > 0);
 }
