@@ -3,7 +3,7 @@
 use clap::builder::{PossibleValue, PossibleValuesParser, TypedValueParser};
 use clap::{Args, Parser, Subcommand, ValueEnum};
 use ember::accel::{Backend, BvhBuilder, EmbreeQuality};
-use ember::export::MitsubaSampler;
+use ember::export::{MitsubaRoulette, MitsubaSampler};
 use ember::integrators::{DirectStrategy, Estimator, Roulette};
 use ember::names::Named;
 use ember::render::{Engine, Shading};
@@ -397,7 +397,7 @@ pub struct BenchConvergeArgs {
     /// default is 5, which has the lower error at equal time when samples are many; a number equal to ember's
     /// start runs once). The peer's best at each time is the lowest of them all.
     #[arg(long, value_delimiter = ',', default_value = "ember,5")]
-    pub mitsuba_rr: Vec<ember::export::MitsubaRoulette>,
+    pub mitsuba_rr: Vec<MitsubaRoulette>,
     /// Also run Blender Cycles as a method, through this Python (one that imports `bpy`; scripts/cycles-env
     /// creates one and prints its path). Scenes of Lambertian surfaces and rectangular area lights only; its
     /// image mean is checked against --reference's manifest.
