@@ -205,6 +205,37 @@ fn light_tracing_from_the_command_line_and_its_warning_on_glass() {
     assert!(r.stderr().contains("mirror or glass"), "{}", r.stderr());
 }
 
+/// `--integrator caustics` renders without a warning, says so in its summary line,
+/// and refuses what its whole-render light paths cannot do, naming the flag.
+#[test]
+fn caustics_from_the_command_line_and_what_it_refuses() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("c.exr");
+    let scene = repo("scenes/cornell.dae");
+    let args = "--integrator caustics -s 4 -m 4 -r 32 24".split(' ');
+    let r = run(command().args(args.clone()).arg("-f").arg(&out).arg(&scene)).success();
+    assert!(r.stderr().contains("caustics ("), "{}", r.stderr());
+    assert!(!r.stderr().contains("warning"), "{}", r.stderr());
+    let img = ember::image_io::read_image(&out).unwrap();
+    assert!(img.all_finite() && img.mean_luminance() > 0.0);
+    for (flag, extra) in [
+        ("-a", &["-a"][..]),
+        ("--time", &["--time", "1"][..]),
+        ("--shard", &["--shard", "0/2"][..]),
+        ("--spp-offset", &["--spp-offset", "4"][..]),
+    ] {
+        let out = dir.path().join("part.exr");
+        let r = run(command()
+            .args(args.clone())
+            .args(extra)
+            .arg("-f")
+            .arg(&out)
+            .arg(&scene));
+        r.fails_with(flag);
+        assert!(!out.exists(), "{flag}: wrote {}", out.display());
+    }
+}
+
 /// The course's `*_unlit.dae` scenes have one ambient light of radiance 0: the render
 /// is black, and ember says so and how to light them; with `-e` it says nothing.
 #[test]

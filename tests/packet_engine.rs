@@ -190,7 +190,7 @@ fn packet_renders_are_the_scalar_renders_bit_for_bit() {
         estimator: Some(Estimator::LightTracing),
         ..base.clone()
     };
-    let cases: [(&str, RenderSettings); 9] = [
+    let cases: [(&str, RenderSettings); 10] = [
         ("scenes/cs184/sky/CBspheres_lambertian.dae", base.clone()),
         (
             "scenes/cs184/sky/CBspheres_lambertian.dae",
@@ -232,6 +232,14 @@ fn packet_renders_are_the_scalar_renders_bit_for_bit() {
             "scenes/cs184/sky/CBgems.dae",
             RenderSettings {
                 strategy: None,
+                ..base.clone()
+            },
+        ),
+        // Path tracing with light-traced caustics: both parts, mirror and glass.
+        (
+            "scenes/cs184/sky/CBspheres.dae",
+            RenderSettings {
+                estimator: Some(Estimator::Caustics),
                 ..base.clone()
             },
         ),

@@ -228,6 +228,7 @@ fn area_light_irradiance_matches_closed_form() {
             strategy,
             roulette: Roulette::Off,
             sampler: SamplerKind::Independent,
+            caustics_by_light: false,
         };
         let camera = Camera::new(&scene.camera, &scene.bounds, 1, 1);
         let integ = PathIntegrator::new(Tracing {

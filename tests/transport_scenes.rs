@@ -256,6 +256,7 @@ fn auto_picks_the_estimator_with_less_noise_per_ray() {
         let (win, lose) = match want {
             Estimator::Path => (path_score, light_score),
             Estimator::LightTracing => (light_score, path_score),
+            Estimator::Caustics => unreachable!("the pilot weighs path and light tracing"),
         };
         assert!(
             lose.inefficiency() > 10.0 * win.inefficiency(),
@@ -263,4 +264,34 @@ fn auto_picks_the_estimator_with_less_noise_per_ray() {
         );
         assert_eq!(pilot(1, 7), (got, scores), "{path}");
     }
+}
+
+/// Without mirrors or glass there are no caustics to hand to light tracing: the
+/// caustics estimator is path tracing, bit for bit. With them (CBspheres) the two
+/// differ, and the caustics image does not depend on the thread count.
+#[test]
+fn caustics_estimator_is_path_tracing_without_specular_surfaces() {
+    let settings = |estimator| RenderSettings {
+        estimator: Some(estimator),
+        spp: 8,
+        max_depth: 5,
+        seed: 3,
+        ..Default::default()
+    };
+    let bits = |img: &ember::film::Image| -> Vec<[u32; 3]> {
+        (img.pixels.iter())
+            .map(|p| [p.x.to_bits(), p.y.to_bits(), p.z.to_bits()])
+            .collect()
+    };
+    let diffuse = load("scenes/cs184/sky/CBspheres_lambertian.dae");
+    let path = render_scene(&diffuse, (64, 48), &settings(Estimator::Path));
+    let caustics = render_scene(&diffuse, (64, 48), &settings(Estimator::Caustics));
+    assert_eq!(bits(&path.image), bits(&caustics.image));
+
+    let specular = load("scenes/cs184/sky/CBspheres.dae");
+    let path = render_threads(1, &settings(Estimator::Path), &specular);
+    let caustics = render_threads(1, &settings(Estimator::Caustics), &specular);
+    assert_ne!(bits(&path), bits(&caustics));
+    let two = render_threads(2, &settings(Estimator::Caustics), &specular);
+    assert_eq!(bits(&caustics), bits(&two));
 }

@@ -68,6 +68,8 @@ impl Row {
         let picked = match self.pick {
             Estimator::Path => p,
             Estimator::LightTracing => l,
+            // Never auto's pick; were it, its path part is what `path` measured.
+            Estimator::Caustics => p,
         };
         if picked == p.min(l) {
             return 1.0; // also for a black image, where both are 0

@@ -191,6 +191,9 @@ pub(super) fn settings_from(args: &RenderArgs) -> Result<RenderSettings> {
         bail!("-e: light tracing does not support environment maps; use path tracing (--integrator auto, light or mis)");
     }
     let adaptive = parse_adaptive(&args.adaptive)?;
+    if estimator(args) == Some(Estimator::Caustics) {
+        caustics_allowed(args, adaptive.is_some())?;
+    }
     if let Some(offset) = args.spp_offset {
         if adaptive.is_some() {
             bail!("--spp-offset cannot be used with adaptive sampling (-a): an adaptive pixel's sample count depends on all its samples, so its samples cannot be split into ranges; split by --shard instead");
@@ -214,6 +217,23 @@ pub(super) fn settings_from(args: &RenderArgs) -> Result<RenderSettings> {
         engine: args.engine,
         sampler: args.sampler,
     })
+}
+
+/// `--integrator caustics` traces a fixed number of light paths per render, over
+/// the whole image, with every camera sample: what it cannot be combined with.
+fn caustics_allowed(args: &RenderArgs, adaptive: bool) -> Result<()> {
+    let clash = if adaptive {
+        "-a (adaptive sampling)"
+    } else if args.time.is_some() {
+        "--time"
+    } else if args.shard.is_some() {
+        "--shard"
+    } else if args.spp_offset.is_some() {
+        "--spp-offset"
+    } else {
+        return Ok(());
+    };
+    bail!("--integrator caustics cannot be used with {clash}: its light paths are counted for the whole render and land anywhere in the image; use --integrator auto, light or mis")
 }
 
 /// The pixels a part (`--shard`, `--spp-offset`) renders and its shard; `None` for a

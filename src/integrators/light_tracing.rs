@@ -62,7 +62,11 @@ impl<'a> LightTracer<'a> {
         let (scene, s) = (t.scene, t.s);
         let radius = 0.5 * scene.bounds.diagonal().length();
         let radius = if radius.is_finite() { radius } else { 1.0 };
-        let power: Vec<f32> = scene.lights.iter().map(|l| l.power(radius)).collect();
+        // For caustics only area lights start paths: the path tracer finds the rest.
+        let starts = |l: &Light| !s.caustics_by_light || matches!(l, Light::Area(_));
+        let power: Vec<f32> = (scene.lights.iter())
+            .map(|l| if starts(l) { l.power(radius) } else { 0.0 })
+            .collect();
         let total: f32 = power.iter().sum();
         let mut acc = 0.0;
         let light_cdf = power
@@ -82,7 +86,8 @@ impl<'a> LightTracer<'a> {
             ..s
         };
         let counts_zero = s.accumulate || s.max_depth == 0;
-        let direct = (counts_zero && has_visible_emitters(scene)).then(|| {
+        let camera_pass = counts_zero && has_visible_emitters(scene) && !s.caustics_by_light;
+        let direct = camera_pass.then(|| {
             PathIntegrator::new(Tracing {
                 s: zero_bounces,
                 ..t
@@ -134,6 +139,8 @@ struct LightKernel<'k, 'a, L: Lanes> {
     /// Where each ray's line starts (lanes of `has_from`): the point it left.
     from: V3<L::F>,
     has_from: LaneBits,
+    /// Lanes whose ray leaves the light (their next hit is the path's first vertex).
+    from_light: LaneBits,
     /// The range's first path, the next to start, and the end of the range.
     first: u64,
     next: u64,
@@ -163,6 +170,7 @@ impl<'k, 'a, L: Lanes> LightKernel<'k, 'a, L> {
             depth: Depth::new(l),
             from: zero,
             has_from: 0,
+            from_light: 0,
             first,
             next: first,
             end: first + count,
@@ -261,6 +269,7 @@ impl<'k, 'a, L: Lanes> LightKernel<'k, 'a, L> {
         self.depth.start(l, m, DIRECTION_PAIR + 1);
         self.from = V3::select(m, V3::from_arrays(l, &from), self.from);
         self.has_from = (self.has_from & !started) | has_from;
+        self.from_light |= started;
         self.live |= started;
     }
 
@@ -301,6 +310,20 @@ impl<'k, 'a, L: Lanes> LightKernel<'k, 'a, L> {
         }
         // Its `wo` points back toward the light.
         let v = Vertex::new(l, it.t.scene, lanes, hit, w);
+        let first = self.from_light & lanes;
+        self.from_light &= !live;
+        // Caustics only: a path whose first vertex is not specular is the path
+        // tracer's.
+        let lanes = if it.t.s.caustics_by_light {
+            let not_caustic = first & !v.bsdf.delta;
+            ended |= not_caustic;
+            lanes & !not_caustic
+        } else {
+            lanes
+        };
+        if lanes == 0 {
+            return ended;
+        }
         // The pairs of this bounce: the lens point, the BSDF direction, lobe and roulette.
         self.depth.advance(l, l.mask(lanes), PAIRS_PER_BOUNCE);
         let connect = self.depth.counts(l, &it.t.s, lanes) & !v.bsdf.delta;

@@ -92,6 +92,9 @@ pub struct PathSettings {
     pub strategy: DirectStrategy,
     pub roulette: Roulette,
     pub sampler: SamplerKind,
+    /// Caustics go to light tracing (`Estimator::Caustics`): the path tracer drops
+    /// the paths that light tracing takes, and light tracing takes only those.
+    pub caustics_by_light: bool,
 }
 
 impl PathSettings {
@@ -216,6 +219,11 @@ pub enum Estimator {
     Path,
     /// Paths start on the lights and connect to the camera (`light_tracing`).
     LightTracing,
+    /// Path tracing, with light tracing for the caustics it finds only by chance:
+    /// paths whose first surface from the camera is not specular and that reach an
+    /// area light through mirrors or glass from a surface that is not (`x₁ D … D S⁺ L`).
+    /// The two take disjoint sets of paths, so their sum is unbiased (README).
+    Caustics,
 }
 
 impl Named for Estimator {
@@ -230,6 +238,11 @@ impl Named for Estimator {
             Estimator::LightTracing,
             "light-tracing",
             "Light tracing: paths start on the lights and connect to the camera (not for mirrors/glass)",
+        ),
+        (
+            Estimator::Caustics,
+            "caustics",
+            "Path tracing, with light tracing (a quarter as many light paths as camera samples) for the light that mirrors and glass focus from area lights onto surfaces the camera sees: far fewer fireflies in scenes with mirrors or glass. Not with -a, --time, --shard or --spp-offset",
         ),
     ];
 }

@@ -210,6 +210,9 @@ struct Kernel<'k, 'a, L: Lanes> {
     prev_p: V3<L::F>,
     prev_pdf: L::F,
     prev_delta: LaneBits,
+    /// Lanes whose first vertex from the camera is not specular (light tracing can
+    /// connect it to the camera).
+    first_diffuse: LaneBits,
     /// Lanes whose camera ray met a surface.
     met_surface: LaneBits,
     slots: Slots,
@@ -252,6 +255,7 @@ impl<'k, 'a, L: Lanes> Kernel<'k, 'a, L> {
             prev_p: zero,
             prev_pdf: l.f(0.0),
             prev_delta: 0,
+            first_diffuse: 0,
             met_surface: 0,
             slots: Slots {
                 block: [usize::MAX; SLOTS],
@@ -494,6 +498,8 @@ impl<'k, 'a, L: Lanes> Kernel<'k, 'a, L> {
             return ended;
         }
         let v = Vertex::new(l, scene, lanes, hit, w);
+        let first = lanes & !self.has_prev;
+        self.first_diffuse = (self.first_diffuse & !first) | (first & !v.bsdf.delta);
         self.depth
             .advance(l, self.mask(lanes), self.it.layout.per_bounce);
         let direct = self.counts(lanes) & !v.bsdf.delta;
@@ -594,7 +600,13 @@ impl<'k, 'a, L: Lanes> Kernel<'k, 'a, L> {
             let (p, d) = (prev.to_arrays(), w.to_arrays());
             let at = |v: &[[f32; LANES]; 3], i: usize| Vec3::new(v[0][i], v[1][i], v[2][i]);
             let pdf = per_lane(w.x, |i| area(i).pdf_li(at(&p, i), at(&d, i)));
-            let weight = self.hit_weight(counted, Some(pdf));
+            let mut weight = self.hit_weight(counted, Some(pdf));
+            if self.it.t.s.caustics_by_light {
+                // Through mirrors or glass from a surface light tracing connects to the
+                // camera: light tracing's path (`Estimator::Caustics`).
+                let caustic = self.prev_delta & self.first_diffuse & self.has_prev & counted;
+                weight = L::F::select(self.mask(caustic), self.f(0.0), weight);
+            }
             self.add_radiance(counted, le * weight);
         }
         best

@@ -26,7 +26,7 @@ use crate::film::{heat_map, Image};
 use crate::integrators::debug::{DebugView, View};
 use crate::integrators::{
     light_tracing, DirectStrategy, Estimator, LightTracer, PathIntegrator, PathSettings, Roulette,
-    SampleIntegrator, Tracing,
+    Tracing,
 };
 use crate::names::{display_from_table, Named};
 use crate::sampling::SamplerKind;
@@ -153,6 +153,7 @@ impl RenderSettings {
             strategy: self.strategy_for(scene),
             roulette: self.roulette,
             sampler: self.sampler,
+            caustics_by_light: false,
         }
     }
 
@@ -300,22 +301,40 @@ fn render_rect(
         };
         return pixels::render(&debug, settings, None, frame, rect, progress, stop);
     }
-    let t = settings.tracing(scene, accel, camera);
-    if job.estimator(settings) == Estimator::LightTracing {
-        let tracer = LightTracer::new(t);
-        return splats::render(&tracer, camera, settings.spp.max(1), rect, progress, stop);
+    let mut t = settings.tracing(scene, accel, camera);
+    match job.estimator(settings) {
+        Estimator::LightTracing => {
+            let tracer = LightTracer::new(t);
+            splats::render(&tracer, camera, settings.spp.max(1), rect, progress, stop)
+        }
+        Estimator::Path => {
+            let integrator = PathIntegrator::new(t);
+            let adaptive = settings.adaptive;
+            pixels::render(&integrator, settings, adaptive, frame, rect, progress, stop)
+        }
+        Estimator::Caustics => {
+            t.s.caustics_by_light = true;
+            let integrator = PathIntegrator::new(t);
+            let mut out = pixels::render(&integrator, settings, None, frame, rect, progress, stop);
+            let light_spp = caustic_paths_per_pixel(settings.spp);
+            let caustics =
+                splats::render(&LightTracer::new(t), camera, light_spp, rect, &|_| {}, stop);
+            for (p, c) in out.image.pixels.iter_mut().zip(&caustics.image.pixels) {
+                *p += *c;
+            }
+            out.nonfinite_samples += caustics.nonfinite_samples;
+            out
+        }
     }
-    let integrator = PathIntegrator::new(t);
-    let integrator: &dyn SampleIntegrator = &integrator;
-    pixels::render(
-        integrator,
-        settings,
-        settings.adaptive,
-        frame,
-        rect,
-        progress,
-        stop,
-    )
+}
+
+/// Light paths per pixel for `spp` camera samples with `Estimator::Caustics`. Measured
+/// on CBspheres `-m 8` (160×120, 8 seeds, RMSE against the Mitsuba reference): with
+/// 64 camera samples, 8, 16 and 64 light paths per pixel gave 0.0146, 0.0139 and
+/// 0.0133, and the light paths cost about a quarter of the camera samples' time at
+/// 16; path tracing alone gave 0.0237 at 64 spp and 0.0165 at 128.
+pub fn caustic_paths_per_pixel(spp: u32) -> u32 {
+    spp.div_ceil(4).max(1)
 }
 
 fn percentile(v: &[f32], q: f32) -> f32 {
