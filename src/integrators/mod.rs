@@ -222,7 +222,10 @@ pub enum Estimator {
     /// Path tracing, with light tracing for the caustics it finds only by chance:
     /// paths whose first surface from the camera is not specular and that reach an
     /// area light through mirrors or glass from a surface that is not (`x₁ D … D S⁺ L`).
-    /// The two take disjoint sets of paths, so their sum is unbiased (README).
+    /// The two take disjoint sets of paths, so their sum is unbiased (README). A
+    /// render is whole: its light paths are numbered for `spp` from 0 and land
+    /// anywhere, so it takes no `RenderSettings::adaptive` (ignored) and no
+    /// `spp_offset` ranges to merge (the command line refuses both, and `--shard`).
     Caustics,
 }
 
