@@ -266,8 +266,8 @@ fn auto_picks_the_estimator_with_less_noise_per_ray() {
     }
 }
 
-/// Without mirrors or glass there are no caustics to hand to light tracing: the
-/// caustics estimator is path tracing, bit for bit. With them (CBspheres) the two
+/// Without mirrors or glass, or without an area light, there are no caustics to hand
+/// to light tracing: the caustics estimator is path tracing, bit for bit. With them (CBspheres) the two
 /// differ, and the caustics image does not depend on the thread count.
 #[test]
 fn caustics_estimator_is_path_tracing_without_specular_surfaces() {
@@ -283,10 +283,17 @@ fn caustics_estimator_is_path_tracing_without_specular_surfaces() {
             .map(|p| [p.x.to_bits(), p.y.to_bits(), p.z.to_bits()])
             .collect()
     };
-    let diffuse = load("scenes/cs184/sky/CBspheres_lambertian.dae");
-    let path = render_scene(&diffuse, (64, 48), &settings(Estimator::Path));
-    let caustics = render_scene(&diffuse, (64, 48), &settings(Estimator::Caustics));
-    assert_eq!(bits(&path.image), bits(&caustics.image));
+    // Nor from lights that are not area lights: CMU462's glass ball under a
+    // directional and an ambient light.
+    for scene in [
+        "scenes/cs184/sky/CBspheres_lambertian.dae",
+        "scenes/cmu462/basic/sphere_glass.dae",
+    ] {
+        let scene = load(scene);
+        let path = render_scene(&scene, (64, 48), &settings(Estimator::Path));
+        let caustics = render_scene(&scene, (64, 48), &settings(Estimator::Caustics));
+        assert_eq!(bits(&path.image), bits(&caustics.image));
+    }
 
     let specular = load("scenes/cs184/sky/CBspheres.dae");
     let path = render_threads(1, &settings(Estimator::Path), &specular);

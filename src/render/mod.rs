@@ -28,6 +28,7 @@ use crate::integrators::{
     light_tracing, DirectStrategy, Estimator, LightTracer, PathIntegrator, PathSettings, Roulette,
     Tracing,
 };
+use crate::lights::Light;
 use crate::names::{display_from_table, Named};
 use crate::sampling::SamplerKind;
 use crate::scene::Scene;
@@ -316,6 +317,11 @@ fn render_rect(
             t.s.caustics_by_light = true;
             let integrator = PathIntegrator::new(t);
             let mut out = pixels::render(&integrator, settings, None, frame, rect, progress, stop);
+            // Only area lights start caustic paths: without one there is nothing to add
+            // (CMU462's glass and mirror scenes, lit by directional and ambient lights).
+            if !scene.lights.iter().any(|l| matches!(l, Light::Area(_))) {
+                return out;
+            }
             let light_spp = caustic_paths_per_pixel(settings.spp);
             let caustics =
                 splats::render(&LightTracer::new(t), camera, light_spp, rect, &|_| {}, stop);
