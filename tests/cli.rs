@@ -205,35 +205,51 @@ fn light_tracing_from_the_command_line_and_its_warning_on_glass() {
     assert!(r.stderr().contains("mirror or glass"), "{}", r.stderr());
 }
 
-/// `--integrator caustics` renders without a warning, says so in its summary line,
-/// and refuses what its whole-render light paths cannot do, naming the flag.
+/// Light-traced caustics from the command line: auto's choice for a scene with glass
+/// under an area light (path tracing with -a), named in the summary line, with parts
+/// (--shard, --spp-offset) and --time; refused with -a when asked for by name.
 #[test]
 fn caustics_from_the_command_line_and_what_it_refuses() {
     let dir = tempfile::tempdir().unwrap();
-    let out = dir.path().join("c.exr");
     let scene = repo("scenes/cornell.dae");
-    let args = "--integrator caustics -s 4 -m 4 -r 32 24".split(' ');
-    let r = run(command().args(args.clone()).arg("-f").arg(&out).arg(&scene)).success();
-    assert!(r.stderr().contains("caustics ("), "{}", r.stderr());
-    assert!(!r.stderr().contains("warning"), "{}", r.stderr());
-    let img = ember::image_io::read_image(&out).unwrap();
-    assert!(img.all_finite() && img.mean_luminance() > 0.0);
-    for (flag, extra) in [
-        ("-a", &["-a"][..]),
-        ("--time", &["--time", "1"][..]),
-        ("--shard", &["--shard", "0/2"][..]),
-        ("--spp-offset", &["--spp-offset", "4"][..]),
-    ] {
-        let out = dir.path().join("part.exr");
+    let base = ["-s", "4", "-m", "4", "-r", "32", "24"];
+    let render = |extra: &[&str], out: &str| {
+        let out = dir.path().join(out);
         let r = run(command()
-            .args(args.clone())
+            .args(base)
             .args(extra)
             .arg("-f")
             .arg(&out)
             .arg(&scene));
-        r.fails_with(flag);
-        assert!(!out.exists(), "{flag}: wrote {}", out.display());
+        (r, out)
+    };
+    for (extra, estimator) in [
+        (&[][..], "caustics ("),
+        (&["--integrator", "caustics"][..], "caustics ("),
+        (
+            &["--integrator", "caustics", "--time", "1"][..],
+            "caustics (",
+        ),
+        (&["-a", "2", "0.05"][..], "path ("),
+    ] {
+        let (r, out) = render(extra, "c.exr");
+        let r = r.success();
+        assert!(r.stderr().contains(estimator), "{extra:?}: {}", r.stderr());
+        assert!(!r.stderr().contains("warning"), "{}", r.stderr());
+        let img = ember::image_io::read_image(&out).unwrap();
+        assert!(img.all_finite() && img.mean_luminance() > 0.0, "{extra:?}");
     }
+    for part in [&["--shard", "0/2"][..], &["--spp-offset", "4"][..]] {
+        let (r, out) = render(
+            &[&["--integrator", "caustics"][..], part].concat(),
+            "part.exr",
+        );
+        assert!(r.success().stderr().contains("caustics ("), "{part:?}");
+        assert!(out.exists(), "{part:?}");
+    }
+    let (r, out) = render(&["--integrator", "caustics", "-a", "2", "0.05"], "a.exr");
+    r.fails_with("-a (adaptive sampling)");
+    assert!(!out.exists(), "-a: wrote {}", out.display());
 }
 
 /// The course's `*_unlit.dae` scenes have one ambient light of radiance 0: the render
@@ -589,9 +605,10 @@ fn the_png_rate_map_has_a_legend_below_the_map() {
     );
 }
 
-/// `bench estimators` compares the two estimators where light tracing can show the
-/// image, and says why not elsewhere (mirrors and glass), with what auto runs and
-/// whether its rule or its pilot chose.
+/// `bench estimators` compares path tracing with light tracing where light tracing
+/// can show the image, and says why not elsewhere (mirrors and glass), and with
+/// light-traced caustics where there are any, with what auto runs and whether its
+/// rule or its pilot chose.
 #[cfg(feature = "bench")]
 #[test]
 fn bench_estimators_rows_say_what_auto_runs_and_why_light_tracing_is_left_out() {
@@ -619,13 +636,14 @@ fn bench_estimators_rows_say_what_auto_runs_and_why_light_tracing_is_left_out() 
     assert_eq!(rows.len(), 3, "{csv}");
     let row = |name: &str| *rows.iter().find(|r| r.contains(name)).unwrap();
     assert!(row("CBempty").contains("(pilot)"), "{csv}");
-    assert!(row("CBspheres").contains("path (rule)"), "{csv}");
+    // Columns: light tracing's noise² is the sixth, caustics' the ninth.
+    let cell = |name: &str, i: usize| row(name).split(',').nth(i).unwrap().to_string();
+    assert!(row("CBspheres").contains("caustics (rule)"), "{csv}");
     assert!(row("CBspheres").contains("mirror or glass"), "{csv}");
+    assert_ne!(cell("CBspheres", 8), "—", "caustics are measured: {csv}");
     assert!(row("CBbunny").contains("path (rule)"), "{csv}");
-    assert!(
-        !row("CBbunny").contains("—"),
-        "light tracing is measured: {csv}"
-    );
+    assert_ne!(cell("CBbunny", 5), "—", "light tracing is measured: {csv}");
+    assert!(row("CBbunny").contains("no caustics"), "{csv}");
     assert!(o.stdout().contains("| scene |"), "{}", o.stdout());
     // A scene that does not load is an error naming it, not a row left out.
     let missing = dir.path().join("missing.dae");

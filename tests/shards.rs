@@ -8,10 +8,14 @@ use common::{ember_in, job, load, repo};
 use ember::accel::{AccelKind, BvhBuilder};
 use ember::film::Image;
 use ember::image_metadata::ImageMetadata;
+use ember::integrators::Estimator;
 use ember::render::{Adaptive, PixelRect, RenderJob, RenderSettings};
 use ember::shard::{merge, MergeError, Part, Shard};
 
 const SCENE: &str = "scenes/cs184/sky/CBspheres_lambertian.dae";
+/// Mirror and glass under an area light: `--integrator auto` renders it with
+/// light-traced caustics, whose light paths land anywhere and are numbered by sample.
+const CAUSTICS_SCENE: &str = "scenes/cs184/sky/CBspheres.dae";
 const SIZE: (u32, u32) = (40, 30);
 
 fn settings(adaptive: bool) -> RenderSettings {
@@ -20,16 +24,29 @@ fn settings(adaptive: bool) -> RenderSettings {
         max_depth: 3,
         adaptive: adaptive.then(|| Adaptive::new(4, 0.05)),
         seed: 3,
+        // `--integrator auto`, as the command line renders parts.
+        estimator: None,
         ..Default::default()
     }
 }
 
 /// Pixels `rect` of `job` rendered with `s` as a part, with the header the CLI writes.
 fn part(job: &RenderJob, s: &RenderSettings, rect: PixelRect, name: &str) -> Part {
+    scene_part(SCENE, job, s, rect, name)
+}
+
+/// As [`part`], for the job of scene file `scene`.
+fn scene_part(
+    scene: &str,
+    job: &RenderJob,
+    s: &RenderSettings,
+    rect: PixelRect,
+    name: &str,
+) -> Part {
     let out = job.render_rect(s, rect, &|_| {});
     Part {
         name: name.into(),
-        meta: ImageMetadata::for_render(&repo(SCENE), job, s, 0.0),
+        meta: ImageMetadata::for_render(&repo(scene), job, s, 0.0),
         frame: SIZE,
         rect,
         image: out.image,
@@ -53,10 +70,12 @@ fn pool(threads: usize) -> rayon::ThreadPool {
 
 #[test]
 fn merged_bands_are_bit_identical_to_the_whole_render() {
-    let scene = load(SCENE);
-    let job = job(&scene, SIZE.0, SIZE.1, AccelKind::Native(BvhBuilder::Sah));
-    for adaptive in [false, true] {
+    for (path, adaptive) in [(SCENE, false), (SCENE, true), (CAUSTICS_SCENE, false)] {
+        let scene = load(path);
+        let job = job(&scene, SIZE.0, SIZE.1, AccelKind::Native(BvhBuilder::Sah));
         let s = settings(adaptive);
+        let want = [Estimator::Path, Estimator::Caustics][usize::from(path == CAUSTICS_SCENE)];
+        assert_eq!(job.estimator(&s), want, "{path}");
         let full = pool(1).install(|| job.render(&s));
         if adaptive {
             let min = full.samples.iter().min().unwrap();
@@ -68,11 +87,12 @@ fn merged_bands_are_bit_identical_to_the_whole_render() {
                 let parts: Vec<Part> = (0..n)
                     .map(|k| {
                         let rect = Shard { index: k, count: n }.rect(SIZE.0, SIZE.1);
-                        pool(threads).install(|| part(&job, &s, rect, &format!("{k}/{n}")))
+                        let name = format!("{k}/{n}");
+                        pool(threads).install(|| scene_part(path, &job, &s, rect, &name))
                     })
                     .collect();
                 let merged = merge(&parts).unwrap_or_else(|e| panic!("N={n}: {e}"));
-                let what = format!("N={n} -t {threads} adaptive={adaptive}");
+                let what = format!("{path} N={n} -t {threads} adaptive={adaptive}");
                 assert!(
                     bits(&merged.image) == bits(&full.image),
                     "{what}: pixels differ"
@@ -86,7 +106,13 @@ fn merged_bands_are_bit_identical_to_the_whole_render() {
 
 #[test]
 fn merged_sample_ranges_equal_the_render_of_all_samples_to_rounding() {
-    let scene = load(SCENE);
+    for path in [SCENE, CAUSTICS_SCENE] {
+        merged_sample_ranges_of(path);
+    }
+}
+
+fn merged_sample_ranges_of(path: &str) {
+    let scene = load(path);
     let job = job(&scene, SIZE.0, SIZE.1, AccelKind::Native(BvhBuilder::Sah));
     let all = RenderSettings {
         spp: 8,
@@ -103,10 +129,10 @@ fn merged_sample_ranges_equal_the_render_of_all_samples_to_rounding() {
     let top = Shard { index: 0, count: 2 }.rect(SIZE.0, SIZE.1);
     let bottom = Shard { index: 1, count: 2 }.rect(SIZE.0, SIZE.1);
     let parts = vec![
-        part(&job, &range(1, 3), frame, "1..4"),
-        part(&job, &range(4, 4), bottom, "4..8 bottom"),
-        part(&job, &range(0, 1), frame, "0..1"),
-        part(&job, &range(4, 4), top, "4..8 top"),
+        scene_part(path, &job, &range(1, 3), frame, "1..4"),
+        scene_part(path, &job, &range(4, 4), bottom, "4..8 bottom"),
+        scene_part(path, &job, &range(0, 1), frame, "0..1"),
+        scene_part(path, &job, &range(4, 4), top, "4..8 top"),
     ];
     // Per-range images only make sense if they differ from the whole render.
     assert!(bits(&parts[2].image) != bits(&full.image));
@@ -122,7 +148,7 @@ fn merged_sample_ranges_equal_the_render_of_all_samples_to_rounding() {
             worst = worst.max(if a == b { 0.0 } else { rel });
         }
     }
-    assert!(worst < 2e-6, "largest relative difference {worst}");
+    assert!(worst < 2e-6, "{path}: largest relative difference {worst}");
 }
 
 /// Two bands of 4 spp and the same bands as sample ranges 0..2, 2..4.

@@ -266,6 +266,53 @@ fn auto_picks_the_estimator_with_less_noise_per_ray() {
     }
 }
 
+/// `--integrator auto` light-traces caustics, by rule, wherever an area light shines
+/// on mirrors or glass and paths bounce (`-m` 2 or more), unless emissive surfaces
+/// that are not lights are in the scene: where it does, it measured more efficient
+/// than path tracing on every scene ember ships (BENCHMARKS §3). It path-traces at
+/// `-m 1`, with `-a`, and where no area light starts a caustic path.
+#[test]
+fn auto_light_traces_caustics_where_an_area_light_shines_on_mirrors_or_glass() {
+    let auto = |path: &str, max_depth, adaptive: bool| {
+        let scene = load(path);
+        let job = common::job(&scene, 32, 24, AccelKind::Native(BvhBuilder::Sah));
+        let s = RenderSettings {
+            estimator: None,
+            max_depth,
+            adaptive: adaptive.then(|| Adaptive::new(4, 0.05)),
+            ..Default::default()
+        };
+        let (estimator, pilot) = job.estimator_choice(&s);
+        assert!(pilot.is_none(), "{path}: a rule decides, not a pilot");
+        estimator
+    };
+    for path in [
+        "scenes/cornell.dae",
+        "scenes/cs184/sky/CBspheres.dae",
+        "scenes/cs184/sky/CBspheres_refract.dae",
+        "scenes/cs184/sky/CBspheres_tex.dae",
+        "scenes/cs184/sky/CBgems.dae",
+        "scenes/cs184/sky/CBcoil.dae",
+        "scenes/stability/caustic.dae",
+    ] {
+        assert_eq!(auto(path, 5, false), Estimator::Caustics, "{path}");
+        assert_eq!(auto(path, 2, false), Estimator::Caustics, "{path} -m 2");
+        assert_eq!(auto(path, 1, false), Estimator::Path, "{path} -m 1");
+        assert_eq!(auto(path, 5, true), Estimator::Path, "{path} -a");
+    }
+    // No mirror or glass; glass under directional and ambient light; glossy metal;
+    // an emissive surface that is not a light, found only by BSDF sampling (its
+    // noise dwarfs the caustics').
+    for path in [
+        "scenes/cs184/sky/CBspheres_lambertian.dae",
+        "scenes/cmu462/basic/sphere_glass.dae",
+        "scenes/cs184/sky/CBbunny_microfacet_cu.dae",
+        "scenes/cmu462/sky/CBspheres.dae",
+    ] {
+        assert_eq!(auto(path, 5, false), Estimator::Path, "{path}");
+    }
+}
+
 /// Without mirrors or glass, or without an area light, there are no caustics to hand
 /// to light tracing: the caustics estimator is path tracing, bit for bit. With them (CBspheres) the two
 /// differ, and the caustics image does not depend on the thread count.

@@ -176,13 +176,11 @@ pub fn methods(base: &RenderSettings, scene: &Scene, compare_backends: bool) -> 
     let mut v = vec![with(DEFAULT_METHOD, auto, native)];
     v.extend(table.iter().map(|&(name, tweak)| with(name, tweak, native)));
     // Light tracing cannot show specular surfaces to the camera: only where it can
-    // converge. Where they are, light tracing takes the caustics they make.
+    // converge. (Where an area light shines on them, the default light-traces their
+    // caustics, and the rows above are path tracing alone.)
     if !scene.materials.iter().any(|mat| mat.is_delta()) {
         let light_tracing: Tweak = |s| s.estimator = Some(Estimator::LightTracing);
         v.push(with("light tracing", light_tracing, native));
-    } else if base.max_depth >= 2 {
-        let caustics: Tweak = |s| s.estimator = Some(Estimator::Caustics);
-        v.push(with("caustics by light tracing", caustics, native));
     }
     let adaptive: Tweak = |s| {
         auto(s);

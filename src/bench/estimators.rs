@@ -1,12 +1,13 @@
-//! `ember bench estimators`: does `--integrator auto` pick the more efficient of path
-//! tracing and light tracing, on every scene where both can render the image?
+//! `ember bench estimators`: does `--integrator auto` pick the most efficient of path
+//! tracing, light tracing and path tracing with light-traced caustics, on every scene
+//! (each where it can render the image)?
 //!
 //! Each estimator renders the scene in pairs with independent seeds. Its noise is the
 //! variance of one pixel of a pair's averaged image (from the two renders' difference,
 //! as the pilot measures it); its cost is the pair's render time; its inefficiency is
 //! their product, the error² it would reach in one second. auto's pick is what `ember`
 //! runs for the scene: its rule where the scene decides, else its pilot. The row says
-//! how much less efficient the pick is than the better estimator (1 when it picked it).
+//! how much less efficient the pick is than the best estimator (1 when it picked it).
 
 use super::table::Table;
 use super::{create_out_dir, median, Report};
@@ -56,25 +57,34 @@ pub struct Row {
     pub path: Cost,
     /// Where light tracing cannot show the image: why.
     pub light: Result<Cost, String>,
+    /// Where light-traced caustics differ from path tracing
+    /// (`light_tracing::caustics_possible`).
+    pub caustics: Option<Cost>,
 }
 
 impl Row {
-    /// The pick's inefficiency over the better estimator's (1: auto took the better).
+    /// The pick's inefficiency over the best estimator's (1: auto took the best).
     pub fn pick_over_best(&self) -> f64 {
-        let Ok(light) = self.light else {
+        let path = self.path.inefficiency();
+        let light = self.light.as_ref().ok().map(Cost::inefficiency);
+        let caustics = self.caustics.map(|c| c.inefficiency());
+        let picked = match self.pick {
+            Estimator::Path => Some(path),
+            Estimator::LightTracing => light,
+            Estimator::Caustics => caustics,
+        };
+        // A pick that could not be measured is auto's rule saying it equals another.
+        let Some(picked) = picked else {
             return 1.0;
         };
-        let (p, l) = (self.path.inefficiency(), light.inefficiency());
-        let picked = match self.pick {
-            Estimator::Path => p,
-            Estimator::LightTracing => l,
-            // Never auto's pick; were it, its path part is what `path` measured.
-            Estimator::Caustics => p,
-        };
-        if picked == p.min(l) {
-            return 1.0; // also for a black image, where both are 0
+        let best = [Some(path), light, caustics]
+            .into_iter()
+            .flatten()
+            .fold(f64::INFINITY, f64::min);
+        if picked == best {
+            return 1.0; // also for a black image, where all are 0
         }
-        picked / p.min(l)
+        picked / best
     }
 }
 
@@ -137,6 +147,8 @@ pub fn run(opts: &EstimatorsOptions, log: &mut dyn FnMut(&str)) -> Result<Estima
             Some(why) => Err(short_reason(why)),
             None => Ok(cost(&job, &base, Estimator::LightTracing, opts)),
         };
+        let caustics = light_tracing::caustics_possible(&job.scene, opts.max_depth)
+            .then(|| cost(&job, &base, Estimator::Caustics, opts));
         rows.push(Row {
             scene: name,
             lights,
@@ -144,6 +156,7 @@ pub fn run(opts: &EstimatorsOptions, log: &mut dyn FnMut(&str)) -> Result<Estima
             by_pilot: scores.is_some(),
             path,
             light,
+            caustics,
         });
     }
     let settings = format!(
@@ -227,7 +240,10 @@ impl EstimatorsReport {
             "light tracing: noise²",
             "light tracing: s",
             "noise²·s, light tracing ÷ path",
-            "auto's pick ÷ the better (noise²·s)",
+            "caustics: noise²",
+            "caustics: s",
+            "noise²·s, caustics ÷ path",
+            "auto's pick ÷ the best (noise²·s)",
         ]);
         for r in &self.rows {
             let how = if r.by_pilot { "pilot" } else { "rule" };
@@ -244,6 +260,19 @@ impl EstimatorsReport {
                 ),
                 Err(why) => ("—".into(), "—".into(), format!("— ({why})")),
             };
+            let (cv, cs, cratio) = match &r.caustics {
+                Some(c) if r.path.inefficiency() > 0.0 => (
+                    format!("{:.3e}", c.variance),
+                    format!("{:.3}", c.seconds),
+                    format!("{:.3}", c.inefficiency() / r.path.inefficiency()),
+                ),
+                Some(c) => (
+                    format!("{:.3e}", c.variance),
+                    format!("{:.3}", c.seconds),
+                    "— (black image)".into(),
+                ),
+                None => ("—".into(), "—".into(), "— (no caustics)".into()),
+            };
             t.push(vec![
                 r.scene.clone(),
                 r.lights.clone(),
@@ -253,6 +282,9 @@ impl EstimatorsReport {
                 lv,
                 ls,
                 ratio,
+                cv,
+                cs,
+                cratio,
                 format!("{:.2}", r.pick_over_best()),
             ]);
         }
@@ -293,6 +325,7 @@ mod tests {
             by_pilot: true,
             path: c(path),
             light: Ok(c(light)),
+            caustics: None,
         }
     }
 
@@ -314,5 +347,13 @@ mod tests {
         let mut only_path = row(Estimator::Path, 1.0, 0.1);
         only_path.light = Err("mirrors".into());
         assert_eq!(only_path.pick_over_best(), 1.0);
+        let mut glass = only_path.clone();
+        glass.caustics = Some(Cost {
+            variance: 0.25,
+            seconds: 2.0,
+        });
+        assert_eq!(glass.pick_over_best(), 4.0);
+        glass.pick = Estimator::Caustics;
+        assert_eq!(glass.pick_over_best(), 1.0);
     }
 }

@@ -556,7 +556,7 @@ pub struct RenderArgs {
     #[arg(long, value_parser = named::<SamplerKind>(), default_value_t = SamplerKind::Sobol)]
     pub sampler: SamplerKind,
 
-    /// Estimator. auto: where every light is a point or spot light, nothing is specular or self-emitting and -m is at least 2, light tracing or path tracing, whichever a small pilot render of each finds less noisy per ray traced (light tracing on CBempty, path tracing on CMU462's basic scenes); otherwise path tracing with MIS (light + BSDF sampling) when the scene has glossy surfaces or an ambient or environment (-e) light, light sampling otherwise. A direct-lighting strategy name means path tracing with it. -H forces hemisphere.
+    /// Estimator. auto: where an area light shines on a mirror or glass surface, -m is at least 2 and no emissive surface is not a light, caustics (path tracing with light-traced caustics; path tracing with -a); where every light is a point or spot light, nothing is specular or self-emitting and -m is at least 2, light tracing or path tracing, whichever a small pilot render of each finds less noisy per ray traced (light tracing on CBempty, path tracing on CMU462's basic scenes); otherwise path tracing with MIS (light + BSDF sampling) when the scene has glossy surfaces or an ambient or environment (-e) light, light sampling otherwise. A direct-lighting strategy name means path tracing with it. -H forces hemisphere.
     #[arg(long, value_parser = integrator(), default_value = AUTO)]
     pub integrator: IntegratorChoice,
 

@@ -192,7 +192,7 @@ pub(super) fn settings_from(args: &RenderArgs) -> Result<RenderSettings> {
     }
     let adaptive = parse_adaptive(&args.adaptive)?;
     if estimator(args) == Some(Estimator::Caustics) {
-        caustics_allowed(args, adaptive.is_some())?;
+        caustics_allowed(adaptive.is_some())?;
     }
     if let Some(offset) = args.spp_offset {
         if adaptive.is_some() {
@@ -219,21 +219,13 @@ pub(super) fn settings_from(args: &RenderArgs) -> Result<RenderSettings> {
     })
 }
 
-/// `--integrator caustics` traces a fixed number of light paths per render, over
-/// the whole image, with every camera sample: what it cannot be combined with.
-fn caustics_allowed(args: &RenderArgs, adaptive: bool) -> Result<()> {
-    let clash = if adaptive {
-        "-a (adaptive sampling)"
-    } else if args.time.is_some() {
-        "--time"
-    } else if args.shard.is_some() {
-        "--shard"
-    } else if args.spp_offset.is_some() {
-        "--spp-offset"
-    } else {
-        return Ok(());
-    };
-    bail!("--integrator caustics cannot be used with {clash}: its light paths are counted for the whole render and land anywhere in the image; use --integrator auto, light or mis")
+/// `--integrator caustics` traces a fixed number of light paths per sample index,
+/// landing anywhere in the image: a pixel cannot stop on its own.
+fn caustics_allowed(adaptive: bool) -> Result<()> {
+    if adaptive {
+        bail!("--integrator caustics cannot be used with -a (adaptive sampling): its light paths are counted per sample index over the whole image, not per pixel; use --integrator auto (path tracing when -a is given), light or mis");
+    }
+    Ok(())
 }
 
 /// The pixels a part (`--shard`, `--spp-offset`) renders and its shard; `None` for a

@@ -62,8 +62,7 @@ impl<'a> LightTracer<'a> {
         let (scene, s) = (t.scene, t.s);
         let radius = 0.5 * scene.bounds.diagonal().length();
         let radius = if radius.is_finite() { radius } else { 1.0 };
-        // For caustics only area lights start paths: the path tracer finds the rest.
-        let starts = |l: &Light| !s.caustics_by_light || matches!(l, Light::Area(_));
+        let starts = |l: &Light| !s.caustics_by_light || starts_caustic_paths(l);
         let power: Vec<f32> = (scene.lights.iter())
             .map(|l| if starts(l) { l.power(radius) } else { 0.0 })
             .collect();
@@ -124,6 +123,23 @@ impl<'a> LightTracer<'a> {
         let p = self.light_cdf[i] - prev;
         (p > 0.0).then_some((i, p))
     }
+}
+
+/// Whether `light` starts the light paths of `Estimator::Caustics`: area lights only.
+/// The path tracer drops exactly the caustic paths that end on an area light
+/// (`PathIntegrator::area_light_on_line`); it finds the rest of every light's light.
+pub fn starts_caustic_paths(light: &Light) -> bool {
+    matches!(light, Light::Area(_))
+}
+
+/// Whether `Estimator::Caustics` differs from path tracing on `scene` at `max_depth`:
+/// a mirror or glass surface, an area light that emits, and at least two bounces
+/// (light → specular → non-specular surface seen by the camera).
+pub fn caustics_possible(scene: &Scene, max_depth: u32) -> bool {
+    let starts = |l: &Light| starts_caustic_paths(l) && l.power(1.0) > 0.0;
+    max_depth >= 2
+        && scene.materials.iter().any(|m| m.is_delta())
+        && scene.lights.iter().any(starts)
 }
 
 /// Per lane: a light path's state between bounces. Lanes are refilled with the next

@@ -222,10 +222,11 @@ pub enum Estimator {
     /// Path tracing, with light tracing for the caustics it finds only by chance:
     /// paths whose first surface from the camera is not specular and that reach an
     /// area light through mirrors or glass from a surface that is not (`x₁ D … D S⁺ L`).
-    /// The two take disjoint sets of paths, so their sum is unbiased (README). A
-    /// render is whole: its light paths are numbered for `spp` from 0 and land
-    /// anywhere, so it takes no `RenderSettings::adaptive` (ignored) and no
-    /// `spp_offset` ranges to merge (the command line refuses both, and `--shard`).
+    /// The two take disjoint sets of paths, so their sum is unbiased (README). Its
+    /// light paths are numbered by camera sample index, so sample ranges merge, and
+    /// a band of the image traces them all (they land anywhere). Adaptive sampling
+    /// does not apply (`RenderSettings::adaptive` is ignored; the command line
+    /// refuses it, and auto path-traces adaptive renders).
     Caustics,
 }
 
@@ -245,7 +246,7 @@ impl Named for Estimator {
         (
             Estimator::Caustics,
             "caustics",
-            "Path tracing, with light tracing (a quarter as many light paths as camera samples) for the light that mirrors and glass focus from area lights onto surfaces the camera sees: far fewer fireflies in scenes with mirrors or glass. Not with -a, --time, --shard or --spp-offset",
+            "Path tracing, with light tracing (a quarter as many light paths as camera samples) for the light that mirrors and glass focus from area lights onto surfaces the camera sees: far fewer fireflies in scenes with mirrors or glass; auto's choice wherever an area light shines on them. Not with -a",
         ),
     ];
 }
@@ -253,18 +254,33 @@ display_from_table!(Estimator);
 
 impl Estimator {
     /// The estimator `--integrator auto` takes when the scene alone decides, or `None`
-    /// when both could win and a pilot render must choose (`RenderJob::estimator`).
-    /// Path tracing wherever light tracing cannot show the whole image (anything
-    /// specular or self-emitting, see `light_tracing`), where any light is not a point
-    /// or spot light (area and environment lights are sampled well from the camera),
-    /// and at `max_depth` ≤ 1: a point light's direct light is then exact per camera
-    /// sample, which light tracing only approaches by chance. Otherwise either can win
-    /// by orders of magnitude: CBempty, whose point light lights the room through the
-    /// ceiling just above it, wants light tracing (stability case 9); CMU462's
-    /// `basic/trigs1.dae`, lit directly, wants path tracing.
+    /// when both path and light tracing could win and a pilot render must choose
+    /// (`RenderJob::estimator`).
+    ///
+    /// - Path tracing at `max_depth` ≤ 1: a point light's direct light is then exact
+    ///   per camera sample, which light tracing only approaches by chance.
+    /// - Path tracing with light-traced caustics (`Caustics`) wherever an area light
+    ///   shines on a mirror or glass surface (`light_tracing::caustics_possible`): it
+    ///   was 1.07–3.4× more efficient (noise² × time) than path tracing on every such
+    ///   shipped scene (BENCHMARKS §3), except where emissive surfaces that are not
+    ///   lights sit in the scene. Only BSDF sampling finds those, at every bounce, so
+    ///   their noise dwarfs the caustics' (CMU462's `sky/CBspheres`, `CBgems` and
+    ///   `CBcoil`: 10× path tracing's noise on CS184's versions, and the same noise
+    ///   with light-traced caustics, for 1.15–1.4× the time).
+    /// - Path tracing wherever light tracing cannot show the whole image (anything
+    ///   specular or self-emitting, see `light_tracing`) and where any light is not a
+    ///   point or spot light (area and environment lights are sampled well from the
+    ///   camera).
+    /// - Otherwise either can win by orders of magnitude: CBempty, whose point light
+    ///   lights the room through the ceiling just above it, wants light tracing
+    ///   (stability case 9); CMU462's `basic/trigs1.dae`, lit directly, wants path
+    ///   tracing.
     pub fn fixed_for(scene: &crate::scene::Scene, max_depth: u32) -> Option<Estimator> {
         if max_depth <= 1 {
             return Some(Estimator::Path);
+        }
+        if light_tracing::caustics_possible(scene, max_depth) && !scene.has_unsampled_emitters() {
+            return Some(Estimator::Caustics);
         }
         let point_lights_only = !scene.lights.is_empty()
             && scene.lights.iter().all(|l| {

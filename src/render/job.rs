@@ -95,6 +95,11 @@ impl RenderJob {
             return (Estimator::Path, None);
         }
         if let Some(e) = Estimator::fixed_for(&self.scene, s.max_depth) {
+            // Caustics' light paths are counted per sample index, not per pixel:
+            // adaptive pixels path-trace alone.
+            if e == Estimator::Caustics && s.adaptive.is_some() {
+                return (Estimator::Path, None);
+            }
             return (e, None);
         }
         let key = s.path_settings(&self.scene);

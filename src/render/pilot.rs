@@ -99,7 +99,8 @@ fn render(
     let (quiet, never) = (&|_| {}, &StopToken::never());
     if e == Estimator::LightTracing {
         let tracer = LightTracer::new(t);
-        return splats::render(&tracer, camera, PILOT_SPP, rect, quiet, never);
+        let paths = 0..u64::from(PILOT_SPP) * u64::from(camera.width) * u64::from(camera.height);
+        return splats::render(&tracer, camera, paths, rect, quiet, never);
     }
     let integrator = PathIntegrator::new(t);
     let frame = (camera.width, camera.height);

@@ -10,38 +10,48 @@ use crate::integrators::light_tracing::CHUNK_PATHS;
 use crate::integrators::{Splat, SplatIntegrator};
 use crate::Color;
 use rayon::prelude::*;
+use std::ops::Range;
 
 /// Chunks traced in parallel before their splats are added (bounds memory).
 const CHUNKS_PER_GROUP: u64 = 64;
 
-/// Renders pixels `rect`: the splats inside it are kept, so a rectangle is exactly the
-/// crop of the full image, at the cost of tracing every path (one full frame's work
-/// per rectangle).
+/// Renders pixels `rect` from light paths `paths` (numbered over the whole render):
+/// the splats inside `rect` are kept, so a rectangle is exactly the crop of the full
+/// image, at the cost of tracing every path (one full frame's work per rectangle).
+/// The image is the splats' sum over the paths traced per pixel, so disjoint ranges
+/// of paths average, weighted by their lengths, to the render of all of them.
 pub(super) fn render(
     tracer: &dyn SplatIntegrator,
     camera: &Camera,
-    spp: u32,
+    paths: Range<u64>,
     rect: PixelRect,
     progress: &(dyn Fn(u64) + Sync),
     stop: &StopToken,
 ) -> RenderOutput {
     let npix = camera.width as u64 * camera.height as u64;
-    let total = spp as u64 * npix;
-    let chunks = total.div_ceil(CHUNK_PATHS);
+    // Chunks are CHUNK_PATHS-aligned, so a path's chunk does not depend on the range.
+    let first_chunk = paths.start / CHUNK_PATHS;
+    let end_chunk = match paths.is_empty() {
+        true => first_chunk,
+        false => paths.end.div_ceil(CHUNK_PATHS),
+    };
+    let span = |c: u64| (c * CHUNK_PATHS).max(paths.start)..((c + 1) * CHUNK_PATHS).min(paths.end);
+    let chunks = end_chunk - first_chunk;
     let (rw, rh) = (rect.width(), rect.height());
     let mut sum = vec![Color::ZERO; rect.area() as usize];
     let mut nonfinite = 0u64;
     let done = |c: u64| c * rect.area() / chunks.max(1);
-    let mut group = 0;
-    while group < chunks && !stop.should_stop() {
-        let end = (group + CHUNKS_PER_GROUP).min(chunks);
+    let mut group = first_chunk;
+    while group < end_chunk && !stop.should_stop() {
+        let end = (group + CHUNKS_PER_GROUP).min(end_chunk);
         let results: Vec<(Vec<Splat>, u32)> = (group..end)
             .into_par_iter()
             .map(|c| {
                 let mut splats = Vec::new();
-                let first = c * CHUNK_PATHS;
-                let bad = tracer.trace_paths(first, CHUNK_PATHS.min(total - first), &mut splats);
-                progress(done(c + 1) - done(c));
+                let r = span(c);
+                let bad = tracer.trace_paths(r.start, r.end - r.start, &mut splats);
+                let k = c - first_chunk;
+                progress(done(k + 1) - done(k));
                 (splats, bad)
             })
             .collect();
@@ -55,9 +65,9 @@ pub(super) fn render(
         }
         group = end;
     }
-    // A stopped render divides by the paths it traced (`spp · pixels` when complete),
-    // and sees emitters directly with as many camera samples.
-    let traced = (group * CHUNK_PATHS).min(total);
+    // A stopped render divides by the paths it traced (the range's length when
+    // complete), and sees emitters directly with as many camera samples.
+    let traced = (group * CHUNK_PATHS).clamp(paths.start, paths.end) - paths.start;
     let per_pixel = traced as f64 / npix as f64;
     let spp = per_pixel.ceil() as u32;
     let mut image = Image::new(rw, rh);
