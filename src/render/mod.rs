@@ -32,6 +32,7 @@ use crate::names::{display_from_table, Named};
 use crate::sampling::SamplerKind;
 use crate::scene::Scene;
 use crate::Color;
+use std::sync::atomic::{AtomicU64, Ordering};
 
 /// What each pixel shows.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
@@ -316,21 +317,68 @@ fn render_rect(
         Estimator::Caustics => {
             t.s.caustics_by_light = true;
             let integrator = PathIntegrator::new(t);
-            let mut out = pixels::render(&integrator, settings, None, frame, rect, progress, stop);
             let tracer = LightTracer::new(t);
             // Nothing to add where no light starts a caustic path (CMU462's glass and
             // mirror scenes, lit by directional and ambient lights).
             if !tracer.starts_paths() {
-                return out;
+                return pixels::render(&integrator, settings, None, frame, rect, progress, stop);
             }
+            let camera_share = ProgressShare::new(progress, false);
+            let light_share = ProgressShare::new(progress, true);
+            let camera_progress = |n| camera_share.report(n);
+            let mut out = pixels::render(
+                &integrator,
+                settings,
+                None,
+                frame,
+                rect,
+                &camera_progress,
+                stop,
+            );
             let paths = caustic_paths(settings, camera);
-            let caustics = splats::render(&tracer, camera, paths, rect, &|_| {}, stop);
+            let light_progress = |n| light_share.report(n);
+            let caustics = splats::render(&tracer, camera, paths, rect, &light_progress, stop);
             for (p, c) in out.image.pixels.iter_mut().zip(&caustics.image.pixels) {
                 *p += *c;
             }
             out.nonfinite_samples += caustics.nonfinite_samples;
             out
         }
+    }
+}
+
+/// One part of a render of two parts, each counting the whole render's pixels: the
+/// camera samples report 4/5 of their count and the light paths the rest (their
+/// share of the time, about a fifth at a quarter as many paths as samples), so the
+/// bar moves through both and the two add up to the render's count.
+struct ProgressShare<'a> {
+    progress: &'a (dyn Fn(u64) + Sync),
+    reported: AtomicU64,
+    light: bool,
+}
+
+impl<'a> ProgressShare<'a> {
+    fn new(progress: &'a (dyn Fn(u64) + Sync), light: bool) -> Self {
+        ProgressShare {
+            progress,
+            reported: AtomicU64::new(0),
+            light,
+        }
+    }
+
+    /// Of `n` pixels counted so far, how many this part reports: monotone in `n`.
+    fn share(&self, n: u64) -> u64 {
+        let camera = n * 4 / 5;
+        if self.light {
+            n - camera
+        } else {
+            camera
+        }
+    }
+
+    fn report(&self, n: u64) {
+        let before = self.reported.fetch_add(n, Ordering::Relaxed);
+        (self.progress)(self.share(before + n) - self.share(before));
     }
 }
 
@@ -415,4 +463,29 @@ fn darkness_warning(scene: &Scene) -> Option<String> {
         "no light in the scene emits anything ({lights}), so the image will be black; \
          light it with an environment map: -e FILE.exr"
     ))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn progress_shares_add_up_to_the_count_in_any_order_of_reports() {
+        let total = AtomicU64::new(0);
+        let sink = |n| {
+            total.fetch_add(n, Ordering::Relaxed);
+        };
+        let (camera, light) = (
+            ProgressShare::new(&sink, false),
+            ProgressShare::new(&sink, true),
+        );
+        for n in [1, 7, 3, 0, 9] {
+            camera.report(n);
+        }
+        assert_eq!(total.load(Ordering::Relaxed), 20 * 4 / 5);
+        for n in [2, 11, 7] {
+            light.report(n);
+        }
+        assert_eq!(total.load(Ordering::Relaxed), 20);
+    }
 }
