@@ -45,6 +45,21 @@ impl Cost {
     pub fn inefficiency(&self) -> f64 {
         self.variance * self.seconds
     }
+
+    /// Table cells: noise², seconds, and inefficiency over path tracing's `path`.
+    fn cells(&self, path: &Cost) -> [String; 3] {
+        let p = path.inefficiency();
+        let ratio = if p == 0.0 {
+            "— (black image)".into()
+        } else {
+            format!("{:.3}", self.inefficiency() / p)
+        };
+        [
+            format!("{:.3e}", self.variance),
+            format!("{:.3}", self.seconds),
+            ratio,
+        ]
+    }
 }
 
 #[derive(Clone, Debug)]
@@ -247,46 +262,26 @@ impl EstimatorsReport {
         ]);
         for r in &self.rows {
             let how = if r.by_pilot { "pilot" } else { "rule" };
-            let (lv, ls, ratio) = match &r.light {
-                Ok(l) if r.path.inefficiency() == 0.0 => (
-                    format!("{:.3e}", l.variance),
-                    format!("{:.3}", l.seconds),
-                    "— (black image)".into(),
-                ),
-                Ok(l) => (
-                    format!("{:.3e}", l.variance),
-                    format!("{:.3}", l.seconds),
-                    format!("{:.3}", l.inefficiency() / r.path.inefficiency()),
-                ),
-                Err(why) => ("—".into(), "—".into(), format!("— ({why})")),
+            let unmeasured = |why: &str| ["—".into(), "—".into(), format!("— ({why})")];
+            let light = match &r.light {
+                Ok(l) => l.cells(&r.path),
+                Err(why) => unmeasured(why),
             };
-            let (cv, cs, cratio) = match &r.caustics {
-                Some(c) if r.path.inefficiency() > 0.0 => (
-                    format!("{:.3e}", c.variance),
-                    format!("{:.3}", c.seconds),
-                    format!("{:.3}", c.inefficiency() / r.path.inefficiency()),
-                ),
-                Some(c) => (
-                    format!("{:.3e}", c.variance),
-                    format!("{:.3}", c.seconds),
-                    "— (black image)".into(),
-                ),
-                None => ("—".into(), "—".into(), "— (no caustics)".into()),
+            let caustics = match &r.caustics {
+                Some(c) => c.cells(&r.path),
+                None => unmeasured("no caustics"),
             };
-            t.push(vec![
+            let mut cells = vec![
                 r.scene.clone(),
                 r.lights.clone(),
                 format!("{} ({how})", r.pick.name()),
                 format!("{:.3e}", r.path.variance),
                 format!("{:.3}", r.path.seconds),
-                lv,
-                ls,
-                ratio,
-                cv,
-                cs,
-                cratio,
-                format!("{:.2}", r.pick_over_best()),
-            ]);
+            ];
+            cells.extend(light);
+            cells.extend(caustics);
+            cells.push(format!("{:.2}", r.pick_over_best()));
+            t.push(cells);
         }
         t
     }

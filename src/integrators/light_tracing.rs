@@ -111,11 +111,6 @@ impl<'a> LightTracer<'a> {
         (!beta0.is_nan() && beta0 > 0.0).then_some((es, beta))
     }
 
-    /// Whether any light can start a path (with `caustics_by_light`, an area light).
-    pub fn starts_paths(&self) -> bool {
-        self.light_cdf.last().is_some_and(|&c| c > 0.0)
-    }
-
     /// A light index chosen in proportion to power, and its probability.
     fn pick_light(&self, u: f32) -> Option<(usize, f32)> {
         let i = self.light_cdf.iter().position(|&c| u < c)?;

@@ -306,7 +306,7 @@ fn render_rect(
     match job.estimator(settings) {
         Estimator::LightTracing => {
             let tracer = LightTracer::new(t);
-            let paths = 0..u64::from(settings.spp.max(1)) * pixels_of(camera);
+            let paths = splats::paths_per_pixel(camera, settings.spp.max(1));
             splats::render(&tracer, camera, paths, rect, progress, stop)
         }
         Estimator::Path => {
@@ -317,12 +317,12 @@ fn render_rect(
         Estimator::Caustics => {
             t.s.caustics_by_light = true;
             let integrator = PathIntegrator::new(t);
-            let tracer = LightTracer::new(t);
-            // Nothing to add where no light starts a caustic path (CMU462's glass and
-            // mirror scenes, lit by directional and ambient lights).
-            if !tracer.starts_paths() {
+            // Nothing to add where no light path can make a caustic (CMU462's glass
+            // and mirror scenes, lit by directional and ambient lights).
+            if !light_tracing::caustics_possible(scene, settings.max_depth) {
                 return pixels::render(&integrator, settings, None, frame, rect, progress, stop);
             }
+            let tracer = LightTracer::new(t);
             let camera_share = ProgressShare::new(progress, false);
             let light_share = ProgressShare::new(progress, true);
             let camera_progress = |n| camera_share.report(n);
@@ -382,10 +382,6 @@ impl<'a> ProgressShare<'a> {
     }
 }
 
-fn pixels_of(camera: &Camera) -> u64 {
-    u64::from(camera.width) * u64::from(camera.height)
-}
-
 /// The light paths of `Estimator::Caustics` for the camera samples `settings` takes:
 /// a quarter as many paths as pixels for each sample index, numbered by it, so the
 /// renders of disjoint sample ranges (`spp_offset`) merge into the render of all
@@ -394,7 +390,7 @@ fn pixels_of(camera: &Camera) -> u64 {
 /// 0.0146, 0.0139 and 0.0133, and the light paths cost about a quarter of the camera
 /// samples' time at 16; path tracing alone gave 0.0237 at 64 spp and 0.0165 at 128.
 fn caustic_paths(settings: &RenderSettings, camera: &Camera) -> std::ops::Range<u64> {
-    let per_sample = pixels_of(camera).div_ceil(4);
+    let per_sample = splats::pixel_count(camera).div_ceil(4);
     let first = u64::from(settings.spp_offset);
     first * per_sample..(first + u64::from(settings.spp)) * per_sample
 }

@@ -99,7 +99,7 @@ fn render(
     let (quiet, never) = (&|_| {}, &StopToken::never());
     if e == Estimator::LightTracing {
         let tracer = LightTracer::new(t);
-        let paths = 0..u64::from(PILOT_SPP) * u64::from(camera.width) * u64::from(camera.height);
+        let paths = splats::paths_per_pixel(camera, PILOT_SPP);
         return splats::render(&tracer, camera, paths, rect, quiet, never);
     }
     let integrator = PathIntegrator::new(t);

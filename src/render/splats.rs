@@ -15,6 +15,16 @@ use std::ops::Range;
 /// Chunks traced in parallel before their splats are added (bounds memory).
 const CHUNKS_PER_GROUP: u64 = 64;
 
+/// Pixels in `camera`'s image.
+pub(super) fn pixel_count(camera: &Camera) -> u64 {
+    u64::from(camera.width) * u64::from(camera.height)
+}
+
+/// The light paths of `spp` per pixel, numbered from 0 (light tracing's render).
+pub(super) fn paths_per_pixel(camera: &Camera, spp: u32) -> Range<u64> {
+    0..u64::from(spp) * pixel_count(camera)
+}
+
 /// Renders pixels `rect` from light paths `paths` (numbered over the whole render):
 /// the splats inside `rect` are kept, so a rectangle is exactly the crop of the full
 /// image, at the cost of tracing every path (one full frame's work per rectangle).
@@ -28,7 +38,7 @@ pub(super) fn render(
     progress: &(dyn Fn(u64) + Sync),
     stop: &StopToken,
 ) -> RenderOutput {
-    let npix = camera.width as u64 * camera.height as u64;
+    let npix = pixel_count(camera);
     // Chunks are CHUNK_PATHS-aligned, so a path's chunk does not depend on the range.
     let first_chunk = paths.start / CHUNK_PATHS;
     let end_chunk = match paths.is_empty() {
