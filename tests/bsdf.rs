@@ -1,7 +1,7 @@
 //! Materials: sampled directions follow `pdf` (chi-square), `sample` agrees with
 //! `eval`/`pdf`, energy is conserved, and the Fresnel terms are the exact ones.
 
-mod common;
+use crate::common;
 
 use common::{chi2_p_value, integrate_bins, mean_and_stderr, sidak_significance};
 use ember::materials::microfacet::beckmann_lambda;

@@ -1,7 +1,7 @@
 //! The native BVH against the brute-force oracle on random triangle soups, plus
 //! watertightness and self-intersection checks of the primitive tests.
 
-mod bvh_common;
+use crate::bvh_common;
 
 use bvh_common::*;
 use ember::accel::{Accel, BruteForce, Bvh, BvhBuilder};

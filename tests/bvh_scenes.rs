@@ -10,7 +10,7 @@
 //! checks the first `BRUTE_RAYS` rays of every scene, which also validates the
 //! oracle's pruning on the same rays.
 
-mod bvh_common;
+use crate::bvh_common;
 
 use bvh_common::*;
 use ember::geometry::Ray;

@@ -1,7 +1,7 @@
 //! The course's camera flags end to end: `-c` camera settings files (and `ember camera
 //! --save`), `-p` cells, `-b`/`-d` thin lens. Images are compared as linear EXR, bit for bit.
 
-mod common;
+use crate::common;
 
 use common::{command, repo, run, Run};
 use ember::film::Image;

@@ -1,7 +1,7 @@
 //! `--camera-placement` (issue 26): a file another tool wrote keeps its camera's
 //! position by default; the flag chooses either placement for `ember camera` and renders.
 
-mod common;
+use crate::common;
 
 use common::ember;
 

@@ -1,6 +1,6 @@
 //! The command line end to end: flags, errors, and never a partial output file.
 
-mod common;
+use crate::common;
 
 use common::{command, ember, repo, run};
 

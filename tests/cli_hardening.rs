@@ -1,7 +1,7 @@
 //! The command line under hostile plumbing: closed pipes, full disks, bad output
 //! paths, and error messages that say each cause once.
 
-mod common;
+use crate::common;
 
 use common::{command, ember, repo, run, wait, Run};
 use std::path::PathBuf;

@@ -4,9 +4,9 @@
 //!
 //! Needs Blender 4.5 as a Python module: `scripts/cycles-env` installs it into
 //! `.cache/cycles` (about 1 GB), or set `EMBER_CYCLES_PYTHON`. Then
-//! `cargo test --test cycles_peer -- --ignored`.
+//! `cargo test --test suite cycles_peer:: -- --ignored`.
 
-mod common;
+use crate::common;
 
 use common::{ember, repo};
 use std::path::{Path, PathBuf};
@@ -43,7 +43,7 @@ fn cycles(scene: &str, m: u32, spp: u32, reference: Option<&str>) -> std::proces
 /// Lambertian spheres (Cycles points) and a rectangular area light: the image mean
 /// is the reference's within 1 % plus 4 standard errors (the script's check).
 #[test]
-#[ignore = "needs Blender Cycles: run scripts/cycles-env, then cargo test --test cycles_peer -- --ignored"]
+#[ignore = "needs Blender Cycles: run scripts/cycles-env, then cargo test --test suite cycles_peer:: -- --ignored"]
 fn cycles_renders_the_reference_mean() {
     let out = cycles(
         "scenes/cs184/sky/CBspheres_lambertian.dae",
@@ -66,7 +66,7 @@ fn cycles_renders_the_reference_mean() {
 
 /// Glass has no exact translation here: the script says which shape, and fails.
 #[test]
-#[ignore = "needs Blender Cycles: run scripts/cycles-env, then cargo test --test cycles_peer -- --ignored"]
+#[ignore = "needs Blender Cycles: run scripts/cycles-env, then cargo test --test suite cycles_peer:: -- --ignored"]
 fn cycles_refuses_what_it_cannot_translate() {
     let out = cycles("scenes/cs184/sky/CBspheres.dae", 5, 4, None);
     let stderr = String::from_utf8_lossy(&out.stderr);

@@ -8,7 +8,7 @@
 
 #![cfg(any(feature = "embree", feature = "embree4"))]
 
-mod common;
+use crate::common;
 
 use common::{command, repo, run};
 use ember::accel::embree::{info, EmbreeAccel, EmbreeDevice, EmbreeMode, PacketWidth};

@@ -3,7 +3,7 @@
 //! (edge hits, ties), so the images agree to far below their own noise.
 #![cfg(any(feature = "embree", feature = "embree4"))]
 
-mod common;
+use crate::common;
 
 use common::{load, render_halves};
 use ember::accel::{AccelKind, BvhBuilder, EmbreeQuality};

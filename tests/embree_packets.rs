@@ -3,7 +3,7 @@
 
 #![cfg(any(feature = "embree", feature = "embree4"))]
 
-mod common;
+use crate::common;
 
 use common::{load, random_triangle_point};
 use ember::accel::embree::EmbreeAccel;

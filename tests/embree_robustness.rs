@@ -6,7 +6,7 @@
 //! at grazing angles too. The variants that give something up say how much.
 #![cfg(any(feature = "embree", feature = "embree4"))]
 
-mod common;
+use crate::common;
 
 use common::load;
 use ember::accel::bvh::Bvh;

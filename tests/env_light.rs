@@ -2,7 +2,7 @@
 //! closed form, importance sampling against its pdf (chi-square), bad maps, the CLI
 //! flag, and MIS with importance sampling against uniform sampling on a sunny map.
 
-mod common;
+use crate::common;
 
 use common::{chi2_p_value, command, integrate_bins, mean_and_stderr, run, sidak_significance};
 use ember::accel::{AccelKind, BvhBuilder};

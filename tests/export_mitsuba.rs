@@ -6,7 +6,7 @@
 //! `.cache/mitsuba` environment (`scripts/mitsuba-env` creates it), so a plain
 //! `cargo test` ignores it; scripts/test installs Mitsuba and runs it with `--ignored`.
 
-mod common;
+use crate::common;
 
 use common::{ember, repo};
 use ember::image_io::read_image;

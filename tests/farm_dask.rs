@@ -10,7 +10,7 @@
 //! with `--ignored`. Every wait has a time limit; every process started here is
 //! stopped by its process group id, whatever happens.
 
-mod common;
+use crate::common;
 
 use std::fs;
 use std::path::{Path, PathBuf};

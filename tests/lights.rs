@@ -1,7 +1,7 @@
 //! Lights: sampled irradiance matches closed forms, `pdf_li` is the density of
 //! `sample_li`, and nothing arrives from behind an area light.
 
-mod common;
+use crate::common;
 
 use common::{mean_and_stderr, polygon_irradiance};
 use ember::geometry::Frame;

@@ -1,7 +1,7 @@
 //! Bad input gives a one-line `FILE: <element>: what` error (or, where the
 //! spec has a safe default, a warning) and never a panic.
 
-mod common;
+use crate::common;
 
 use common::{edit, parse_err, parse_ok, TEMPLATE};
 use ember::scene::collada::{load, parse};

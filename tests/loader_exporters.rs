@@ -3,7 +3,7 @@
 //! decimal commas, zero rotation axes, dangling bindings, UTF-16, `.zae` archives,
 //! the file's own camera, emission, specular warnings, textures and spot lights.
 
-mod common;
+use crate::common;
 
 use common::{edit, geometry_instance, parse_err, parse_ok, quad_instance, scene_doc, TEMPLATE};
 use ember::camera::Camera;

@@ -2,7 +2,7 @@
 //! deleted or duplicated, numbers replaced by huge, negative or non-finite
 //! values, text truncated. Fixed seed and case counts keep runs repeatable.
 
-mod common;
+use crate::common;
 
 use ember::scene::collada::parse;
 use proptest::prelude::*;

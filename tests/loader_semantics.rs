@@ -2,7 +2,7 @@
 //! kinds and order, nested nodes, primitive kinds and offsets, normals,
 //! material selection and binding, camera and light rules.
 
-mod common;
+use crate::common;
 
 use common::{geometry_instance, parse_ok, quad_instance, scene_doc};
 use ember::lights::{AreaLight, Light};

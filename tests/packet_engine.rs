@@ -3,8 +3,8 @@
 //! Every instruction set this CPU has is checked (they must agree with each other
 //! too, which the scalar reference makes transitive).
 
-mod bvh_common;
-mod common;
+use crate::bvh_common;
+use crate::common;
 
 use bvh_common::{builders, random_ray, scene_from};
 use common::{load, random_triangle_point};

@@ -6,7 +6,7 @@
 //! to how the BVH handles hits of grazing rays. Update a pin only for such a change, and say
 //! so in the commit.
 
-mod common;
+use crate::common;
 
 use common::{load, render_scene};
 use ember::film::Image;

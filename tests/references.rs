@@ -2,7 +2,7 @@
 //! their README prescribes: image mean, and RMSE of 8×8 block averages against
 //! the combined noise floor of the reference and of this render.
 
-mod common;
+use crate::common;
 
 use common::{load, render_halves, repo};
 use ember::accel::{AccelKind, BvhBuilder};
@@ -433,7 +433,7 @@ fn cbempty_m5_per_pixel_with_the_default_estimator() {
 
 /// Not a test: prints the masked CBempty m5 mean at high spp (EMBER_SPP), to check for bias by hand.
 #[test]
-#[ignore = "a probe for checking bias by hand (it asserts nothing): EMBER_SPP=8192 cargo test --release --test references cbempty_m5_high_spp_probe -- --ignored --nocapture"]
+#[ignore = "a probe for checking bias by hand (it asserts nothing): EMBER_SPP=8192 cargo test --release --test suite references::cbempty_m5_high_spp_probe -- --ignored --nocapture"]
 fn cbempty_m5_high_spp_probe() {
     let spp: u32 = std::env::var("EMBER_SPP")
         .ok()

@@ -5,7 +5,7 @@
 //!
 //! The report is made once per test run and shared by the tests.
 
-mod common;
+use crate::common;
 
 use common::cli::ember_in;
 use std::path::{Path, PathBuf};

@@ -2,7 +2,7 @@
 //! them (`ember merge`): bands merge bit for bit into the whole render, sample ranges
 //! into the render of all their samples (to f32 rounding), and bad merges are refused.
 
-mod common;
+use crate::common;
 
 use common::{ember_in, job, load, repo};
 use ember::accel::{AccelKind, BvhBuilder};

@@ -3,7 +3,7 @@
 //! that renders like the same geometry written twice, a spot light's irradiance on a
 //! plane against its closed form (path and light tracing), and their Mitsuba export.
 
-mod common;
+use crate::common;
 
 use common::render_scene;
 use ember::accel::{AccelKind, BvhBuilder};

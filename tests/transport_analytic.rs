@@ -1,7 +1,7 @@
 //! Analytic checks of the light transport: the furnace and the irradiance of a
 //! rectangular light. Tolerances come from the estimators' own standard errors.
 
-mod common;
+use crate::common;
 
 use common::polygon_irradiance;
 use ember::accel::{self, AccelKind, BvhBuilder};

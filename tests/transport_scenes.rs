@@ -1,7 +1,7 @@
 //! Whole-scene transport checks: estimators agree, nothing is ever NaN, and
 //! renders do not depend on the thread count.
 
-mod common;
+use crate::common;
 
 use common::{load, render_halves, render_scene, repo};
 use ember::accel::{AccelKind, BvhBuilder};

@@ -3,7 +3,9 @@
 use clap::builder::{PossibleValue, PossibleValuesParser, TypedValueParser};
 use clap::{Args, Parser, Subcommand, ValueEnum};
 use ember::accel::{Backend, BvhBuilder, EmbreeQuality};
-use ember::export::{MitsubaRoulette, MitsubaSampler};
+#[cfg(feature = "bench")]
+use ember::export::MitsubaRoulette;
+use ember::export::MitsubaSampler;
 use ember::integrators::{DirectStrategy, Estimator, Roulette};
 use ember::names::Named;
 use ember::render::{Engine, Shading};
