@@ -356,7 +356,8 @@ pub struct BenchConvergeArgs {
     /// Reference image (linear EXR at the render resolution). Default: ember's own high-spp render, cached under <out>/cache.
     #[arg(long)]
     pub reference: Option<PathBuf>,
-    /// Per-pixel RMS noise of --reference, if known (e.g. noise_rmse_per_pixel from the references' manifest); subtracted from every MSE.
+    /// Per-pixel RMS noise of --reference, subtracted from every MSE. Default: from the manifest.json beside --reference
+    /// (as tests/data/references has), else taken as negligible.
     #[arg(long)]
     pub reference_noise: Option<f64>,
     /// Max ray depth.

@@ -402,8 +402,11 @@ pub(super) fn bench_converge_options(
     check_resolution(width, height)?;
     Ok(bench::converge::ConvergeOptions {
         scene: a.scene,
+        reference_noise: match (a.reference_noise, &a.reference) {
+            (None, Some(r)) => bench::stability::light_paths::manifest_noise(r)?,
+            (noise, _) => noise,
+        },
         reference: a.reference,
-        reference_noise: a.reference_noise,
         width,
         height,
         max_depth: a.max_depth,

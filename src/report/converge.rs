@@ -137,10 +137,9 @@ fn reference(case: &ConvergeCase) -> Result<(Option<PathBuf>, Option<f64>)> {
     let Some(file) = &case.reference else {
         return Ok((None, None));
     };
-    let refs = crate::data::references()?;
-    let (_, noise) = crate::bench::stability::light_paths::reference(&refs, file)?;
-    let mean = noise.iter().sum::<f64>() / 3.0;
-    Ok((Some(refs.join(file)), Some(mean)))
+    let path = crate::data::references()?.join(file);
+    let noise = crate::bench::stability::light_paths::manifest_noise(&path)?;
+    Ok((Some(path), noise))
 }
 
 /// The `ember bench converge` command that runs the same measurement (its times, and

@@ -152,6 +152,22 @@ pub fn rows_if_data(b: &Budget) -> Result<Vec<Row>> {
 /// the folder's manifest.
 pub fn reference(refs: &Path, file: &str) -> Result<(Image, [f64; 3])> {
     let image = read_image(&refs.join(file))?;
+    Ok((image, manifest_noise_rgb(refs, file)?))
+}
+
+/// The per-pixel RMS noise of the reference EXR `path` (the mean over its channels)
+/// from the `manifest.json` beside it; `None` when there is no manifest there.
+pub fn manifest_noise(path: &Path) -> Result<Option<f64>> {
+    let refs = path.parent().unwrap_or(Path::new("."));
+    if !refs.join("manifest.json").is_file() {
+        return Ok(None);
+    }
+    let file = path.file_name().and_then(|f| f.to_str()).unwrap_or("");
+    let noise = manifest_noise_rgb(refs, file)?;
+    Ok(Some(noise.iter().sum::<f64>() / 3.0))
+}
+
+fn manifest_noise_rgb(refs: &Path, file: &str) -> Result<[f64; 3]> {
     let manifest = refs.join("manifest.json");
     let text = std::fs::read_to_string(&manifest)
         .with_context(|| format!("{}: cannot read", manifest.display()))?;
@@ -173,7 +189,7 @@ pub fn reference(refs: &Path, file: &str) -> Result<(Image, [f64; 3])> {
     if v.len() != 3 {
         bail!("{}: {file}: malformed {key}", manifest.display());
     }
-    Ok((image, [v[0], v[1], v[2]]))
+    Ok([v[0], v[1], v[2]])
 }
 
 fn mean_and_se(v: &[f64]) -> (f64, f64) {
@@ -343,5 +359,19 @@ mod tests {
         assert!((student_t_two_sided(2.947, 15.0) - 0.01).abs() < 1e-4);
         assert!((student_t_two_sided(1.959964, 1e6) - 0.05).abs() < 1e-4);
         assert!((student_t_two_sided(0.0, 5.0) - 1.0).abs() < 1e-12);
+    }
+
+    /// The shipped references' noise is read from their manifest (CBbunny_m5's
+    /// channels are about 0.00199 each); a reference without a manifest beside it has none.
+    #[test]
+    fn manifest_noise_of_a_reference() {
+        let refs = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/references");
+        let noise = manifest_noise(&refs.join("CBbunny_m5.exr"))
+            .unwrap()
+            .unwrap();
+        assert!((noise - 0.00199).abs() < 5e-6, "{noise}");
+        let elsewhere = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/cornell.dae");
+        assert_eq!(manifest_noise(&elsewhere).unwrap(), None);
+        assert!(manifest_noise(&refs.join("no_such.exr")).is_err());
     }
 }
