@@ -6,8 +6,6 @@
 //! that the Embree stages of scripts/test build the library once and run only what
 //! depends on the backend.)
 
-#![cfg(any(feature = "embree", feature = "embree4"))]
-
 use crate::common;
 
 use common::{command, repo, run};

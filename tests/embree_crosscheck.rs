@@ -11,7 +11,6 @@
 //! bounded; every other disagreement fails the test and is printed with the full ray,
 //! float bits included, so it can be replayed. `EMBER_CROSSCHECK_ONLY=<scene>` runs
 //! one scene, `EMBER_SHOW_EXCUSED=1` prints excused rays too.
-#![cfg(any(feature = "embree", feature = "embree4"))]
 
 use ember::accel::bvh::Bvh;
 use ember::accel::embree::EmbreeAccel;

@@ -1,7 +1,6 @@
 //! Whole-image agreement of the native BVH and Embree: the same render, same seed,
 //! through both backends. Paths diverge only where the backends legitimately differ
 //! (edge hits, ties), so the images agree to far below their own noise.
-#![cfg(any(feature = "embree", feature = "embree4"))]
 
 use crate::common;
 

@@ -1,8 +1,6 @@
 //! Embree's packet queries (`rtcIntersect16`/`rtcOccluded16` through the shim, with
 //! each lane's skip applied by the filter) against its single-ray queries.
 
-#![cfg(any(feature = "embree", feature = "embree4"))]
-
 use crate::common;
 
 use common::{load, random_triangle_point};

@@ -4,7 +4,6 @@
 //! (`Ray::skip`): a ray spawned from a surface never finds the triangle it leaves, and
 //! finds the sphere it leaves only at its far side, near the origin and far from it,
 //! at grazing angles too. The variants that give something up say how much.
-#![cfg(any(feature = "embree", feature = "embree4"))]
 
 use crate::common;
 
