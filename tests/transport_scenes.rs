@@ -266,13 +266,15 @@ fn auto_picks_the_estimator_with_less_noise_per_ray() {
     }
 }
 
-/// `--integrator auto` light-traces caustics, by rule, wherever an area light shines
-/// on mirrors or glass and paths bounce (`-m` 2 or more), unless emissive surfaces
-/// that are not lights are in the scene: where it does, it measured more efficient
-/// than path tracing on every scene ember ships (BENCHMARKS §3). It path-traces at
-/// `-m 1`, with `-a`, and where no area light starts a caustic path.
+/// `--integrator auto` light-traces caustics, by rule, wherever a light shines on
+/// mirrors or glass, another surface can receive the caustic and paths bounce (`-m`
+/// 2 or more), unless emissive surfaces that are not lights are in the scene: from
+/// area lights it measured more efficient than path tracing on every scene ember
+/// ships (BENCHMARKS §3); from directional lights (CMU462's `carim_*`) path tracing
+/// misses the caustic. It path-traces at `-m 1`, with `-a`, and where no light
+/// starts a caustic path or nothing receives one.
 #[test]
-fn auto_light_traces_caustics_where_an_area_light_shines_on_mirrors_or_glass() {
+fn auto_light_traces_caustics_where_a_light_shines_on_mirrors_or_glass() {
     let auto = |path: &str, max_depth, adaptive: bool| {
         let scene = load(path);
         let job = common::job(&scene, 32, 24, AccelKind::Native(BvhBuilder::Sah));
@@ -294,15 +296,17 @@ fn auto_light_traces_caustics_where_an_area_light_shines_on_mirrors_or_glass() {
         "scenes/cs184/sky/CBgems.dae",
         "scenes/cs184/sky/CBcoil.dae",
         "scenes/stability/caustic.dae",
+        "scenes/cmu462/basic/carim_glass.dae",
+        "scenes/cmu462/basic/carim_mirror.dae",
     ] {
         assert_eq!(auto(path, 5, false), Estimator::Caustics, "{path}");
         assert_eq!(auto(path, 2, false), Estimator::Caustics, "{path} -m 2");
         assert_eq!(auto(path, 1, false), Estimator::Path, "{path} -m 1");
         assert_eq!(auto(path, 5, true), Estimator::Path, "{path} -a");
     }
-    // No mirror or glass; glass under directional and ambient light; glossy metal;
-    // an emissive surface that is not a light, found only by BSDF sampling (its
-    // noise dwarfs the caustics').
+    // No mirror or glass; a glass ball alone (nothing to receive a caustic); glossy
+    // metal; an emissive surface that is not a light, found only by BSDF sampling
+    // (its noise dwarfs the caustics').
     for path in [
         "scenes/cs184/sky/CBspheres_lambertian.dae",
         "scenes/cmu462/basic/sphere_glass.dae",
@@ -313,8 +317,9 @@ fn auto_light_traces_caustics_where_an_area_light_shines_on_mirrors_or_glass() {
     }
 }
 
-/// Without mirrors or glass, or without an area light, there are no caustics to hand
-/// to light tracing: the caustics estimator is path tracing, bit for bit. With them (CBspheres) the two
+/// Without mirrors or glass, or without another surface to receive their caustics,
+/// there are none to hand to light tracing: the caustics estimator is path tracing,
+/// bit for bit. With them (CBspheres) the two
 /// differ, and the caustics image does not depend on the thread count.
 #[test]
 fn caustics_estimator_is_path_tracing_without_specular_surfaces() {
@@ -330,7 +335,7 @@ fn caustics_estimator_is_path_tracing_without_specular_surfaces() {
             .map(|p| [p.x.to_bits(), p.y.to_bits(), p.z.to_bits()])
             .collect()
     };
-    // Nor from lights that are not area lights: CMU462's glass ball under a
+    // Nor where nothing receives them: CMU462's glass ball alone under a
     // directional and an ambient light.
     for scene in [
         "scenes/cs184/sky/CBspheres_lambertian.dae",

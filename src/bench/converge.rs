@@ -176,7 +176,7 @@ pub fn methods(base: &RenderSettings, scene: &Scene, compare_backends: bool) -> 
     let mut v = vec![with(DEFAULT_METHOD, auto, native)];
     v.extend(table.iter().map(|&(name, tweak)| with(name, tweak, native)));
     // Light tracing cannot show specular surfaces to the camera: only where it can
-    // converge. (Where an area light shines on them, the default light-traces their
+    // converge. (Where a light shines on them, the default light-traces their
     // caustics, and the rows above are path tracing alone.)
     if !scene.materials.iter().any(|mat| mat.is_delta()) {
         let light_tracing: Tweak = |s| s.estimator = Some(Estimator::LightTracing);

@@ -70,6 +70,10 @@ pub struct Row {
     pub pick: Estimator,
     pub by_pilot: bool,
     pub path: Cost,
+    /// Path tracing cannot converge: it misses the caustics of point, spot or
+    /// directional lights (`light_tracing::path_misses_caustics`), so its noise is
+    /// not its error and it is not a candidate for the best.
+    pub path_misses_caustics: bool,
     /// Where light tracing cannot show the image: why.
     pub light: Result<Cost, String>,
     /// Where light-traced caustics differ from path tracing
@@ -78,13 +82,18 @@ pub struct Row {
 }
 
 impl Row {
-    /// The pick's inefficiency over the best estimator's (1: auto took the best).
+    /// The pick's inefficiency over the best estimator's (1: auto took the best;
+    /// infinite for path tracing where it misses caustics).
     pub fn pick_over_best(&self) -> f64 {
         let path = self.path.inefficiency();
         let light = self.light.as_ref().ok().map(Cost::inefficiency);
         let caustics = self.caustics.map(|c| c.inefficiency());
+        if self.path_misses_caustics && self.pick == Estimator::Path {
+            return f64::INFINITY; // it does not converge to the image
+        }
+        let path = (!self.path_misses_caustics).then_some(path);
         let picked = match self.pick {
-            Estimator::Path => Some(path),
+            Estimator::Path => path,
             Estimator::LightTracing => light,
             Estimator::Caustics => caustics,
         };
@@ -92,7 +101,7 @@ impl Row {
         let Some(picked) = picked else {
             return 1.0;
         };
-        let best = [Some(path), light, caustics]
+        let best = [path, light, caustics]
             .into_iter()
             .flatten()
             .fold(f64::INFINITY, f64::min);
@@ -170,6 +179,7 @@ pub fn run(opts: &EstimatorsOptions, log: &mut dyn FnMut(&str)) -> Result<Estima
             pick,
             by_pilot: scores.is_some(),
             path,
+            path_misses_caustics: light_tracing::path_misses_caustics(&job.scene, opts.max_depth),
             light,
             caustics,
         });
@@ -275,7 +285,15 @@ impl EstimatorsReport {
                 r.scene.clone(),
                 r.lights.clone(),
                 format!("{} ({how})", r.pick.name()),
-                format!("{:.3e}", r.path.variance),
+                format!(
+                    "{:.3e}{}",
+                    r.path.variance,
+                    if r.path_misses_caustics {
+                        " (misses caustics)"
+                    } else {
+                        ""
+                    }
+                ),
                 format!("{:.3}", r.path.seconds),
             ];
             cells.extend(light);
@@ -319,6 +337,7 @@ mod tests {
             pick,
             by_pilot: true,
             path: c(path),
+            path_misses_caustics: false,
             light: Ok(c(light)),
             caustics: None,
         }
@@ -350,5 +369,15 @@ mod tests {
         assert_eq!(glass.pick_over_best(), 4.0);
         glass.pick = Estimator::Caustics;
         assert_eq!(glass.pick_over_best(), 1.0);
+        // Path tracing that misses caustics is no candidate, however low its noise.
+        let mut sun = glass.clone();
+        sun.path = Cost {
+            variance: 0.01,
+            seconds: 1.0,
+        };
+        sun.path_misses_caustics = true;
+        assert_eq!(sun.pick_over_best(), 1.0);
+        sun.pick = Estimator::Path;
+        assert_eq!(sun.pick_over_best(), f64::INFINITY);
     }
 }

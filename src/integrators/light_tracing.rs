@@ -24,13 +24,15 @@ use super::path::{geometrically_consistent, occluded, trace};
 use super::vertex::{Depth, Scattering, Vertex};
 use super::Engine;
 use super::{PathIntegrator, PathSettings, SampleIntegrator, Splat, SplatIntegrator, Tracing};
+use crate::geometry::Aabb;
 use crate::geometry::NO_PRIM;
 use crate::lanes::rays::{HitPacket, RayPacket};
 use crate::lanes::{
     dispatch, each_lane, LaneBits, LaneMask, Lanes, One, Real, Simd, SimdTask, UInt, LANES, V3,
 };
-use crate::lights::emit::EmissionSample;
+use crate::lights::emit::{EmissionAim, EmissionSample};
 use crate::lights::Light;
+use crate::materials::Material;
 use crate::sampling::{pixel_key, SampleStream};
 use crate::scene::{Hits, Scene};
 use crate::Color;
@@ -53,6 +55,9 @@ pub struct LightTracer<'a> {
     scattering: Scattering,
     /// Cumulative light-selection probabilities, proportional to emitted power.
     light_cdf: Vec<f32>,
+    /// For caustics: the sphere around the mirrors and glass, which point and
+    /// directional lights aim their paths at (every other path ends at its first hit).
+    aim: Option<EmissionAim>,
     /// Emitters seen directly (0-bounce paths), which only camera rays can find.
     direct: Option<PathIntegrator<'a>>,
 }
@@ -96,6 +101,10 @@ impl<'a> LightTracer<'a> {
             t,
             scattering: Scattering::of(scene),
             light_cdf,
+            aim: s
+                .caustics_by_light
+                .then(|| specular_bounds(scene))
+                .flatten(),
             direct,
         }
     }
@@ -105,7 +114,8 @@ impl<'a> LightTracer<'a> {
     /// it carries nothing.
     fn emit(&self, u_choice: f32, u_pos: Vec2, u_dir: Vec2) -> Option<(EmissionSample, Color)> {
         let (li, p_light) = self.pick_light(u_choice)?;
-        let es = self.t.scene.lights[li].sample_le(&self.t.scene.bounds, u_pos, u_dir)?;
+        let light = &self.t.scene.lights[li];
+        let es = light.sample_le(&self.t.scene.bounds, self.aim, u_pos, u_dir)?;
         let beta = es.beta / p_light;
         let beta0 = beta.max_element();
         (!beta0.is_nan() && beta0 > 0.0).then_some((es, beta))
@@ -120,21 +130,61 @@ impl<'a> LightTracer<'a> {
     }
 }
 
-/// Whether `light` starts the light paths of `Estimator::Caustics`: area lights only.
-/// The path tracer drops exactly the caustic paths that end on an area light
-/// (`PathIntegrator::area_light_on_line`); it finds the rest of every light's light.
+/// Whether `light` starts the light paths of `Estimator::Caustics`, so that each path
+/// is counted once:
+/// - area lights: the path tracer drops exactly the caustic paths that end on an
+///   area light (`PathIntegrator::area_light_on_line`);
+/// - point, spot and directional lights: the path tracer never finds a path whose
+///   vertex next to the light is a mirror or glass (neither a shadow ray nor a
+///   BSDF-sampled ray can reach a point or a single direction through one), so
+///   without light tracing those caustics would be missing;
+/// - ambient and environment lights: the path tracer finds their light through
+///   mirrors and glass by BSDF sampling, and keeps it.
 pub fn starts_caustic_paths(light: &Light) -> bool {
-    matches!(light, Light::Area(_))
+    match light {
+        Light::Area(_) | Light::Point { .. } | Light::Spot(_) | Light::Directional { .. } => true,
+        Light::Ambient { .. } | Light::Environment(_) => false,
+    }
 }
 
 /// Whether `Estimator::Caustics` differs from path tracing on `scene` at `max_depth`:
-/// a mirror or glass surface, an area light that emits, and at least two bounces
-/// (light → specular → non-specular surface seen by the camera).
+/// a mirror or glass surface, a light that starts caustic paths and emits, a
+/// surface that is neither to receive them, and at least two bounces (light →
+/// specular → non-specular surface seen by the camera).
 pub fn caustics_possible(scene: &Scene, max_depth: u32) -> bool {
     let starts = |l: &Light| starts_caustic_paths(l) && l.power(1.0) > 0.0;
+    let receives = |m: &Material| m.scatters() && !m.is_delta();
     max_depth >= 2
         && scene.materials.iter().any(|m| m.is_delta())
+        && scene.materials.iter().any(receives)
         && scene.lights.iter().any(starts)
+}
+
+/// The bounding sphere of the scene's mirror and glass surfaces, if it has any.
+fn specular_bounds(scene: &Scene) -> Option<EmissionAim> {
+    let delta = |m: u32| scene.materials[m as usize].is_delta();
+    let mut b: Option<Aabb> = None;
+    let mut add = |p: Vec3| match b.as_mut() {
+        Some(b) => b.grow(p),
+        None => b = Some(Aabb::from_point(p)),
+    };
+    for t in scene.triangles.iter().filter(|t| delta(t.material)) {
+        t.v.iter().for_each(|&v| add(scene.positions[v as usize]));
+    }
+    for s in scene.spheres.iter().filter(|s| delta(s.material)) {
+        add(s.centre - Vec3::splat(s.radius));
+        add(s.centre + Vec3::splat(s.radius));
+    }
+    b.as_ref().and_then(EmissionAim::around)
+}
+
+/// Whether path tracing alone misses light on `scene` at `max_depth`: caustics are
+/// possible and a point, spot or directional light can start one, which no camera
+/// path can find.
+pub fn path_misses_caustics(scene: &Scene, max_depth: u32) -> bool {
+    caustics_possible(scene, max_depth)
+        && (scene.lights.iter())
+            .any(|l| l.is_delta() && starts_caustic_paths(l) && l.power(1.0) > 0.0)
 }
 
 /// Per lane: a light path's state between bounces. Lanes are refilled with the next

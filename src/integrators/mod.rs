@@ -219,10 +219,13 @@ pub enum Estimator {
     Path,
     /// Paths start on the lights and connect to the camera (`light_tracing`).
     LightTracing,
-    /// Path tracing, with light tracing for the caustics it finds only by chance:
-    /// paths whose first surface from the camera is not specular and that reach an
-    /// area light through mirrors or glass from a surface that is not (`x₁ D … D S⁺ L`).
-    /// The two take disjoint sets of paths, so their sum is unbiased (README). Its
+    /// Path tracing, with light tracing for the caustics it finds only by chance, or
+    /// never: paths whose first surface from the camera is not specular and that
+    /// reach a light through mirrors or glass from a surface that is not
+    /// (`x₁ D … D S⁺ L`). From an area light the path tracer finds them by chance and
+    /// drops them here; from a point, spot or directional light it cannot find them
+    /// at all (`light_tracing::starts_caustic_paths`). The two take disjoint sets
+    /// of paths, so their sum is unbiased (README). Its
     /// light paths are numbered by camera sample index, so sample ranges merge, and
     /// a band of the image traces them all (they land anywhere). Adaptive sampling
     /// does not apply (`RenderSettings::adaptive` is ignored; the command line
@@ -246,7 +249,7 @@ impl Named for Estimator {
         (
             Estimator::Caustics,
             "caustics",
-            "Path tracing, with light tracing (a quarter as many light paths as camera samples) for the light that mirrors and glass focus from area lights onto surfaces the camera sees: far fewer fireflies in scenes with mirrors or glass; auto's choice wherever an area light shines on them. Not with -a",
+            "Path tracing, with light tracing (a quarter as many light paths as camera samples) for the light that mirrors and glass focus onto surfaces the camera sees: far fewer fireflies under area lights, and the caustics of point, spot and directional lights, which path tracing cannot find; auto's choice wherever a light shines on mirrors or glass. Not with -a",
         ),
     ];
 }
@@ -259,11 +262,13 @@ impl Estimator {
     ///
     /// - Path tracing at `max_depth` ≤ 1: a point light's direct light is then exact
     ///   per camera sample, which light tracing only approaches by chance.
-    /// - Path tracing with light-traced caustics (`Caustics`) wherever an area light
-    ///   shines on a mirror or glass surface (`light_tracing::caustics_possible`): it
-    ///   was 1.07–3.4× more efficient (noise² × time) than path tracing on every such
-    ///   shipped scene (BENCHMARKS §3), except where emissive surfaces that are not
-    ///   lights sit in the scene. Only BSDF sampling finds those, at every bounce, so
+    /// - Path tracing with light-traced caustics (`Caustics`) wherever a light
+    ///   shines on a mirror or glass surface and a surface that is neither can
+    ///   receive the caustic (`light_tracing::caustics_possible`). From area lights
+    ///   it was 1.07–3.4× more efficient (noise² × time) than path tracing on every
+    ///   such shipped scene (BENCHMARKS §3); from point, spot and directional lights
+    ///   path tracing misses the caustic altogether. Not where emissive surfaces
+    ///   that are not lights sit in the scene. Only BSDF sampling finds those, at every bounce, so
     ///   their noise dwarfs the caustics' (CMU462's `sky/CBspheres`, `CBgems` and
     ///   `CBcoil`: 10× path tracing's noise on CS184's versions, and the same noise
     ///   with light-traced caustics, for 1.15–1.4× the time).

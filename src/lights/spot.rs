@@ -12,6 +12,7 @@ use super::Incident;
 use crate::geometry::Frame;
 use crate::lanes::math::{exp, ln};
 use crate::lanes::{Lanes, Real, V3};
+use crate::sampling::uniform_cone;
 use crate::Color;
 use glam::{Vec2, Vec3};
 use std::f32::consts::PI;
@@ -126,12 +127,9 @@ impl SpotLight {
     /// pdf `1/(2π(1 − cos_min))`, so β = `I(θ)·2π(1 − cos_min)`.
     pub fn sample_le(&self, u: Vec2) -> Option<EmissionSample> {
         let c = self.cos_min();
-        let cos_theta = 1.0 - u.x * (1.0 - c);
-        let sin_theta = (1.0 - cos_theta * cos_theta).max(0.0).sqrt();
-        let phi = 2.0 * PI * u.y;
-        let local = Vec3::new(sin_theta * phi.cos(), sin_theta * phi.sin(), cos_theta);
+        let local = uniform_cone(u, 1.0 - c);
         let dir = Frame::from_normal(self.direction).to_world(local);
-        let beta = self.intensity * (self.falloff(cos_theta) * 2.0 * PI * (1.0 - c));
+        let beta = self.intensity * (self.falloff(local.z) * 2.0 * PI * (1.0 - c));
         (beta != Color::ZERO).then_some(EmissionSample {
             origin: self.position,
             on_surface: None,

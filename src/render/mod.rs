@@ -318,7 +318,7 @@ fn render_rect(
             t.s.caustics_by_light = true;
             let integrator = PathIntegrator::new(t);
             // Nothing to add where no light path can make a caustic (CMU462's glass
-            // and mirror scenes, lit by directional and ambient lights).
+            // and mirror spheres, with no other surface to receive one).
             if !light_tracing::caustics_possible(scene, settings.max_depth) {
                 return pixels::render(&integrator, settings, None, frame, rect, progress, stop);
             }

@@ -9,7 +9,7 @@ pub mod warps;
 
 pub use rng::{splitmix64, Rng};
 pub use warps::{
-    concentric_disk, cosine_hemisphere, cosine_hemisphere_pdf, uniform_hemisphere,
+    concentric_disk, cosine_hemisphere, cosine_hemisphere_pdf, uniform_cone, uniform_hemisphere,
     uniform_hemisphere_pdf, uniform_sphere, uniform_sphere_pdf,
 };
 

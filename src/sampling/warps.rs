@@ -99,6 +99,16 @@ pub fn uniform_sphere(u: Vec2) -> Vec3 {
     uniform_sphere_l(u.x, u.y).vec3()
 }
 
+/// Uniform direction in the cone about +Z of `cos θ ≥ 1 − one_minus_cos_max` (given
+/// as that difference, which stays exact for narrow cones); its pdf is
+/// `1/(2π·one_minus_cos_max)`.
+pub fn uniform_cone(u: Vec2, one_minus_cos_max: f32) -> Vec3 {
+    let cos_theta = 1.0 - u.x * one_minus_cos_max;
+    let sin_theta = (1.0 - cos_theta * cos_theta).max(0.0).sqrt();
+    let phi = 2.0 * std::f32::consts::PI * u.y;
+    Vec3::new(sin_theta * phi.cos(), sin_theta * phi.sin(), cos_theta)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
