@@ -152,12 +152,16 @@ pub fn starts_caustic_paths(light: &Light) -> bool {
 /// surface that is neither to receive them, and at least two bounces (light →
 /// specular → non-specular surface seen by the camera).
 pub fn caustics_possible(scene: &Scene, max_depth: u32) -> bool {
-    let starts = |l: &Light| starts_caustic_paths(l) && l.power(1.0) > 0.0;
     let receives = |m: &Material| m.scatters() && !m.is_delta();
     max_depth >= 2
         && scene.materials.iter().any(|m| m.is_delta())
         && scene.materials.iter().any(receives)
-        && scene.lights.iter().any(starts)
+        && scene.lights.iter().any(starts_emitting_caustic_paths)
+}
+
+/// A light that starts caustic paths and emits something.
+fn starts_emitting_caustic_paths(light: &Light) -> bool {
+    starts_caustic_paths(light) && light.power(1.0) > 0.0
 }
 
 /// The bounding sphere of the scene's mirror and glass surfaces, if it has any.
@@ -183,8 +187,7 @@ fn specular_bounds(scene: &Scene) -> Option<EmissionAim> {
 /// path can find.
 pub fn path_misses_caustics(scene: &Scene, max_depth: u32) -> bool {
     caustics_possible(scene, max_depth)
-        && (scene.lights.iter())
-            .any(|l| l.is_delta() && starts_caustic_paths(l) && l.power(1.0) > 0.0)
+        && (scene.lights.iter()).any(|l| l.is_delta() && starts_emitting_caustic_paths(l))
 }
 
 /// Per lane: a light path's state between bounces. Lanes are refilled with the next
