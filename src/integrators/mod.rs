@@ -265,8 +265,9 @@ impl Estimator {
     /// - Path tracing with light-traced caustics (`Caustics`) wherever a light
     ///   shines on a mirror or glass surface and a surface that is neither can
     ///   receive the caustic (`light_tracing::caustics_possible`). From area lights
-    ///   it was 1.07–3.4× more efficient (noise² × time) than path tracing on every
-    ///   such shipped scene (BENCHMARKS §3); from point, spot and directional lights
+    ///   it was 1.3–3.4× more efficient (noise² × time) than path tracing on every
+    ///   such shipped scene but CS184's CBcoil, where the two are level within the
+    ///   timing noise (BENCHMARKS §3); from point, spot and directional lights
     ///   path tracing misses the caustic altogether. Not where emissive surfaces
     ///   that are not lights sit in the scene. Only BSDF sampling finds those, at every bounce, so
     ///   their noise dwarfs the caustics' (CMU462's `sky/CBspheres`, `CBgems` and
