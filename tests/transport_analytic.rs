@@ -4,6 +4,7 @@
 use crate::common;
 
 use common::polygon_irradiance;
+use common::stats::mean_and_stderr;
 use ember::accel::{self, AccelKind, BvhBuilder};
 use ember::camera::Camera;
 use ember::geometry::Aabb;
@@ -14,7 +15,7 @@ use ember::lights::{AreaLight, Light};
 use ember::materials::Material;
 use ember::render::{Engine, RenderJob, RenderSettings};
 use ember::sampling::SamplerKind;
-use ember::scene::{Scene, Sphere, Triangle, NO_LIGHT};
+use ember::scene::{Scene, Sphere, SurfaceInteraction, Triangle, NO_LIGHT};
 use ember::{Color, Vec3};
 
 /// A closed sphere that emits `le` (both sides) and reflects with Lambertian albedo `a`,
@@ -419,36 +420,47 @@ fn light_tracing_furnace_with_a_point_light_at_the_centre() {
     }
 }
 
-#[test]
-fn light_tracing_matches_the_area_light_closed_form() {
-    let (albedo, le) = (0.8f32, 4.0f32);
-    let (scene, quad) = lit_floor(albedo, le);
-    let accel = accel::build(&scene, AccelKind::Native(BvhBuilder::Sah)).unwrap();
-    let (w, h) = (24u32, 24u32);
-    let mut cam = Camera::new(&scene.camera, &scene.bounds, w, h);
-    cam.eye = Vec3::new(0.3, 3.0, 0.1);
-    cam.forward = Vec3::NEG_Y;
-    cam.up = Vec3::Z;
-    cam.right = cam.forward.cross(cam.up);
-    // The closed form at 4×4 points per pixel; points where the eye sees the light's
-    // black back instead of the floor count as 0.
-    let mut want = vec![0f64; (w * h) as usize];
-    for y in 0..h {
-        for x in 0..w {
+/// A closed form's image: per pixel of `cam`, the mean of `value` at the surface each
+/// of 4×4 stratified points sees (`None` where it sees nothing).
+fn closed_form_image(
+    scene: &Scene,
+    cam: &Camera,
+    value: impl Fn(Option<SurfaceInteraction>) -> f64,
+) -> Vec<f64> {
+    let accel = accel::build(scene, AccelKind::Native(BvhBuilder::Sah)).unwrap();
+    let mut image = Vec::with_capacity((cam.width * cam.height) as usize);
+    for y in 0..cam.height {
+        for x in 0..cam.width {
             let mut s = 0.0;
             for k in 0..16 {
                 let xi =
                     ember::Vec2::new((k % 4) as f32 / 4.0 + 0.125, (k / 4) as f32 / 4.0 + 0.125);
                 let r = cam.generate_ray(x, y, xi);
-                let hit = accel.intersect(&r).map(|hh| scene.interaction(&r, &hh));
-                if let Some(si) = hit.filter(|si| si.material == 0) {
-                    let e = polygon_irradiance(si.p, Vec3::Y, &quad, le as f64) as f32;
-                    s += (albedo / std::f32::consts::PI * e) as f64;
-                }
+                s += value(accel.intersect(&r).map(|h| scene.interaction(&r, &h)));
             }
-            want[(y * w + x) as usize] = s / 16.0;
+            image.push(s / 16.0);
         }
     }
+    image
+}
+
+#[test]
+fn light_tracing_matches_the_area_light_closed_form() {
+    let (albedo, le) = (0.8f32, 4.0f32);
+    let (scene, quad) = lit_floor(albedo, le);
+    let mut cam = Camera::new(&scene.camera, &scene.bounds, 24, 24);
+    cam.eye = Vec3::new(0.3, 3.0, 0.1);
+    cam.forward = Vec3::NEG_Y;
+    cam.up = Vec3::Z;
+    cam.right = cam.forward.cross(cam.up);
+    // Points where the eye sees the light's black back instead of the floor count as 0.
+    let want = closed_form_image(&scene, &cam, |hit| match hit {
+        Some(si) if si.material == 0 => {
+            let e = polygon_irradiance(si.p, Vec3::Y, &quad, le as f64) as f32;
+            (albedo / std::f32::consts::PI * e) as f64
+        }
+        _ => 0.0,
+    });
     let s = RenderSettings {
         spp: 512,
         max_depth: 1,
@@ -461,11 +473,10 @@ fn light_tracing_matches_the_area_light_closed_form() {
     let out = job.render(&s);
     assert_eq!(out.nonfinite_samples, 0);
     let got: Vec<f64> = out.image.pixels.iter().map(|p| p.y as f64).collect();
-    let n = got.len() as f64;
-    let (mg, mw) = (got.iter().sum::<f64>() / n, want.iter().sum::<f64>() / n);
+    let (mg, _) = mean_and_stderr(&got);
+    let (mw, _) = mean_and_stderr(&want);
     let d: Vec<f64> = got.iter().zip(&want).map(|(g, w)| g - w).collect();
-    let md = d.iter().sum::<f64>() / n;
-    let se = (d.iter().map(|v| (v - md).powi(2)).sum::<f64>() / (n - 1.0) / n).sqrt();
+    let (_, se) = mean_and_stderr(&d);
     assert!(
         (mg - mw).abs() <= 4.5 * se + 2e-3 * mw,
         "light tracing {mg} vs closed form {mw} (se {se})"
@@ -578,29 +589,18 @@ fn caustics_of_point_and_directional_lights_off_a_mirror() {
     let albedo = 0.8f64;
     for directional in [false, true] {
         let (scene, cam, irradiance) = mirror_beside_a_delta_light(directional);
-        let accel = accel::build(&scene, AccelKind::Native(BvhBuilder::Sah)).unwrap();
-        // The closed form at 4×4 points per pixel: with and without the mirror's light.
-        let (mut with, mut without) = (vec![], vec![]);
-        for y in 0..cam.height {
-            for x in 0..cam.width {
-                let (mut a, mut b) = (0.0, 0.0);
-                for k in 0..16 {
-                    let xi = ember::Vec2::new(
-                        (k % 4) as f32 / 4.0 + 0.125,
-                        (k / 4) as f32 / 4.0 + 0.125,
-                    );
-                    let r = cam.generate_ray(x, y, xi);
-                    let si = accel.intersect(&r).map(|h| scene.interaction(&r, &h));
-                    let si = si.expect("the camera sees only the floor");
-                    assert_eq!(si.material, 0, "the camera sees only the floor");
-                    let (direct, mirrored) = irradiance(si.p);
-                    a += albedo / std::f64::consts::PI * (direct + mirrored);
-                    b += albedo / std::f64::consts::PI * direct;
-                }
-                with.push(a / 16.0);
-                without.push(b / 16.0);
-            }
-        }
+        // The closed form with and without the mirror's light.
+        let floor = |hit: Option<SurfaceInteraction>| {
+            let si = hit.expect("the camera sees only the floor");
+            assert_eq!(si.material, 0, "the camera sees only the floor");
+            irradiance(si.p)
+        };
+        let radiance = albedo / std::f64::consts::PI;
+        let with = closed_form_image(&scene, &cam, |hit| {
+            let (direct, mirrored) = floor(hit);
+            radiance * (direct + mirrored)
+        });
+        let without = closed_form_image(&scene, &cam, |hit| radiance * floor(hit).0);
         let job = RenderJob::with_camera(scene, AccelKind::Native(BvhBuilder::Sah), cam).unwrap();
         for estimator in [
             Estimator::Caustics,
@@ -618,11 +618,9 @@ fn caustics_of_point_and_directional_lights_off_a_mirror() {
             let out = job.render(&s);
             assert_eq!(out.nonfinite_samples, 0);
             let got: Vec<f64> = out.image.pixels.iter().map(|p| p.y as f64).collect();
-            let n = got.len() as f64;
-            let mean = |v: &[f64]| v.iter().sum::<f64>() / v.len() as f64;
             let d: Vec<f64> = got.iter().zip(&with).map(|(g, w)| g - w).collect();
-            let md = mean(&d);
-            let se = (d.iter().map(|v| (v - md).powi(2)).sum::<f64>() / (n - 1.0) / n).sqrt();
+            let (_, se) = mean_and_stderr(&d);
+            let mean = |v: &[f64]| mean_and_stderr(v).0;
             let (mg, mw, mo) = (mean(&got), mean(&with), mean(&without));
             let what = format!(
                 "{estimator:?}, directional {directional}: {mg} (se {se}) against {mw} with the \

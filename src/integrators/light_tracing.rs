@@ -24,7 +24,6 @@ use super::path::{geometrically_consistent, occluded, trace};
 use super::vertex::{Depth, Scattering, Vertex};
 use super::Engine;
 use super::{PathIntegrator, PathSettings, SampleIntegrator, Splat, SplatIntegrator, Tracing};
-use crate::geometry::Aabb;
 use crate::geometry::NO_PRIM;
 use crate::lanes::rays::{HitPacket, RayPacket};
 use crate::lanes::{
@@ -166,20 +165,15 @@ fn starts_emitting_caustic_paths(light: &Light) -> bool {
 
 /// The bounding sphere of the scene's mirror and glass surfaces, if it has any.
 fn specular_bounds(scene: &Scene) -> Option<EmissionAim> {
-    let delta = |m: u32| scene.materials[m as usize].is_delta();
-    let mut b: Option<Aabb> = None;
-    let mut add = |p: Vec3| match b.as_mut() {
-        Some(b) => b.grow(p),
-        None => b = Some(Aabb::from_point(p)),
-    };
-    for t in scene.triangles.iter().filter(|t| delta(t.material)) {
-        t.v.iter().for_each(|&v| add(scene.positions[v as usize]));
-    }
-    for s in scene.spheres.iter().filter(|s| delta(s.material)) {
-        add(s.centre - Vec3::splat(s.radius));
-        add(s.centre + Vec3::splat(s.radius));
-    }
-    b.as_ref().and_then(EmissionAim::around)
+    // Primitive ids number the triangles first, then the spheres.
+    let materials = (scene.triangles.iter().map(|t| t.material))
+        .chain(scene.spheres.iter().map(|s| s.material));
+    let b = (0..)
+        .zip(materials)
+        .filter(|&(_, m)| scene.materials[m as usize].is_delta())
+        .map(|(prim, _)| scene.prim_bounds(prim))
+        .reduce(|a, b| a.union(&b))?;
+    EmissionAim::around(&b)
 }
 
 /// Whether path tracing alone misses light on `scene` at `max_depth`: caustics are

@@ -87,10 +87,7 @@ impl Light {
             Light::Directional {
                 direction,
                 irradiance,
-            } => {
-                let disk = aim.map(|a| (a.centre, a.radius));
-                disk_emission(bounds, disk, direction, irradiance, u_pos, 1.0)
-            }
+            } => disk_emission(bounds, aim, direction, irradiance, u_pos, 1.0),
             Light::Ambient { radiance } => {
                 // Light arrives from ω (ω·Y > 0) and travels along −ω.
                 let omega = Frame::from_normal(Vec3::Y).to_world(uniform_hemisphere(u_dir));
@@ -117,13 +114,13 @@ fn cone_toward(p: Vec3, aim: EmissionAim) -> Option<(Vec3, f32)> {
     (d > aim.radius && sin2.is_finite()).then(|| (to / d, sin2 / (1.0 + (1.0 - sin2).sqrt())))
 }
 
-/// Parallel light travelling along `dir` through a disk of radius `r` facing it,
-/// centred on the line through the centre of `disk` (default: `bounds`' bounding
-/// sphere) and starting just outside `bounds`' bounding sphere: pdf_pos = 1/(πr²), so
+/// Parallel light travelling along `dir` through a disk facing it of the radius `r`
+/// of `aim` (default: `bounds`' bounding sphere), on the line through its centre and
+/// starting just outside `bounds`' bounding sphere: pdf_pos = 1/(πr²), so
 /// β = `value`·πr²·`dir_weight`.
 fn disk_emission(
     bounds: &Aabb,
-    disk: Option<(Vec3, f32)>,
+    aim: Option<EmissionAim>,
     dir: Vec3,
     value: Color,
     u: Vec2,
@@ -134,7 +131,7 @@ fn disk_emission(
     } else {
         (bounds.centre(), 0.5 * bounds.diagonal().length().max(1e-6))
     };
-    let (centre, radius) = disk.unwrap_or((c, r));
+    let (centre, radius) = aim.map_or((c, r), |a| (a.centre, a.radius));
     // Back from the disk's centre far enough to leave the scene's sphere.
     let back = 1.01 * ((centre - c).length() + r);
     let frame = Frame::from_normal(dir);
