@@ -2,6 +2,7 @@
 //! headers as string attributes and into PNG files as text chunks, read back by
 //! `ember info IMAGE`. Shard headers and merges reuse the same list.
 
+use crate::integrators::light_tracing::caustics_possible;
 use crate::integrators::{Estimator, Roulette};
 use crate::render::{Adaptive, RenderJob, RenderSettings, Shading, StopReason, StopRule};
 use std::path::Path;
@@ -161,9 +162,18 @@ pub fn adaptive_text(a: Option<&Adaptive>) -> String {
 /// What `--integrator` (perhaps auto) chose for `scene`: light tracing, or path
 /// tracing with its direct-lighting strategy.
 pub fn estimator_label(s: &RenderSettings, job: &RenderJob) -> String {
+    let strategy = s.strategy_for(&job.scene);
     match job.estimator(s) {
         Estimator::LightTracing => Estimator::LightTracing.to_string(),
-        e => format!("{e} ({})", s.strategy_for(&job.scene)),
+        Estimator::Caustics if caustics_possible(&job.scene, s.max_depth) => {
+            let divisor = job.caustics_split(s).0.divisor;
+            let per = match divisor {
+                1 => "1 light path per camera sample".to_string(),
+                d => format!("1 light path per {d} camera samples"),
+            };
+            format!("{} ({strategy}, {per})", Estimator::Caustics)
+        }
+        e => format!("{e} ({strategy})"),
     }
 }
 

@@ -317,6 +317,41 @@ fn auto_light_traces_caustics_where_a_light_shines_on_mirrors_or_glass() {
     }
 }
 
+/// The caustics pilot gives the light paths the share their noise earns: few on
+/// CMU462's `carim_glass`, where they cost most of the rays and add almost no noise
+/// (sunlight through the glass figure lights a few pixels at its foot), more on
+/// `cornell.dae`, whose glass and mirror balls cast caustics across the box. Its
+/// choice does not depend on the thread count or the render's seed, so every band
+/// and sample range of a render traces the same light paths.
+#[test]
+fn caustics_pilot_shares_light_paths_by_their_noise_and_rays() {
+    let split = |path: &str, threads: usize, seed: u64| {
+        let scene = load(path);
+        let pool = rayon::ThreadPoolBuilder::new()
+            .num_threads(threads)
+            .build()
+            .unwrap();
+        let job = common::job(&scene, 160, 120, AccelKind::Native(BvhBuilder::Sah));
+        let s = RenderSettings {
+            estimator: Some(Estimator::Caustics),
+            max_depth: 5,
+            seed,
+            ..Default::default()
+        };
+        pool.install(|| job.caustics_split(&s))
+    };
+    let (carim, scores) = split("scenes/cmu462/basic/carim_glass.dae", 2, 0);
+    let (cornell, _) = split("scenes/cornell.dae", 2, 0);
+    assert!(
+        carim.divisor >= 4 * cornell.divisor,
+        "carim_glass {carim:?} {scores:?}, cornell.dae {cornell:?}"
+    );
+    assert_eq!(
+        split("scenes/cmu462/basic/carim_glass.dae", 1, 9),
+        (carim, scores)
+    );
+}
+
 /// Without mirrors or glass, or without another surface to receive their caustics,
 /// there are none to hand to light tracing: the caustics estimator is path tracing,
 /// bit for bit. With them (CBspheres) the two

@@ -225,7 +225,8 @@ pub enum Estimator {
     /// (`x₁ D … D S⁺ L`). From an area light the path tracer finds them by chance and
     /// drops them here; from a point, spot or directional light it cannot find them
     /// at all (`light_tracing::starts_caustic_paths`). The two take disjoint sets
-    /// of paths, so their sum is unbiased (README). Its
+    /// of paths, so their sum is unbiased (README). How many light paths it traces
+    /// per camera sample is a pilot's choice (`render::pilot::CausticsSplit`). Its
     /// light paths are numbered by camera sample index, so sample ranges merge, and
     /// a band of the image traces them all (they land anywhere). Adaptive sampling
     /// does not apply (`RenderSettings::adaptive` is ignored; the command line
@@ -249,7 +250,7 @@ impl Named for Estimator {
         (
             Estimator::Caustics,
             "caustics",
-            "Path tracing, with light tracing (a quarter as many light paths as camera samples) for the light that mirrors and glass focus onto surfaces the camera sees: far fewer fireflies under area lights, and the caustics of point, spot and directional lights, which path tracing cannot find; auto's choice wherever a light shines on mirrors or glass. Not with -a",
+            "Path tracing, with light tracing (1 light path per 1 to 64 camera samples, as a small pilot render finds best for the scene) for the light that mirrors and glass focus onto surfaces the camera sees: far fewer fireflies under area lights, and the caustics of point, spot and directional lights, which path tracing cannot find; auto's choice wherever a light shines on mirrors or glass. Not with -a",
         ),
     ];
 }

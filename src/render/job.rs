@@ -2,7 +2,7 @@
 //! resolution), rendered over a rectangle of pixels. The CLI, the benches and the tests all
 //! render through a `RenderJob`.
 
-use super::pilot::{self, PilotScore};
+use super::pilot::{self, CausticsSplit, PilotScore};
 use super::{render_warnings, RenderOutput, RenderSettings, Shading, StopToken};
 use crate::accel::{self, Accel, AccelError, AccelKind};
 use crate::camera::Camera;
@@ -50,8 +50,37 @@ pub struct RenderJob {
     pub scene: Scene,
     pub accel: Box<dyn Accel>,
     pub camera: Camera,
-    /// The pilots run so far (`RenderJob::estimator`), by the settings they ran with.
-    pilots: Mutex<Vec<(PathSettings, Estimator, [PilotScore; 2])>>,
+    /// The estimator pilots run so far (`RenderJob::estimator`), by the settings they ran with.
+    pilots: PilotCache<(Estimator, [PilotScore; 2])>,
+    /// The caustics pilots run so far (`RenderJob::caustics_split`), likewise.
+    caustics_pilots: PilotCache<(CausticsSplit, [PilotScore; 2])>,
+}
+
+/// Pilot results by the path settings they ran with.
+struct PilotCache<T>(Mutex<Vec<(PathSettings, T)>>);
+
+impl<T: Copy> PilotCache<T> {
+    fn new() -> Self {
+        PilotCache(Mutex::new(Vec::new()))
+    }
+
+    /// The result for `key`, from `run` the first time it is asked for.
+    fn get_or_run(&self, key: PathSettings, run: impl FnOnce() -> T) -> T {
+        let known = |v: &[(PathSettings, T)]| v.iter().find(|(k, _)| *k == key).map(|&(_, t)| t);
+        if let Some(t) = known(&self.0.lock().unwrap_or_else(|e| e.into_inner())) {
+            return t;
+        }
+        // Not under the lock: the pilot runs on rayon, whose threads may ask meanwhile.
+        let t = run();
+        let mut v = self.0.lock().unwrap_or_else(|e| e.into_inner());
+        match known(&v) {
+            Some(first) => first,
+            None => {
+                v.push((key, t));
+                t
+            }
+        }
+    }
 }
 
 impl RenderJob {
@@ -74,7 +103,8 @@ impl RenderJob {
             scene,
             accel,
             camera,
-            pilots: Mutex::new(Vec::new()),
+            pilots: PilotCache::new(),
+            caustics_pilots: PilotCache::new(),
         }
     }
 
@@ -103,22 +133,18 @@ impl RenderJob {
             return (e, None);
         }
         let key = s.path_settings(&self.scene);
-        let known = |pilots: &[(PathSettings, Estimator, [PilotScore; 2])]| {
-            pilots
-                .iter()
-                .find(|(k, ..)| *k == key)
-                .map(|&(_, e, p)| (e, p))
-        };
-        if let Some((e, scores)) = known(&self.pilots.lock().unwrap_or_else(|e| e.into_inner())) {
-            return (e, Some(scores));
-        }
-        // Not under the lock: the pilot runs on rayon, whose threads may ask meanwhile.
-        let (e, scores) = pilot::choose(self, s);
-        let mut pilots = self.pilots.lock().unwrap_or_else(|e| e.into_inner());
-        if known(&pilots).is_none() {
-            pilots.push((key, e, scores));
-        }
+        let (e, scores) = self.pilots.get_or_run(key, || pilot::choose(self, s));
         (e, Some(scores))
+    }
+
+    /// How `Estimator::Caustics` shares a render with settings `s` between camera
+    /// samples and light paths: the caustics pilot's choice (`render::pilot`), run
+    /// once per job and path settings, so every band and sample range of a render
+    /// traces the same light paths. With its scores (camera part, light part).
+    pub fn caustics_split(&self, s: &RenderSettings) -> (CausticsSplit, [PilotScore; 2]) {
+        let key = s.path_settings(&self.scene);
+        self.caustics_pilots
+            .get_or_run(key, || pilot::caustics_split(self, s))
     }
 
     /// The whole image.

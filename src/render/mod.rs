@@ -322,9 +322,10 @@ fn render_rect(
             if !light_tracing::caustics_possible(scene, settings.max_depth) {
                 return pixels::render(&integrator, settings, None, frame, rect, progress, stop);
             }
+            let (split, _) = job.caustics_split(settings);
             let tracer = LightTracer::new(t);
-            let camera_share = ProgressShare::new(progress, false);
-            let light_share = ProgressShare::new(progress, true);
+            let camera_share = ProgressShare::new(progress, split.light_rays, false);
+            let light_share = ProgressShare::new(progress, split.light_rays, true);
             let camera_progress = |n| camera_share.report(n);
             let mut out = pixels::render(
                 &integrator,
@@ -335,7 +336,7 @@ fn render_rect(
                 &camera_progress,
                 stop,
             );
-            let paths = caustic_paths(settings, camera);
+            let paths = caustic_paths(settings, camera, split.divisor);
             let light_progress = |n| light_share.report(n);
             let caustics = splats::render(&tracer, camera, paths, rect, &light_progress, stop);
             for (p, c) in out.image.pixels.iter_mut().zip(&caustics.image.pixels) {
@@ -348,27 +349,30 @@ fn render_rect(
 }
 
 /// One part of a render of two parts, each counting the whole render's pixels: the
-/// camera samples report 4/5 of their count and the light paths the rest (their
-/// share of the time, about a fifth at a quarter as many paths as samples), so the
-/// bar moves through both and the two add up to the render's count.
+/// light paths report their predicted share of the rays (`CausticsSplit`) and the
+/// camera samples the rest, so the bar moves through both as the time does and the
+/// two add up to the render's count.
 struct ProgressShare<'a> {
     progress: &'a (dyn Fn(u64) + Sync),
     reported: AtomicU64,
+    /// The camera samples' share, in millionths.
+    camera_ppm: u64,
     light: bool,
 }
 
 impl<'a> ProgressShare<'a> {
-    fn new(progress: &'a (dyn Fn(u64) + Sync), light: bool) -> Self {
+    fn new(progress: &'a (dyn Fn(u64) + Sync), light_share: f64, light: bool) -> Self {
         ProgressShare {
             progress,
             reported: AtomicU64::new(0),
+            camera_ppm: ((1.0 - light_share.clamp(0.0, 1.0)) * 1e6).round() as u64,
             light,
         }
     }
 
     /// Of `n` pixels counted so far, how many this part reports: monotone in `n`.
     fn share(&self, n: u64) -> u64 {
-        let camera = n * 4 / 5;
+        let camera = (u128::from(n) * u128::from(self.camera_ppm) / 1_000_000) as u64;
         if self.light {
             n - camera
         } else {
@@ -383,14 +387,12 @@ impl<'a> ProgressShare<'a> {
 }
 
 /// The light paths of `Estimator::Caustics` for the camera samples `settings` takes:
-/// a quarter as many paths as pixels for each sample index, numbered by it, so the
-/// renders of disjoint sample ranges (`spp_offset`) merge into the render of all
-/// of them. Measured on CBspheres `-m 8` (160×120, 8 seeds, RMSE against the Mitsuba
-/// reference): with 64 camera samples, 8, 16 and 64 light paths per pixel gave
-/// 0.0146, 0.0139 and 0.0133, and the light paths cost about a quarter of the camera
-/// samples' time at 16; path tracing alone gave 0.0237 at 64 spp and 0.0165 at 128.
-fn caustic_paths(settings: &RenderSettings, camera: &Camera) -> std::ops::Range<u64> {
-    let per_sample = splats::pixel_count(camera).div_ceil(4);
+/// one path per `divisor` pixels for each sample index, numbered by it, so the
+/// renders of disjoint sample ranges (`spp_offset`) merge into the render of all of
+/// them. The divisor is the caustics pilot's (`pilot::CausticsSplit`), the same for
+/// every render of a job and its settings.
+fn caustic_paths(settings: &RenderSettings, camera: &Camera, divisor: u32) -> std::ops::Range<u64> {
+    let per_sample = splats::pixel_count(camera).div_ceil(u64::from(divisor.max(1)));
     let first = u64::from(settings.spp_offset);
     first * per_sample..(first + u64::from(settings.spp)) * per_sample
 }
@@ -472,8 +474,8 @@ mod tests {
             total.fetch_add(n, Ordering::Relaxed);
         };
         let (camera, light) = (
-            ProgressShare::new(&sink, false),
-            ProgressShare::new(&sink, true),
+            ProgressShare::new(&sink, 0.2, false),
+            ProgressShare::new(&sink, 0.2, true),
         );
         for n in [1, 7, 3, 0, 9] {
             camera.report(n);
