@@ -79,6 +79,8 @@ pub struct Row {
     /// Where light-traced caustics differ from path tracing
     /// (`light_tracing::caustics_possible`).
     pub caustics: Option<Cost>,
+    /// There: camera samples per light path, the caustics pilot's choice.
+    pub caustics_divisor: Option<u32>,
 }
 
 impl Row {
@@ -171,8 +173,10 @@ pub fn run(opts: &EstimatorsOptions, log: &mut dyn FnMut(&str)) -> Result<Estima
             Some(why) => Err(short_reason(why)),
             None => Ok(cost(&job, &base, Estimator::LightTracing, opts)),
         };
-        let caustics = light_tracing::caustics_possible(&job.scene, opts.max_depth)
-            .then(|| cost(&job, &base, Estimator::Caustics, opts));
+        // The caustics pilot runs here, as auto's pilot above, not in the timed renders.
+        let caustics_divisor = light_tracing::caustics_possible(&job.scene, opts.max_depth)
+            .then(|| job.caustics_split(&base).0.divisor);
+        let caustics = caustics_divisor.map(|_| cost(&job, &base, Estimator::Caustics, opts));
         rows.push(Row {
             scene: name,
             lights,
@@ -182,6 +186,7 @@ pub fn run(opts: &EstimatorsOptions, log: &mut dyn FnMut(&str)) -> Result<Estima
             path_misses_caustics: light_tracing::path_misses_caustics(&job.scene, opts.max_depth),
             light,
             caustics,
+            caustics_divisor,
         });
     }
     let settings = format!(
@@ -265,6 +270,7 @@ impl EstimatorsReport {
             "light tracing: noise²",
             "light tracing: s",
             "noise²·s, light tracing ÷ path",
+            "caustics: camera samples per light path",
             "caustics: noise²",
             "caustics: s",
             "noise²·s, caustics ÷ path",
@@ -297,6 +303,7 @@ impl EstimatorsReport {
                 format!("{:.3}", r.path.seconds),
             ];
             cells.extend(light);
+            cells.push(r.caustics_divisor.map_or("—".into(), |d| d.to_string()));
             cells.extend(caustics);
             cells.push(format!("{:.2}", r.pick_over_best()));
             t.push(cells);
@@ -340,6 +347,7 @@ mod tests {
             path_misses_caustics: false,
             light: Ok(c(light)),
             caustics: None,
+            caustics_divisor: None,
         }
     }
 
