@@ -6,7 +6,7 @@ use crate::common;
 use common::{load, render_halves, render_scene, repo};
 use ember::accel::{AccelKind, BvhBuilder};
 use ember::integrators::{DirectStrategy, Estimator};
-use ember::render::{Adaptive, RenderSettings, Shading};
+use ember::render::{Adaptive, RenderJob, RenderSettings, Shading};
 use std::path::Path;
 
 #[test]
@@ -235,21 +235,8 @@ fn auto_picks_the_estimator_with_less_noise_per_ray() {
         ("scenes/stability/point_light.dae", Estimator::Path),
     ];
     for (path, want) in cases {
-        let scene = load(path);
-        let pilot = |threads: usize, seed: u64| {
-            let pool = rayon::ThreadPoolBuilder::new()
-                .num_threads(threads)
-                .build()
-                .unwrap();
-            let job = common::job(&scene, 160, 120, AccelKind::Native(BvhBuilder::Sah));
-            let s = RenderSettings {
-                estimator: None,
-                max_depth: 5,
-                seed,
-                ..Default::default()
-            };
-            pool.install(|| job.estimator_choice(&s))
-        };
+        let pilot =
+            |threads, seed| on_pool(path, None, threads, seed, |job, s| job.estimator_choice(s));
         let (got, scores) = pilot(2, 0);
         let [path_score, light_score] = scores.expect("a pilot chose");
         assert_eq!(got, want, "{path}: {path_score:?} {light_score:?}");
@@ -264,6 +251,30 @@ fn auto_picks_the_estimator_with_less_noise_per_ray() {
         );
         assert_eq!(pilot(1, 7), (got, scores), "{path}");
     }
+}
+
+/// `ask` of a 160×120 job of the scene at `path` with `estimator`, `-m 5` and `seed`,
+/// run on a pool of `threads`: the pilots' choices must depend on neither.
+fn on_pool<T: Send>(
+    path: &str,
+    estimator: Option<Estimator>,
+    threads: usize,
+    seed: u64,
+    ask: impl FnOnce(&RenderJob, &RenderSettings) -> T + Send,
+) -> T {
+    let scene = load(path);
+    let pool = rayon::ThreadPoolBuilder::new()
+        .num_threads(threads)
+        .build()
+        .unwrap();
+    let job = common::job(&scene, 160, 120, AccelKind::Native(BvhBuilder::Sah));
+    let s = RenderSettings {
+        estimator,
+        max_depth: 5,
+        seed,
+        ..Default::default()
+    };
+    pool.install(|| ask(&job, &s))
 }
 
 /// `--integrator auto` light-traces caustics, by rule, wherever a light shines on
@@ -325,20 +336,11 @@ fn auto_light_traces_caustics_where_a_light_shines_on_mirrors_or_glass() {
 /// and sample range of a render traces the same light paths.
 #[test]
 fn caustics_pilot_shares_light_paths_by_their_noise_and_rays() {
-    let split = |path: &str, threads: usize, seed: u64| {
-        let scene = load(path);
-        let pool = rayon::ThreadPoolBuilder::new()
-            .num_threads(threads)
-            .build()
-            .unwrap();
-        let job = common::job(&scene, 160, 120, AccelKind::Native(BvhBuilder::Sah));
-        let s = RenderSettings {
-            estimator: Some(Estimator::Caustics),
-            max_depth: 5,
-            seed,
-            ..Default::default()
-        };
-        pool.install(|| job.caustics_split(&s))
+    let split = |path, threads, seed| {
+        let caustics = Some(Estimator::Caustics);
+        on_pool(path, caustics, threads, seed, |job, s| {
+            job.caustics_split(s)
+        })
     };
     let (carim, scores) = split("scenes/cmu462/basic/carim_glass.dae", 2, 0);
     let (cornell, _) = split("scenes/cornell.dae", 2, 0);
