@@ -2,7 +2,6 @@
 //! headers as string attributes and into PNG files as text chunks, read back by
 //! `ember info IMAGE`. Shard headers and merges reuse the same list.
 
-use crate::integrators::light_tracing::caustics_possible;
 use crate::integrators::{Estimator, Roulette};
 use crate::render::{Adaptive, RenderJob, RenderSettings, Shading, StopReason, StopRule};
 use std::path::Path;
@@ -163,17 +162,20 @@ pub fn adaptive_text(a: Option<&Adaptive>) -> String {
 /// tracing with its direct-lighting strategy.
 pub fn estimator_label(s: &RenderSettings, job: &RenderJob) -> String {
     let strategy = s.strategy_for(&job.scene);
-    match job.estimator(s) {
-        Estimator::LightTracing => Estimator::LightTracing.to_string(),
-        Estimator::Caustics if caustics_possible(&job.scene, s.max_depth) => {
-            let divisor = job.caustics_split(s).0.divisor;
-            let per = match divisor {
+    let e = job.estimator(s);
+    let split = (e == Estimator::Caustics)
+        .then(|| job.caustics_split(s))
+        .flatten();
+    match (e, split) {
+        (Estimator::LightTracing, _) => e.to_string(),
+        (_, Some((split, _))) => {
+            let per = match split.divisor {
                 1 => "1 light path per camera sample".to_string(),
                 d => format!("1 light path per {d} camera samples"),
             };
-            format!("{} ({strategy}, {per})", Estimator::Caustics)
+            format!("{e} ({strategy}, {per})")
         }
-        e => format!("{e} ({strategy})"),
+        (_, None) => format!("{e} ({strategy})"),
     }
 }
 

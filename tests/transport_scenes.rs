@@ -339,7 +339,7 @@ fn caustics_pilot_shares_light_paths_by_their_noise_and_rays() {
     let split = |path, threads, seed| {
         let caustics = Some(Estimator::Caustics);
         on_pool(path, caustics, threads, seed, |job, s| {
-            job.caustics_split(s)
+            job.caustics_split(s).expect("caustics are possible")
         })
     };
     let (carim, scores) = split("scenes/cmu462/basic/carim_glass.dae", 2, 0);

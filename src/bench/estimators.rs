@@ -174,8 +174,7 @@ pub fn run(opts: &EstimatorsOptions, log: &mut dyn FnMut(&str)) -> Result<Estima
             None => Ok(cost(&job, &base, Estimator::LightTracing, opts)),
         };
         // The caustics pilot runs here, as auto's pilot above, not in the timed renders.
-        let caustics_divisor = light_tracing::caustics_possible(&job.scene, opts.max_depth)
-            .then(|| job.caustics_split(&base).0.divisor);
+        let caustics_divisor = job.caustics_split(&base).map(|(split, _)| split.divisor);
         let caustics = caustics_divisor.map(|_| cost(&job, &base, Estimator::Caustics, opts));
         rows.push(Row {
             scene: name,

@@ -266,14 +266,14 @@ impl Estimator {
     /// - Path tracing with light-traced caustics (`Caustics`) wherever a light
     ///   shines on a mirror or glass surface and a surface that is neither can
     ///   receive the caustic (`light_tracing::caustics_possible`). From area lights
-    ///   it was 1.3–3.4× more efficient (noise² × time) than path tracing on every
-    ///   such shipped scene but CS184's CBcoil, where the two are level within the
-    ///   timing noise (BENCHMARKS §3); from point, spot and directional lights
-    ///   path tracing misses the caustic altogether. Not where emissive surfaces
-    ///   that are not lights sit in the scene. Only BSDF sampling finds those, at every bounce, so
-    ///   their noise dwarfs the caustics' (CMU462's `sky/CBspheres`, `CBgems` and
-    ///   `CBcoil`: 10× path tracing's noise on CS184's versions, and the same noise
-    ///   with light-traced caustics, for 1.15–1.4× the time).
+    ///   it was 1.15–2.6× more efficient (noise² × time) than path tracing on every
+    ///   such shipped scene, CS184's CBcoil the closest (BENCHMARKS §3); from point,
+    ///   spot and directional lights path tracing misses the caustic altogether.
+    ///   Not where emissive surfaces that are not lights sit in the scene. Only
+    ///   BSDF sampling finds those, at every bounce, so their noise dwarfs the
+    ///   caustics' (CMU462's `sky/CBspheres`, `CBgems` and `CBcoil`: 10× path
+    ///   tracing's noise on CS184's versions, and the same noise with light-traced
+    ///   caustics, for 1.01–1.11× the noise² × time).
     /// - Path tracing wherever light tracing cannot show the whole image (anything
     ///   specular or self-emitting, see `light_tracing`) and where any light is not a
     ///   point or spot light (area and environment lights are sampled well from the

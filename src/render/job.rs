@@ -8,7 +8,7 @@ use crate::accel::{self, Accel, AccelError, AccelKind};
 use crate::camera::Camera;
 use crate::color::luminance;
 use crate::film::Image;
-use crate::integrators::{Estimator, PathSettings};
+use crate::integrators::{light_tracing, Estimator, PathSettings};
 use crate::scene::Scene;
 use std::sync::Mutex;
 
@@ -141,10 +141,17 @@ impl RenderJob {
     /// samples and light paths: the caustics pilot's choice (`render::pilot`), run
     /// once per job and path settings, so every band and sample range of a render
     /// traces the same light paths. With its scores (camera part, light part).
-    pub fn caustics_split(&self, s: &RenderSettings) -> (CausticsSplit, [PilotScore; 2]) {
+    /// `None` where no light path can make a caustic
+    /// (`light_tracing::caustics_possible`): the estimator is path tracing alone.
+    pub fn caustics_split(&self, s: &RenderSettings) -> Option<(CausticsSplit, [PilotScore; 2])> {
+        if !light_tracing::caustics_possible(&self.scene, s.max_depth) {
+            return None;
+        }
         let key = s.path_settings(&self.scene);
-        self.caustics_pilots
-            .get_or_run(key, || pilot::caustics_split(self, s))
+        Some(
+            self.caustics_pilots
+                .get_or_run(key, || pilot::caustics_split(self, s)),
+        )
     }
 
     /// The whole image.

@@ -319,10 +319,9 @@ fn render_rect(
             let integrator = PathIntegrator::new(t);
             // Nothing to add where no light path can make a caustic (CMU462's glass
             // and mirror spheres, with no other surface to receive one).
-            if !light_tracing::caustics_possible(scene, settings.max_depth) {
+            let Some((split, _)) = job.caustics_split(settings) else {
                 return pixels::render(&integrator, settings, None, frame, rect, progress, stop);
-            }
-            let (split, _) = job.caustics_split(settings);
+            };
             let tracer = LightTracer::new(t);
             let camera_share = ProgressShare::new(progress, split.light_rays, false);
             let light_share = ProgressShare::new(progress, split.light_rays, true);
