@@ -29,6 +29,13 @@ pub fn render_scene(
     job(scene, width, height, AccelKind::Native(BvhBuilder::Sah)).render(settings)
 }
 
+/// The luminance (`y`) of every pixel of `out`, which must hold no NaN or infinite
+/// sample.
+pub fn finite_luminance(out: &RenderOutput) -> Vec<f64> {
+    assert_eq!(out.nonfinite_samples, 0);
+    out.image.pixels.iter().map(|p| p.y as f64).collect()
+}
+
 /// Two renders with independent seeds, and their average: the halves give the
 /// render's own noise the way the reference README measures it.
 pub struct HalfRenders {
