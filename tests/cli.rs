@@ -205,6 +205,73 @@ fn light_tracing_from_the_command_line_and_its_warning_on_glass() {
     assert!(r.stderr().contains("mirror or glass"), "{}", r.stderr());
 }
 
+/// `--simd` picks the instruction set of the packets and the node tests: the summary
+/// line names it and the image is the same bit for bit with each (scalar engine too);
+/// a set this CPU lacks is refused with a one-line error naming it.
+#[test]
+fn simd_flag_changes_the_speed_only() {
+    let dir = tempfile::tempdir().unwrap();
+    let scene = repo("scenes/cs184/sky/CBspheres.dae");
+    fn has(name: &str) -> bool {
+        match name {
+            "portable" => true,
+            #[cfg(target_arch = "x86_64")]
+            "avx2" => ["avx2", "bmi1", "bmi2", "lzcnt", "popcnt"]
+                .iter()
+                .all(|&f| detected(f)),
+            #[cfg(target_arch = "x86_64")]
+            "avx512" => {
+                has("avx2")
+                    && ["avx512f", "avx512dq", "avx512bw", "avx512vl"]
+                        .iter()
+                        .all(|&f| detected(f))
+            }
+            _ => false,
+        }
+    }
+    #[cfg(target_arch = "x86_64")]
+    fn detected(feature: &str) -> bool {
+        match feature {
+            "avx2" => std::is_x86_feature_detected!("avx2"),
+            "bmi1" => std::is_x86_feature_detected!("bmi1"),
+            "bmi2" => std::is_x86_feature_detected!("bmi2"),
+            "lzcnt" => std::is_x86_feature_detected!("lzcnt"),
+            "popcnt" => std::is_x86_feature_detected!("popcnt"),
+            "avx512f" => std::is_x86_feature_detected!("avx512f"),
+            "avx512dq" => std::is_x86_feature_detected!("avx512dq"),
+            "avx512bw" => std::is_x86_feature_detected!("avx512bw"),
+            "avx512vl" => std::is_x86_feature_detected!("avx512vl"),
+            _ => false,
+        }
+    }
+    let mut images = Vec::new();
+    for (simd, label) in [
+        ("portable", "(portable)"),
+        ("avx2", "(AVX2)"),
+        ("avx512", "(AVX-512)"),
+    ] {
+        for engine in ["auto", "scalar"] {
+            let out = dir.path().join(format!("{simd}_{engine}.exr"));
+            let mut cmd = command();
+            cmd.args(["--simd", simd, "--engine", engine, "-s", "4", "-m", "8"])
+                .args(["-r", "40", "30", "-f"])
+                .arg(&out)
+                .arg(&scene);
+            if !has(simd) {
+                run(&mut cmd).fails_with(&format!("--simd {simd}: this CPU has no"));
+                continue;
+            }
+            let r = run(&mut cmd).success();
+            if engine == "auto" {
+                assert!(r.stderr().contains(label), "{simd}: {}", r.stderr());
+            }
+            images.push(ember::image_io::read_image(&out).unwrap().pixels);
+        }
+    }
+    assert!(images.windows(2).all(|w| w[0] == w[1]));
+    run(command().args(["--simd", "sse9", "x.dae"])).fails_with("sse9");
+}
+
 /// Light-traced caustics from the command line: auto's choice for a scene with glass
 /// under an area light (path tracing with -a), named in the summary line, with parts
 /// (--shard, --spp-offset) and --time; refused with -a when asked for by name.

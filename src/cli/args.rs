@@ -58,6 +58,11 @@ pub struct Cli {
     /// the clone around the current directory or the executable.
     #[arg(long, global = true, value_name = "DIR")]
     pub data: Option<PathBuf>,
+    /// The instruction set the packets of sixteen paths (and the BVH's node tests) run with, for
+    /// comparing their speed: the image is the same bit for bit with every one. An error if this
+    /// CPU lacks it.
+    #[arg(long, global = true, value_enum, default_value_t = SimdChoice::Auto)]
+    pub simd: SimdChoice,
     #[command(flatten)]
     pub render: RenderArgs,
 }
@@ -193,6 +198,19 @@ pub struct PlacementArgs {
     /// the camera node's position (the course's rule when the file has no camera).
     #[arg(long = "camera-placement", value_enum, value_name = "PLACEMENT", default_value_t = CameraPlacement::Auto)]
     pub camera_placement: CameraPlacement,
+}
+
+/// `--simd`.
+#[derive(clap::ValueEnum, Clone, Copy, Debug, PartialEq, Eq)]
+pub enum SimdChoice {
+    /// The widest this CPU has.
+    Auto,
+    /// AVX-512 (F, DQ, BW and VL, with AVX2's): one instruction per sixteen lanes.
+    Avx512,
+    /// AVX2 (with BMI1, BMI2, LZCNT and POPCNT): two instructions per sixteen lanes.
+    Avx2,
+    /// Plain Rust over arrays of sixteen, for any CPU.
+    Portable,
 }
 
 /// `--camera-placement`.

@@ -5,8 +5,9 @@ use super::args::{
     BenchAccelArgs, BenchConvergeArgs, BenchEstimatorsArgs, BenchRenderArgs, BenchStabilityArgs,
     ReportArgs,
 };
-use super::args::{CameraPlacement, LensArgs, PlacementArgs, RenderArgs};
+use super::args::{CameraPlacement, LensArgs, PlacementArgs, RenderArgs, SimdChoice};
 use anyhow::{bail, Context, Result};
+use clap::ValueEnum;
 use ember::accel::Backend;
 #[cfg(feature = "bench")]
 use ember::bench;
@@ -217,6 +218,28 @@ pub(super) fn settings_from(args: &RenderArgs) -> Result<RenderSettings> {
         engine: args.engine,
         sampler: args.sampler,
     })
+}
+
+/// `--simd`: caps the instruction set `ember::lanes::dispatch` runs with, process-wide;
+/// an error where this CPU lacks the one asked for.
+pub(super) fn limit_simd(choice: SimdChoice) -> Result<()> {
+    use ember::lanes::{instruction_set, limit_instruction_set, InstructionSet};
+    let want = match choice {
+        SimdChoice::Auto => return Ok(()),
+        SimdChoice::Avx512 => InstructionSet::Avx512,
+        SimdChoice::Avx2 => InstructionSet::Avx2,
+        SimdChoice::Portable => InstructionSet::Portable,
+    };
+    limit_instruction_set(want);
+    let got = instruction_set();
+    if got != want {
+        let name = choice.to_possible_value().map(|v| v.get_name().to_string());
+        bail!(
+            "--simd {}: this CPU has no {want} (the widest instruction set it has is {got})",
+            name.unwrap_or_default()
+        );
+    }
+    Ok(())
 }
 
 /// `--integrator caustics` traces a fixed number of light paths per sample index,

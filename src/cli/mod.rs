@@ -111,6 +111,7 @@ pub fn run(cli: Cli) -> anyhow::Result<()> {
     if let Some(dir) = cli.data {
         ember::data::set_root(dir);
     }
+    convert::limit_simd(cli.simd)?;
     match cli.command {
         Some(Command::Info {
             path,

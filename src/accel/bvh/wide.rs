@@ -313,13 +313,15 @@ impl BoxTest for Avx2Boxes {
     }
 }
 
-/// Whether the SIMD box test (and the SIMD leaf test) can run on this CPU;
-/// detected once (the standard library caches the CPUID result).
+/// Whether the SIMD box test (and the SIMD leaf test) may run: this CPU has AVX2
+/// (the standard library caches the CPUID result) and the instruction-set cap
+/// (`--simd`) allows it.
 #[inline(always)]
 pub(crate) fn simd_available() -> bool {
     #[cfg(target_arch = "x86_64")]
     {
-        std::is_x86_feature_detected!("avx2")
+        use crate::lanes::{instruction_set_allowed, InstructionSet};
+        std::is_x86_feature_detected!("avx2") && instruction_set_allowed(InstructionSet::Avx2)
     }
     #[cfg(not(target_arch = "x86_64"))]
     {

@@ -493,6 +493,12 @@ pub fn limit_instruction_set(widest: InstructionSet) {
     LIMIT.store(widest as u8, Ordering::Relaxed);
 }
 
+/// Whether [`limit_instruction_set`]'s cap lets code use `set` (whether this CPU has
+/// it is asked apart): for code that picks its instructions without [`dispatch`].
+pub fn instruction_set_allowed(set: InstructionSet) -> bool {
+    LIMIT.load(Ordering::Relaxed) >= set as u8
+}
+
 /// The instruction set [`dispatch`] runs with now: the widest this CPU has,
 /// within [`limit_instruction_set`]'s cap.
 pub fn instruction_set() -> InstructionSet {
