@@ -272,6 +272,46 @@ fn simd_flag_changes_the_speed_only() {
     run(command().args(["--simd", "sse9", "x.dae"])).fails_with("sse9");
 }
 
+/// `ember bench render --simds` renders each instruction set in turn, a row each,
+/// named in the table, and leaves the process's cap as it was.
+#[cfg(feature = "bench")]
+#[test]
+fn bench_render_compares_instruction_sets() {
+    let dir = tempfile::tempdir().unwrap();
+    let scene = repo("scenes/cs184/sky/CBspheres_lambertian.dae");
+    let mut c = command();
+    c.args([
+        "bench",
+        "render",
+        "--simds",
+        "portable,auto",
+        "--engines",
+        "auto",
+    ])
+    .args([
+        "--accel",
+        "native",
+        "--repeats",
+        "1",
+        "-s",
+        "1",
+        "-m",
+        "1",
+        "--out",
+    ])
+    .arg(dir.path())
+    .arg(&scene);
+    run(&mut c).success();
+    let md = std::fs::read_to_string(dir.path().join("render.md")).unwrap();
+    let rows: Vec<&str> = md.lines().skip(2).collect();
+    assert_eq!(rows.len(), 2, "{md}");
+    assert!(rows[0].contains("packets (portable) | portable |"), "{md}");
+    assert!(
+        !rows[1].contains("portable"),
+        "auto is the widest set: {md}"
+    );
+}
+
 /// Light-traced caustics from the command line: auto's choice for a scene with glass
 /// under an area light (path tracing with -a), named in the summary line, with parts
 /// (--shard, --spp-offset) and --time; refused with -a when asked for by name.

@@ -7,6 +7,7 @@
 use super::table::Table;
 use super::{create_out_dir, Report};
 use crate::accel::{AccelKind, Backend, BvhBuilder, EmbreeQuality};
+use crate::lanes::InstructionSet;
 use crate::render::{Engine, RenderJob, RenderSettings};
 use crate::scene::collada;
 use anyhow::Result;
@@ -24,6 +25,10 @@ pub struct RenderBenchOptions {
     pub accels: Vec<AccelKind>,
     /// Engines to compare, each a row per backend.
     pub engines: Vec<Engine>,
+    /// Instruction sets to compare (the packets' and the node tests'), each a row per
+    /// engine and backend; the set is capped for each render in turn
+    /// (`lanes::limit_instruction_set`) and the cap put back after.
+    pub instruction_sets: Vec<InstructionSet>,
 }
 
 impl RenderBenchOptions {
@@ -71,6 +76,7 @@ impl Default for RenderBenchOptions {
             repeat: 3,
             accels: RenderBenchOptions::accels_for(Backend::Auto, false),
             engines: vec![Engine::Auto, Engine::Scalar],
+            instruction_sets: vec![crate::lanes::instruction_set()],
         }
     }
 }
@@ -86,6 +92,8 @@ pub struct RenderBenchRow {
     /// The engine asked for, and what ran ("packets (AVX-512)", "scalar").
     pub engine: Engine,
     pub ran: String,
+    /// The instruction set the render was capped at.
+    pub instruction_set: InstructionSet,
     /// The backend asked for, and its full name as built (Embree's version, ISA and
     /// mode: the variant measured).
     pub accel: AccelKind,
@@ -146,49 +154,23 @@ fn measure(path: &Path, opts: &RenderBenchOptions) -> Result<Vec<RenderBenchRow>
         strategy: None,
         ..Default::default()
     };
-    let cases: Vec<(Engine, AccelKind)> = opts
-        .engines
-        .iter()
-        .flat_map(|&e| opts.accels.iter().map(move |&a| (e, a)))
+    let cases: Vec<(Engine, InstructionSet, AccelKind)> = (opts.engines.iter())
+        .flat_map(|&e| opts.instruction_sets.iter().map(move |&i| (e, i)))
+        .flat_map(|(e, i)| opts.accels.iter().map(move |&a| (e, i, a)))
         .collect();
     let mut runs: Vec<Vec<Run>> = vec![Vec::new(); cases.len()];
-
-    for _ in 0..opts.repeat.max(1) {
-        for (k, &(engine, accel)) in cases.iter().enumerate() {
-            let settings = RenderSettings {
-                engine,
-                ..base.clone()
-            };
-            let t0 = Instant::now();
-            let scene = collada::load(path)?;
-            let load_s = t0.elapsed().as_secs_f64();
-            let t1 = Instant::now();
-            // A device per build, as a render makes it (with Embree 4's TBB, a scene of
-            // Embree's own spheres leaves a worker yielding in a loop for as long as its
-            // device lives: it must not outlive its own render).
-            let job = RenderJob::new(scene, accel, WIDTH, HEIGHT)?;
-            let build_s = t1.elapsed().as_secs_f64();
-            let ran = if settings.uses_packets() {
-                format!("packets ({})", crate::lanes::instruction_set())
-            } else {
-                "scalar".into()
-            };
-            let (t2, cpu) = (Instant::now(), cpu_seconds());
-            let out = job.render(&settings);
-            let render_s = t2.elapsed().as_secs_f64();
-            let cpu_s = cpu_seconds() - cpu;
-            let samples = out.total_samples();
-            runs[k].push((
-                render_s,
-                load_s,
-                build_s,
-                samples,
-                ran,
-                job.accel.name(),
-                cpu_s,
-            ));
+    let cap = crate::lanes::instruction_set_limit();
+    let measured = (|| {
+        for _ in 0..opts.repeat.max(1) {
+            for (k, &(engine, set, accel)) in cases.iter().enumerate() {
+                crate::lanes::limit_instruction_set(set);
+                runs[k].push(render_once(path, &base, engine, accel)?);
+            }
         }
-    }
+        Ok::<_, anyhow::Error>(())
+    })();
+    crate::lanes::limit_instruction_set(cap);
+    measured?;
     let scene = path
         .file_name()
         .map(|s| s.to_string_lossy().into_owned())
@@ -197,7 +179,7 @@ fn measure(path: &Path, opts: &RenderBenchOptions) -> Result<Vec<RenderBenchRow>
     Ok(runs
         .into_iter()
         .zip(cases)
-        .map(|(mut runs, (engine, accel))| {
+        .map(|(mut runs, (engine, instruction_set, accel))| {
             let mut cpu: Vec<f64> = runs.iter().map(|r| r.6).collect();
             let cpu_s = super::median(&mut cpu);
             runs.sort_by(|a, b| a.0.total_cmp(&b.0));
@@ -207,6 +189,7 @@ fn measure(path: &Path, opts: &RenderBenchOptions) -> Result<Vec<RenderBenchRow>
                 scene: scene.clone(),
                 engine,
                 ran,
+                instruction_set,
                 accel,
                 backend,
                 threads,
@@ -222,6 +205,47 @@ fn measure(path: &Path, opts: &RenderBenchOptions) -> Result<Vec<RenderBenchRow>
         .collect())
 }
 
+/// One load, build and render of the scene at `path` with `engine` and `accel`.
+fn render_once(
+    path: &Path,
+    base: &RenderSettings,
+    engine: Engine,
+    accel: AccelKind,
+) -> Result<Run> {
+    let settings = RenderSettings {
+        engine,
+        ..base.clone()
+    };
+    let t0 = Instant::now();
+    let scene = collada::load(path)?;
+    let load_s = t0.elapsed().as_secs_f64();
+    let t1 = Instant::now();
+    // A device per build, as a render makes it (with Embree 4's TBB, a scene of
+    // Embree's own spheres leaves a worker yielding in a loop for as long as its
+    // device lives: it must not outlive its own render).
+    let job = RenderJob::new(scene, accel, WIDTH, HEIGHT)?;
+    let build_s = t1.elapsed().as_secs_f64();
+    let ran = if settings.uses_packets() {
+        format!("packets ({})", crate::lanes::instruction_set())
+    } else {
+        "scalar".into()
+    };
+    let (t2, cpu) = (Instant::now(), cpu_seconds());
+    let out = job.render(&settings);
+    let render_s = t2.elapsed().as_secs_f64();
+    let cpu_s = cpu_seconds() - cpu;
+    let samples = out.total_samples();
+    Ok((
+        render_s,
+        load_s,
+        build_s,
+        samples,
+        ran,
+        job.accel.name(),
+        cpu_s,
+    ))
+}
+
 impl RenderBenchReport {
     /// One line per scene, engine and backend; "÷ native" is a row's render-only
     /// samples/s over the native row's of the same scene and engine, by wall time and
@@ -232,6 +256,7 @@ impl RenderBenchReport {
             "resolution",
             "threads",
             "engine",
+            "instruction set",
             "backend",
             "Embree variant",
             "spp",
@@ -250,6 +275,7 @@ impl RenderBenchReport {
             let native = self.rows.iter().find(|o| {
                 o.scene == r.scene
                     && o.engine == r.engine
+                    && o.instruction_set == r.instruction_set
                     && matches!(o.accel, AccelKind::Native(BvhBuilder::Sah))
             });
             t.push(vec![
@@ -257,6 +283,7 @@ impl RenderBenchReport {
                 format!("{WIDTH}×{HEIGHT}"),
                 r.threads.to_string(),
                 format!("{} → {}", r.engine, r.ran),
+                r.instruction_set.to_string(),
                 r.backend.clone(),
                 embree_variant(r.accel),
                 r.spp.to_string(),
@@ -317,6 +344,7 @@ mod tests {
             scene: "s.dae".into(),
             engine: Engine::Auto,
             ran: "packets (AVX2)".into(),
+            instruction_set: InstructionSet::Avx2,
             accel,
             backend: match accel {
                 AccelKind::Embree(_) => {
@@ -344,7 +372,7 @@ mod tests {
             ],
         };
         let md = report.table().to_markdown();
-        assert!(md.contains("| s.dae | 480×360 | 2 | auto → packets (AVX2) | native BVH (binned SAH) | — | 64 | 5 | 10.00 | 1.00 |"), "{md}");
+        assert!(md.contains("| s.dae | 480×360 | 2 | auto → packets (AVX2) | AVX2 | native BVH (binned SAH) | — | 64 | 5 | 10.00 | 1.00 |"), "{md}");
         assert!(
             md.contains(
                 "(medium robust) | medium robust: packet8 queries, retry self-hits, ember spheres | 64 | 5 | 9.00 | 0.90 |"

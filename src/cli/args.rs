@@ -326,6 +326,10 @@ pub struct BenchRenderArgs {
     /// Engines to compare, in turn within each repetition (a row per backend each).
     #[arg(long, value_parser = named::<Engine>(), value_delimiter = ',', default_value = "auto,scalar")]
     pub engines: Vec<Engine>,
+    /// Instruction sets to compare (as --simd: auto, avx512, avx2, portable), in turn within each
+    /// repetition, a row per engine and backend each. Default: --simd's.
+    #[arg(long, value_enum, value_delimiter = ',', default_value = "auto")]
+    pub simds: Vec<SimdChoice>,
     /// Output folder (render.csv, render.md).
     #[arg(long, default_value = "bench-out/render")]
     pub out: PathBuf,

@@ -223,23 +223,36 @@ pub(super) fn settings_from(args: &RenderArgs) -> Result<RenderSettings> {
 /// `--simd`: caps the instruction set `ember::lanes::dispatch` runs with, process-wide;
 /// an error where this CPU lacks the one asked for.
 pub(super) fn limit_simd(choice: SimdChoice) -> Result<()> {
-    use ember::lanes::{instruction_set, limit_instruction_set, InstructionSet};
+    if choice != SimdChoice::Auto {
+        ember::lanes::limit_instruction_set(instruction_set_for(choice, "--simd")?);
+    }
+    Ok(())
+}
+
+/// The instruction set `choice` names (auto: the one `--simd` leaves); an error,
+/// naming `flag`, where this CPU lacks it.
+fn instruction_set_for(choice: SimdChoice, flag: &str) -> Result<ember::lanes::InstructionSet> {
+    use ember::lanes::InstructionSet;
+    use ember::lanes::{instruction_set, instruction_set_limit, limit_instruction_set};
     let want = match choice {
-        SimdChoice::Auto => return Ok(()),
+        SimdChoice::Auto => return Ok(instruction_set()),
         SimdChoice::Avx512 => InstructionSet::Avx512,
         SimdChoice::Avx2 => InstructionSet::Avx2,
         SimdChoice::Portable => InstructionSet::Portable,
     };
+    // What this CPU runs under the cap `want`, the cap put back after.
+    let cap = instruction_set_limit();
     limit_instruction_set(want);
     let got = instruction_set();
+    limit_instruction_set(cap);
     if got != want {
         let name = choice.to_possible_value().map(|v| v.get_name().to_string());
         bail!(
-            "--simd {}: this CPU has no {want} (the widest instruction set it has is {got})",
+            "{flag} {}: this CPU has no {want} (the widest instruction set it has is {got})",
             name.unwrap_or_default()
         );
     }
-    Ok(())
+    Ok(want)
 }
 
 /// `--integrator caustics` traces a fixed number of light paths per sample index,
@@ -392,6 +405,9 @@ pub(super) fn bench_render_options(
         repeat: a.repeats.max(1),
         accels: bench::render::RenderBenchOptions::accels_for(a.accel, a.embree_steps),
         engines: a.engines,
+        instruction_sets: (a.simds.into_iter())
+            .map(|c| instruction_set_for(c, "--simds"))
+            .collect::<Result<_>>()?,
     })
 }
 

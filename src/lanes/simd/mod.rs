@@ -493,6 +493,15 @@ pub fn limit_instruction_set(widest: InstructionSet) {
     LIMIT.store(widest as u8, Ordering::Relaxed);
 }
 
+/// [`limit_instruction_set`]'s cap now.
+pub fn instruction_set_limit() -> InstructionSet {
+    match LIMIT.load(Ordering::Relaxed) {
+        x if x >= InstructionSet::Avx512 as u8 => InstructionSet::Avx512,
+        x if x >= InstructionSet::Avx2 as u8 => InstructionSet::Avx2,
+        _ => InstructionSet::Portable,
+    }
+}
+
 /// Whether [`limit_instruction_set`]'s cap lets code use `set` (whether this CPU has
 /// it is asked apart): for code that picks its instructions without [`dispatch`].
 pub fn instruction_set_allowed(set: InstructionSet) -> bool {
