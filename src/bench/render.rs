@@ -247,9 +247,10 @@ fn render_once(
 }
 
 impl RenderBenchReport {
-    /// One line per scene, engine and backend; "÷ native" is a row's render-only
-    /// samples/s over the native row's of the same scene and engine, by wall time and
-    /// by CPU time (the figure to read on a machine other work keeps busy).
+    /// One line per scene, engine, instruction set and backend; "÷ native" is a row's
+    /// render-only samples/s over the native row's of the same scene, engine and
+    /// instruction set, by wall time and by CPU time (the figure to read on a machine
+    /// other work keeps busy).
     pub fn table(&self) -> Table {
         let mut t = Table::new([
             "scene",
