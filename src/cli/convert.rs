@@ -232,23 +232,18 @@ pub(super) fn limit_simd(choice: SimdChoice) -> Result<()> {
 /// The instruction set `choice` names (auto: the one `--simd` leaves); an error,
 /// naming `flag`, where this CPU lacks it.
 fn instruction_set_for(choice: SimdChoice, flag: &str) -> Result<ember::lanes::InstructionSet> {
-    use ember::lanes::InstructionSet;
-    use ember::lanes::{instruction_set, instruction_set_limit, limit_instruction_set};
+    use ember::lanes::{instruction_set, widest_instruction_set, InstructionSet};
     let want = match choice {
         SimdChoice::Auto => return Ok(instruction_set()),
         SimdChoice::Avx512 => InstructionSet::Avx512,
         SimdChoice::Avx2 => InstructionSet::Avx2,
         SimdChoice::Portable => InstructionSet::Portable,
     };
-    // What this CPU runs under the cap `want`, the cap put back after.
-    let cap = instruction_set_limit();
-    limit_instruction_set(want);
-    let got = instruction_set();
-    limit_instruction_set(cap);
-    if got != want {
+    let widest = widest_instruction_set();
+    if want > widest {
         let name = choice.to_possible_value().map(|v| v.get_name().to_string());
         bail!(
-            "{flag} {}: this CPU has no {want} (the widest instruction set it has is {got})",
+            "{flag} {}: this CPU has no {want} (the widest instruction set it has is {widest})",
             name.unwrap_or_default()
         );
     }

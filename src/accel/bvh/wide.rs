@@ -320,8 +320,8 @@ impl BoxTest for Avx2Boxes {
 pub(crate) fn simd_available() -> bool {
     #[cfg(target_arch = "x86_64")]
     {
-        use crate::lanes::{instruction_set_allowed, InstructionSet};
-        std::is_x86_feature_detected!("avx2") && instruction_set_allowed(InstructionSet::Avx2)
+        use crate::lanes::{instruction_set_limit, InstructionSet};
+        std::is_x86_feature_detected!("avx2") && instruction_set_limit() >= InstructionSet::Avx2
     }
     #[cfg(not(target_arch = "x86_64"))]
     {

@@ -493,7 +493,8 @@ pub fn limit_instruction_set(widest: InstructionSet) {
     LIMIT.store(widest as u8, Ordering::Relaxed);
 }
 
-/// [`limit_instruction_set`]'s cap now.
+/// [`limit_instruction_set`]'s cap now (code that picks its instructions without
+/// [`dispatch`] asks it too).
 pub fn instruction_set_limit() -> InstructionSet {
     match LIMIT.load(Ordering::Relaxed) {
         x if x >= InstructionSet::Avx512 as u8 => InstructionSet::Avx512,
@@ -502,10 +503,18 @@ pub fn instruction_set_limit() -> InstructionSet {
     }
 }
 
-/// Whether [`limit_instruction_set`]'s cap lets code use `set` (whether this CPU has
-/// it is asked apart): for code that picks its instructions without [`dispatch`].
-pub fn instruction_set_allowed(set: InstructionSet) -> bool {
-    LIMIT.load(Ordering::Relaxed) >= set as u8
+/// The widest instruction set this CPU has, whatever the cap.
+pub fn widest_instruction_set() -> InstructionSet {
+    #[cfg(target_arch = "x86_64")]
+    {
+        if Avx512::detect().is_some() {
+            return InstructionSet::Avx512;
+        }
+        if Avx2::detect().is_some() {
+            return InstructionSet::Avx2;
+        }
+    }
+    InstructionSet::Portable
 }
 
 /// The instruction set [`dispatch`] runs with now: the widest this CPU has,
@@ -515,18 +524,7 @@ pub fn instruction_set() -> InstructionSet {
         // What the unit tests' `dispatch` runs.
         return InstructionSet::Portable;
     }
-    let limit = LIMIT.load(Ordering::Relaxed);
-    #[cfg(target_arch = "x86_64")]
-    {
-        if limit >= InstructionSet::Avx512 as u8 && Avx512::detect().is_some() {
-            return InstructionSet::Avx512;
-        }
-        if limit >= InstructionSet::Avx2 as u8 && Avx2::detect().is_some() {
-            return InstructionSet::Avx2;
-        }
-    }
-    let _ = limit;
-    InstructionSet::Portable
+    widest_instruction_set().min(instruction_set_limit())
 }
 
 /// Runs `task` with [`instruction_set`].
