@@ -39,25 +39,25 @@ const CASES: &[Case] = &[
         scene: "scenes/cs184/sky/CBspheres_lambertian.dae",
         max_depth: 1,
         strategy: DirectStrategy::Light,
-        expected: 0x99df_b0d0_7e67_ecf0,
+        expected: 0x37d4_86a0_b90c_e3a1,
     },
     Case {
         scene: "scenes/cs184/sky/CBspheres_lambertian.dae",
         max_depth: 5,
         strategy: DirectStrategy::Mis,
-        expected: 0xc440_6dd0_d9d8_45e6,
+        expected: 0x0cf2_bcf1_65da_bd13,
     },
     Case {
         scene: "scenes/cs184/sky/CBspheres.dae",
         max_depth: 5,
         strategy: DirectStrategy::Light,
-        expected: 0x7a25_a171_8c2f_29ce,
+        expected: 0x22bb_f52f_435d_a273,
     },
     Case {
         scene: "scenes/cs184/sky/CBbunny_microfacet_cu.dae",
         max_depth: 5,
         strategy: DirectStrategy::Mis,
-        expected: 0xc90f_3a6b_4232_e630,
+        expected: 0x0756_1b27_4f4b_4663,
     },
 ];
 

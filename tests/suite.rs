@@ -19,6 +19,7 @@ mod camera_placement;
 mod cli;
 mod cli_hardening;
 mod cycles_peer;
+mod emitter_edges;
 mod env_light;
 mod export_mitsuba;
 mod farm_dask;

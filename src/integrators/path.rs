@@ -120,6 +120,7 @@ impl PathIntegrator<'_> {
             y: 0,
             first: index,
             count: 1,
+            camera_emission: true,
         }];
         let mut kernel = Kernel::new(One, self, &block, &|| false);
         kernel.first_ray = Some((o, d, key));
@@ -215,6 +216,8 @@ struct Kernel<'k, 'a, L: Lanes> {
     first_diffuse: LaneBits,
     /// Lanes whose camera ray met a surface.
     met_surface: LaneBits,
+    /// Lanes whose block leaves out emission seen directly (`PixelSamples::camera_emission`).
+    no_camera_emission: LaneBits,
     slots: Slots,
     /// Next sample to start, as (block, sample).
     next: (usize, u32),
@@ -257,6 +260,7 @@ impl<'k, 'a, L: Lanes> Kernel<'k, 'a, L> {
             prev_delta: 0,
             first_diffuse: 0,
             met_surface: 0,
+            no_camera_emission: 0,
             slots: Slots {
                 block: [usize::MAX; SLOTS],
                 key: [0; SLOTS],
@@ -328,6 +332,13 @@ impl<'k, 'a, L: Lanes> Kernel<'k, 'a, L> {
     #[inline(always)]
     fn counts(&self, lanes: LaneBits) -> LaneBits {
         self.depth.counts(self.l, &self.it.t.s, lanes)
+    }
+
+    /// Lanes where emission found by the current ray counts: all but camera rays of
+    /// blocks that leave it out.
+    #[inline(always)]
+    fn emission_counted(&self) -> LaneBits {
+        self.has_prev | !self.no_camera_emission
     }
 
     /// Lanes of `lanes` at the depth cap.
@@ -417,6 +428,8 @@ impl<'k, 'a, L: Lanes> Kernel<'k, 'a, L> {
             (xy[0][i], xy[1][i]) = (block.x as f32, block.y as f32);
             self.slot[i] = slot as u32;
             self.sample[i] = sample;
+            let skip = LaneBits::from(!block.camera_emission) << i;
+            self.no_camera_emission = (self.no_camera_emission & !(1 << i)) | skip;
             fresh |= 1 << i;
             self.next = if sample + 1 < block.count {
                 (b, sample + 1)
@@ -615,7 +628,7 @@ impl<'k, 'a, L: Lanes> Kernel<'k, 'a, L> {
     /// Light from the lights at infinity reaching the escaped rays of `lanes`.
     #[inline(always)]
     fn escaped(&mut self, lanes: LaneBits, w: V3<L::F>) {
-        let lanes = self.counts(lanes);
+        let lanes = self.counts(lanes) & self.emission_counted();
         if lanes == 0 {
             return;
         }
@@ -637,6 +650,7 @@ impl<'k, 'a, L: Lanes> Kernel<'k, 'a, L> {
     #[inline(always)]
     fn emitted(&mut self, lanes: LaneBits, hit: &Hits<L>, w: V3<L::F>) {
         let scene = self.it.t.scene;
+        let lanes = lanes & self.emission_counted();
         let cos_out = (-w).dot(hit.ng).to_array();
         let on_light = !self.l.u_from(hit.light).eq(self.l.u(NO_LIGHT)).bits();
         let camera_on_light = lanes & on_light & !self.has_prev;

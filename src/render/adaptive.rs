@@ -48,6 +48,9 @@ pub struct PixelStats {
     /// Whether a camera ray of the pixel met a surface (followed only while every
     /// sample is zero: `PixelStats::is_empty`).
     pub met_surface: bool,
+    /// The mean of the pixel's emitter-only samples, added to its samples' mean
+    /// (`render::edges`; zero elsewhere).
+    pub emitters: Color,
     first: Color,
 }
 
@@ -113,7 +116,7 @@ impl PixelStats {
     }
 
     pub fn mean(&self) -> Color {
-        self.sum / self.n.max(1) as f32
+        self.sum / self.n.max(1) as f32 + self.emitters
     }
 }
 

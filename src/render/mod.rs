@@ -5,6 +5,7 @@
 //! `RenderJob` (job.rs) owns what is rendered.
 
 pub mod adaptive;
+mod edges;
 mod job;
 mod memory;
 pub mod pilot;
@@ -32,6 +33,8 @@ use crate::names::{display_from_table, Named};
 use crate::sampling::SamplerKind;
 use crate::scene::Scene;
 use crate::Color;
+use edges::EmitterEdges;
+use pixels::Emitters;
 use std::sync::atomic::{AtomicU64, Ordering};
 
 /// What each pixel shows.
@@ -123,9 +126,16 @@ pub struct RenderSettings {
     /// shards, `--spp-offset`) merge into one render of all of them. Not with `adaptive`.
     pub spp_offset: u32,
     pub engine: Engine,
+    /// Emitter-only camera rays per pixel sample in the pixels an emitter's edge
+    /// crosses, which estimate emission seen directly there (`edges.rs`); 0: none.
+    pub emitter_edges: u32,
 }
 
 impl RenderSettings {
+    /// Emitter-only samples per pixel sample where emitters' edges cross pixels:
+    /// measured on CBbunny `-m 5` (BENCHMARKS §3).
+    pub const DEFAULT_EMITTER_EDGES: u32 = 16;
+
     /// The direct-lighting estimator these settings use for `scene`.
     pub fn strategy_for(&self, scene: &Scene) -> DirectStrategy {
         self.strategy
@@ -201,6 +211,7 @@ impl Default for RenderSettings {
             sampler: SamplerKind::default(),
             spp_offset: 0,
             engine: Engine::Auto,
+            emitter_edges: RenderSettings::DEFAULT_EMITTER_EDGES,
         }
     }
 }
@@ -300,7 +311,16 @@ fn render_rect(
             seed: settings.seed,
             sampler: settings.sampler,
         };
-        return pixels::render(&debug, settings, None, frame, rect, progress, stop);
+        return pixels::render(
+            &debug,
+            Emitters(None),
+            settings,
+            None,
+            frame,
+            rect,
+            progress,
+            stop,
+        );
     }
     let mut t = settings.tracing(scene, accel, camera);
     match job.estimator(settings) {
@@ -311,16 +331,37 @@ fn render_rect(
         }
         Estimator::Path => {
             let integrator = PathIntegrator::new(t);
-            let adaptive = settings.adaptive;
-            pixels::render(&integrator, settings, adaptive, frame, rect, progress, stop)
+            let edges = EmitterEdges::new(t, settings.emitter_edges);
+            let (emitters, adaptive) = (Emitters(edges.as_ref()), settings.adaptive);
+            pixels::render(
+                &integrator,
+                emitters,
+                settings,
+                adaptive,
+                frame,
+                rect,
+                progress,
+                stop,
+            )
         }
         Estimator::Caustics => {
             t.s.caustics_by_light = true;
             let integrator = PathIntegrator::new(t);
+            let edges = EmitterEdges::new(t, settings.emitter_edges);
+            let emitters = Emitters(edges.as_ref());
             // Nothing to add where no light path can make a caustic (CMU462's glass
             // and mirror spheres, with no other surface to receive one).
             let Some((split, _)) = job.caustics_split(settings) else {
-                return pixels::render(&integrator, settings, None, frame, rect, progress, stop);
+                return pixels::render(
+                    &integrator,
+                    emitters,
+                    settings,
+                    None,
+                    frame,
+                    rect,
+                    progress,
+                    stop,
+                );
             };
             let tracer = LightTracer::new(t);
             let camera_share = ProgressShare::new(progress, split.light_rays, false);
@@ -328,6 +369,7 @@ fn render_rect(
             let camera_progress = |n| camera_share.report(n);
             let mut out = pixels::render(
                 &integrator,
+                emitters,
                 settings,
                 None,
                 frame,

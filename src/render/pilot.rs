@@ -180,7 +180,16 @@ fn render(
     }
     let integrator = PathIntegrator::new(t);
     let frame = (camera.width, camera.height);
-    pixels::render(&integrator, &settings, None, frame, rect, quiet, never)
+    pixels::render(
+        &integrator,
+        pixels::Emitters(None),
+        &settings,
+        None,
+        frame,
+        rect,
+        quiet,
+        never,
+    )
 }
 
 /// An accelerator that counts the rays it is asked to trace.

@@ -4,6 +4,7 @@
 
 use super::adaptive::NEIGHBOUR_RADIUS;
 use super::adaptive::{may_stop, min_samples_if_zero, neighbour_hit_rates, PixelStats};
+use super::edges::{EmitterEdges, Marks};
 use super::{Adaptive, PixelRect, RenderOutput, RenderSettings, StopRule, StopToken};
 use crate::film::Image;
 use crate::integrators::{PixelSamples, SampleIntegrator};
@@ -12,12 +13,62 @@ use rayon::prelude::*;
 /// Tiles are `TILE × TILE` pixels.
 pub(super) const TILE: u32 = 16;
 
+/// How a render estimates emission seen directly: with its pixel samples, or apart
+/// where emitters' edges cross pixels (`edges.rs`).
+#[derive(Clone, Copy)]
+pub(super) struct Emitters<'e, 'a>(pub Option<&'e EmitterEdges<'a>>);
+
+/// Pixel samples and the emitter-only samples of the pixels `marks` holds.
+#[derive(Clone, Copy)]
+struct Sampling<'s, 'a> {
+    integrator: &'s dyn SampleIntegrator,
+    edges: Option<(&'s EmitterEdges<'a>, &'s Marks)>,
+}
+
+impl Sampling<'_, '_> {
+    /// Samples `first .. first + count` of pixel `p`.
+    fn block(&self, p: (u32, u32), first: u32, count: u32) -> PixelSamples {
+        let marked = self.edges.is_some_and(|(_, m)| m.get(p));
+        PixelSamples {
+            x: p.0,
+            y: p.1,
+            first,
+            count,
+            camera_emission: !marked,
+        }
+    }
+
+    /// Adds to the marked pixels among `pixels` (that have samples, numbered from
+    /// `first`) their emitter-only estimate.
+    fn add_emitters(&self, pixels: &[(u32, u32)], stats: &mut [PixelStats], first: u32) {
+        let Some((edges, marks)) = self.edges else {
+            return;
+        };
+        let todo: Vec<usize> = (0..pixels.len())
+            .filter(|&i| marks.get(pixels[i]) && stats[i].n > 0)
+            .collect();
+        if todo.is_empty() {
+            return;
+        }
+        let asked: Vec<_> = todo
+            .iter()
+            .map(|&i| (pixels[i], first, stats[i].n))
+            .collect();
+        for (&i, (mean, bad)) in todo.iter().zip(edges.estimate(&asked)) {
+            stats[i].emitters = mean;
+            stats[i].nonfinite += bad;
+        }
+    }
+}
+
 /// Renders pixels `rect` with `integrator`: `settings.spp` samples per pixel from
 /// `settings.spp_offset`, or adaptively. `progress` is called with the number of
 /// pixels finished; once `stop` says so, pixels not started are left black with 0
 /// samples.
+#[allow(clippy::too_many_arguments)]
 pub(super) fn render(
     integrator: &dyn SampleIntegrator,
+    emitters: Emitters,
     settings: &RenderSettings,
     adaptive: Option<Adaptive>,
     frame: (u32, u32),
@@ -26,17 +77,27 @@ pub(super) fn render(
     stop: &StopToken,
 ) -> RenderOutput {
     let spp = settings.spp.max(1);
+    let marks_over = |r: PixelRect| match emitters.0 {
+        Some(e) => e.marks(frame, r),
+        None => Marks::none(),
+    };
     let stats = match adaptive {
-        None => fixed(
-            integrator,
-            spp,
-            settings.spp_offset,
-            false,
-            rect,
-            progress,
-            stop,
-        ),
-        Some(a) => adaptively(integrator, spp, a, frame, rect, progress, stop),
+        None => {
+            let marks = marks_over(rect);
+            let s = Sampling {
+                integrator,
+                edges: emitters.0.map(|e| (e, &marks)),
+            };
+            fixed(s, spp, settings.spp_offset, false, rect, progress, stop)
+        }
+        Some(a) => {
+            let marks = marks_over(halo(a, frame, rect));
+            let s = Sampling {
+                integrator,
+                edges: emitters.0.map(|e| (e, &marks)),
+            };
+            adaptively(s, spp, a, frame, rect, progress, stop)
+        }
     };
     let mut image = Image::new(rect.width(), rect.height());
     for (px, p) in image.pixels.iter_mut().zip(&stats) {
@@ -52,7 +113,7 @@ pub(super) fn render(
 /// Every pixel of `rect`, `spp` samples from `first`: each pixel's statistics (all
 /// of them when `stats`, else only the sum), in the rectangle's row-major order.
 fn fixed(
-    integrator: &dyn SampleIntegrator,
+    sampling: Sampling,
     spp: u32,
     first: u32,
     stats: bool,
@@ -67,23 +128,26 @@ fn fixed(
         .par_chunks_mut((TILE * TILE) as usize)
         .zip(tiles.par_iter())
         .for_each(|(pixels, &tile)| {
-            let blocks: Vec<PixelSamples> = tile_pixels(rect, tile)
-                .map(|(x, y)| PixelSamples {
-                    x,
-                    y,
-                    first,
-                    count: spp,
-                })
+            let coords: Vec<(u32, u32)> = tile_pixels(rect, tile).collect();
+            let blocks: Vec<PixelSamples> = coords
+                .iter()
+                .map(|&p| sampling.block(p, first, spp))
                 .collect();
             let mut n = 0;
-            integrator.render_blocks(&blocks, &|| stop.should_stop(), &mut |i, values| {
-                let p = &mut pixels[i];
-                match stats {
-                    true => values.iter().for_each(|v| p.add_sample(v)),
-                    false => values.iter().for_each(|v| p.add_to_sum(v)),
-                }
-                n += 1;
-            });
+            let stopping = &|| stop.should_stop();
+            sampling
+                .integrator
+                .render_blocks(&blocks, stopping, &mut |i, values| {
+                    let p = &mut pixels[i];
+                    match stats {
+                        true => values.iter().for_each(|v| p.add_sample(v)),
+                        false => values.iter().for_each(|v| p.add_to_sum(v)),
+                    }
+                    n += 1;
+                });
+            if !stats {
+                sampling.add_emitters(&coords, pixels, first);
+            }
             progress(n);
         });
     in_rect_order(rect, &tiles, &by_tile)
@@ -95,26 +159,18 @@ fn fixed(
 /// rate of finding light; then each tile samples its pixels a batch at a time until
 /// `may_stop` lets each go.
 fn adaptively(
-    integrator: &dyn SampleIntegrator,
+    sampling: Sampling,
     spp: u32,
     a: Adaptive,
-    (width, height): (u32, u32),
+    frame: (u32, u32),
     rect: PixelRect,
     progress: &(dyn Fn(u64) + Sync),
     stop: &StopToken,
 ) -> Vec<PixelStats> {
-    let r = match a.rule {
-        StopRule::Neighbourhood => NEIGHBOUR_RADIUS,
-        StopRule::PerPixel => 0,
-    };
-    let halo = PixelRect {
-        x0: rect.x0.saturating_sub(r),
-        y0: rect.y0.saturating_sub(r),
-        x1: (rect.x1 + r).min(width),
-        y1: (rect.y1 + r).min(height),
-    };
+    let halo = halo(a, frame, rect);
+    let r = neighbour_radius(a);
     let batch = a.batch.min(spp);
-    let pilot = fixed(integrator, batch, 0, true, halo, &|_| {}, stop);
+    let pilot = fixed(sampling, batch, 0, true, halo, &|_| {}, stop);
     let min_if_zero: Vec<u32> = neighbour_hit_rates(&pilot, halo.width(), halo.height(), r)
         .into_iter()
         .map(min_samples_if_zero)
@@ -143,20 +199,39 @@ fn adaptively(
                 }
                 let blocks: Vec<PixelSamples> = active
                     .iter()
-                    .map(|&i| PixelSamples {
-                        x: pixels[i].0,
-                        y: pixels[i].1,
-                        first: stats[i].n,
-                        count: batch.min(spp - stats[i].n),
-                    })
+                    .map(|&i| sampling.block(pixels[i], stats[i].n, batch.min(spp - stats[i].n)))
                     .collect();
-                integrator.render_blocks(&blocks, &|| stop.should_stop(), &mut |k, values| {
-                    values.iter().for_each(|v| stats[active[k]].add_sample(v));
-                });
+                let stopping = &|| stop.should_stop();
+                sampling
+                    .integrator
+                    .render_blocks(&blocks, stopping, &mut |k, values| {
+                        values.iter().for_each(|v| stats[active[k]].add_sample(v));
+                    });
             }
+            sampling.add_emitters(&pixels, stats, 0);
             progress(pixels.len() as u64);
         });
     in_rect_order(rect, &tiles, &by_tile)
+}
+
+/// How far adaptive sampling's stopping rule looks for neighbours.
+fn neighbour_radius(a: Adaptive) -> u32 {
+    match a.rule {
+        StopRule::Neighbourhood => NEIGHBOUR_RADIUS,
+        StopRule::PerPixel => 0,
+    }
+}
+
+/// `rect` grown by the neighbour radius, within the frame: the pixels adaptive
+/// sampling's first batch covers.
+fn halo(a: Adaptive, (width, height): (u32, u32), rect: PixelRect) -> PixelRect {
+    let r = neighbour_radius(a);
+    PixelRect {
+        x0: rect.x0.saturating_sub(r),
+        y0: rect.y0.saturating_sub(r),
+        x1: (rect.x1 + r).min(width),
+        y1: (rect.y1 + r).min(height),
+    }
 }
 
 /// The tiles covering `rect`, as their top-left pixels, in a scattered order: every

@@ -94,7 +94,16 @@ pub(super) fn render(
             ..RenderSettings::default()
         };
         let frame = (camera.width, camera.height);
-        let seen = pixels::render(direct, &settings, None, frame, rect, &|_| {}, stop);
+        let seen = pixels::render(
+            direct,
+            pixels::Emitters(None),
+            &settings,
+            None,
+            frame,
+            rect,
+            &|_| {},
+            stop,
+        );
         for (p, d) in image.pixels.iter_mut().zip(&seen.image.pixels) {
             *p += *d;
         }
