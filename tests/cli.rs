@@ -461,6 +461,16 @@ fn summary_states_resolution_shading_and_the_cells_samples() {
     };
     let radiance = summary(&["-s", "2", "-m", "3"]);
     assert!(radiance.contains("; 16x12, path ("), "{radiance}");
+    // The light's outline (a few pixels wide at 48x36) had emitter samples of its
+    // own, unless turned off.
+    let outline = |edges: &str| {
+        let args = ["-r", "48", "36", "-s", "2", "-m", "3", "--emitter-edges", edges];
+        let err = run(command().args(args).arg("-f").arg(&out).arg(&scene))
+            .success()
+            .stderr();
+        err.contains("-l 1, 16x emitter samples in ")
+    };
+    assert!(outline("16") && !outline("0"));
     assert!(
         radiance.contains("-m 3") && radiance.contains(", 2 spp,"),
         "{radiance}"

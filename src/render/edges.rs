@@ -54,6 +54,12 @@ impl Marks {
         }
     }
 
+    /// How many pixels of `rect` are marked.
+    pub fn count_in(&self, rect: PixelRect) -> u64 {
+        let pixels = (rect.y0..rect.y1).flat_map(|y| (rect.x0..rect.x1).map(move |x| (x, y)));
+        pixels.filter(|&p| self.get(p)).count() as u64
+    }
+
     pub fn get(&self, (x, y): (u32, u32)) -> bool {
         let r = self.rect;
         (r.x0..r.x1).contains(&x)

@@ -222,6 +222,9 @@ pub struct RenderOutput {
     pub samples: Vec<u32>,
     /// Samples whose radiance was NaN or infinite and were counted as black (should be 0).
     pub nonfinite_samples: u64,
+    /// Pixels whose emission seen directly had samples of its own (lights' outlines,
+    /// `edges.rs`); in a render of passes, the most of any pass.
+    pub outline_pixels: u64,
 }
 
 impl RenderOutput {

@@ -77,28 +77,21 @@ pub(super) fn render(
     stop: &StopToken,
 ) -> RenderOutput {
     let spp = settings.spp.max(1);
-    let marks_over = |r: PixelRect| match emitters.0 {
-        Some(e) => e.marks(frame, r),
+    // Adaptive sampling's first batch covers its halo, whose pixels need their marks.
+    let marked_rect = adaptive.map_or(rect, |a| halo(a, frame, rect));
+    let marks = match emitters.0 {
+        Some(e) => e.marks(frame, marked_rect),
         None => Marks::none(),
     };
-    let stats = match adaptive {
-        None => {
-            let marks = marks_over(rect);
-            let s = Sampling {
-                integrator,
-                edges: emitters.0.map(|e| (e, &marks)),
-            };
-            fixed(s, spp, settings.spp_offset, false, rect, progress, stop)
-        }
-        Some(a) => {
-            let marks = marks_over(halo(a, frame, rect));
-            let s = Sampling {
-                integrator,
-                edges: emitters.0.map(|e| (e, &marks)),
-            };
-            adaptively(s, spp, a, frame, rect, progress, stop)
-        }
+    let s = Sampling {
+        integrator,
+        edges: emitters.0.map(|e| (e, &marks)),
     };
+    let stats = match adaptive {
+        None => fixed(s, spp, settings.spp_offset, false, rect, progress, stop),
+        Some(a) => adaptively(s, spp, a, frame, rect, progress, stop),
+    };
+    let outline_pixels = marks.count_in(rect);
     let mut image = Image::new(rect.width(), rect.height());
     for (px, p) in image.pixels.iter_mut().zip(&stats) {
         *px = p.mean();
@@ -107,6 +100,7 @@ pub(super) fn render(
         image,
         samples: stats.iter().map(|p| p.n).collect(),
         nonfinite_samples: stats.iter().map(|p| p.nonfinite as u64).sum(),
+        outline_pixels,
     }
 }
 

@@ -39,6 +39,7 @@ pub struct Film {
     sum: Vec<Color>,
     samples: Vec<u32>,
     nonfinite: u64,
+    outline_pixels: u64,
     /// Passes completed (a stopped pass is not counted, though its finished pixels are kept).
     pub passes: u32,
 }
@@ -53,6 +54,7 @@ impl Film {
             sum: vec![Color::ZERO; n],
             samples: vec![0; n],
             nonfinite: 0,
+            outline_pixels: 0,
             passes: 0,
         }
     }
@@ -65,6 +67,7 @@ impl Film {
             *n += k;
         }
         self.nonfinite += pass.nonfinite_samples;
+        self.outline_pixels = self.outline_pixels.max(pass.outline_pixels);
     }
 
     /// Samples per pixel so far.
@@ -93,6 +96,7 @@ impl Film {
             image: self.image(),
             samples: self.samples.clone(),
             nonfinite_samples: self.nonfinite,
+            outline_pixels: self.outline_pixels,
         }
     }
 }

@@ -113,5 +113,6 @@ pub(super) fn render(
         image,
         samples: vec![spp; rect.area() as usize],
         nonfinite_samples: nonfinite,
+        outline_pixels: 0,
     }
 }
