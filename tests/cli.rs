@@ -464,10 +464,15 @@ fn summary_states_resolution_shading_and_the_cells_samples() {
     // The light's outline (a few pixels wide at 48x36) had emitter samples of its
     // own, unless turned off.
     let outline = |edges: &str| {
-        let args = ["-r", "48", "36", "-s", "2", "-m", "3", "--emitter-edges", edges];
-        let err = run(command().args(args).arg("-f").arg(&out).arg(&scene))
-            .success()
-            .stderr();
+        let args = ["-r", "48", "36", "-s", "2", "-m", "3", "--emitter-edges"];
+        let err = run(command()
+            .args(args)
+            .arg(edges)
+            .arg("-f")
+            .arg(&out)
+            .arg(&scene))
+        .success()
+        .stderr();
         err.contains("-l 1, 16x emitter samples in ")
     };
     assert!(outline("16") && !outline("0"));
