@@ -100,7 +100,8 @@ impl PixelStats {
             return false;
         }
         let n = self.n as f64;
-        let mu = self.s1 / n;
+        // The emitter-only estimate is part of the pixel's value, its error not in σ.
+        let mu = self.s1 / n + luminance(self.emitters) as f64;
         let var = ((self.s2 - self.s1 * self.s1 / n) / (n - 1.0)).max(0.0);
         1.96 * var.sqrt() / n.sqrt() <= tol as f64 * mu
     }

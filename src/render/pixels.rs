@@ -38,8 +38,8 @@ impl Sampling<'_, '_> {
         }
     }
 
-    /// Adds to the marked pixels among `pixels` (that have samples, numbered from
-    /// `first`) their emitter-only estimate.
+    /// Gives the marked pixels among `pixels` that have samples (numbered from
+    /// `first`) their emitter-only estimate: `factor` per sample they have.
     fn add_emitters(&self, pixels: &[(u32, u32)], stats: &mut [PixelStats], first: u32) {
         let Some((edges, marks)) = self.edges else {
             return;
@@ -180,6 +180,9 @@ fn adaptively(
             for (s, &p) in stats.iter_mut().zip(&pixels) {
                 *s = pilot[at(p)];
             }
+            // Before the stopping rule reads the pixels' means: `factor` per sample of
+            // the first batch.
+            sampling.add_emitters(&pixels, stats, 0);
             loop {
                 // Once stopped, a pixel keeps the samples it has.
                 let active: Vec<usize> = (0..pixels.len())
@@ -202,7 +205,6 @@ fn adaptively(
                         values.iter().for_each(|v| stats[active[k]].add_sample(v));
                     });
             }
-            sampling.add_emitters(&pixels, stats, 0);
             progress(pixels.len() as u64);
         });
     in_rect_order(rect, &tiles, &by_tile)
