@@ -95,13 +95,9 @@ impl<'a> EmitterEdges<'a> {
 
     /// The pixels of `rect` (within the `frame`) that an emitter's edge crosses, as
     /// the pilot sees it.
-    pub fn marks(&self, (width, height): (u32, u32), rect: PixelRect) -> Marks {
-        let halo = PixelRect {
-            x0: rect.x0.saturating_sub(1),
-            y0: rect.y0.saturating_sub(1),
-            x1: (rect.x1 + 1).min(width),
-            y1: (rect.y1 + 1).min(height),
-        };
+    pub fn marks(&self, frame: (u32, u32), rect: PixelRect) -> Marks {
+        let (width, height) = frame;
+        let halo = rect.grown(1, frame);
         let seen = self.pilot_values(halo);
         let at = |x: u32, y: u32| seen[((y - halo.y0) * halo.width() + (x - halo.x0)) as usize];
         let mut marked = Vec::with_capacity(rect.area() as usize);

@@ -43,6 +43,16 @@ impl PixelRect {
     pub fn area(&self) -> u64 {
         self.width() as u64 * self.height() as u64
     }
+
+    /// This rectangle grown by `r` pixels on every side, within a `width × height` frame.
+    pub fn grown(&self, r: u32, (width, height): (u32, u32)) -> PixelRect {
+        PixelRect {
+            x0: self.x0.saturating_sub(r),
+            y0: self.y0.saturating_sub(r),
+            x1: (self.x1 + r).min(width),
+            y1: (self.y1 + r).min(height),
+        }
+    }
 }
 
 /// A scene ready to render: its acceleration structure and its camera.

@@ -27,7 +27,7 @@ use crate::film::{heat_map, Image};
 use crate::integrators::debug::{DebugView, View};
 use crate::integrators::{
     light_tracing, DirectStrategy, Estimator, LightTracer, PathIntegrator, PathSettings, Roulette,
-    Tracing,
+    SampleIntegrator, Tracing,
 };
 use crate::names::{display_from_table, Named};
 use crate::sampling::SamplerKind;
@@ -300,6 +300,15 @@ fn render_rect(
 ) -> RenderOutput {
     let (scene, accel, camera) = (&job.scene, job.accel.as_ref(), &job.camera);
     let frame = (camera.width, camera.height);
+    // The pixel loop over `rect` with these settings.
+    let pixels = |integrator: &dyn SampleIntegrator,
+                  emitters: Emitters,
+                  adaptive: Option<Adaptive>,
+                  progress: &(dyn Fn(u64) + Sync)| {
+        pixels::render(
+            integrator, emitters, settings, adaptive, frame, rect, progress, stop,
+        )
+    };
     let view = match settings.shading {
         Shading::Radiance => None,
         Shading::Normals => Some(View::Normals),
@@ -314,16 +323,7 @@ fn render_rect(
             seed: settings.seed,
             sampler: settings.sampler,
         };
-        return pixels::render(
-            &debug,
-            Emitters(None),
-            settings,
-            None,
-            frame,
-            rect,
-            progress,
-            stop,
-        );
+        return pixels(&debug, Emitters(None), None, progress);
     }
     let mut t = settings.tracing(scene, accel, camera);
     match job.estimator(settings) {
@@ -335,17 +335,8 @@ fn render_rect(
         Estimator::Path => {
             let integrator = PathIntegrator::new(t);
             let edges = EmitterEdges::new(t, settings.emitter_edges);
-            let (emitters, adaptive) = (Emitters(edges.as_ref()), settings.adaptive);
-            pixels::render(
-                &integrator,
-                emitters,
-                settings,
-                adaptive,
-                frame,
-                rect,
-                progress,
-                stop,
-            )
+            let emitters = Emitters(edges.as_ref());
+            pixels(&integrator, emitters, settings.adaptive, progress)
         }
         Estimator::Caustics => {
             t.s.caustics_by_light = true;
@@ -355,31 +346,13 @@ fn render_rect(
             // Nothing to add where no light path can make a caustic (CMU462's glass
             // and mirror spheres, with no other surface to receive one).
             let Some((split, _)) = job.caustics_split(settings) else {
-                return pixels::render(
-                    &integrator,
-                    emitters,
-                    settings,
-                    None,
-                    frame,
-                    rect,
-                    progress,
-                    stop,
-                );
+                return pixels(&integrator, emitters, None, progress);
             };
             let tracer = LightTracer::new(t);
             let camera_share = ProgressShare::new(progress, split.light_rays, false);
             let light_share = ProgressShare::new(progress, split.light_rays, true);
             let camera_progress = |n| camera_share.report(n);
-            let mut out = pixels::render(
-                &integrator,
-                emitters,
-                settings,
-                None,
-                frame,
-                rect,
-                &camera_progress,
-                stop,
-            );
+            let mut out = pixels(&integrator, emitters, None, &camera_progress);
             let paths = caustic_paths(settings, camera, split.divisor);
             let light_progress = |n| light_share.report(n);
             let caustics = splats::render(&tracer, camera, paths, rect, &light_progress, stop);

@@ -220,14 +220,8 @@ fn neighbour_radius(a: Adaptive) -> u32 {
 
 /// `rect` grown by the neighbour radius, within the frame: the pixels adaptive
 /// sampling's first batch covers.
-fn halo(a: Adaptive, (width, height): (u32, u32), rect: PixelRect) -> PixelRect {
-    let r = neighbour_radius(a);
-    PixelRect {
-        x0: rect.x0.saturating_sub(r),
-        y0: rect.y0.saturating_sub(r),
-        x1: (rect.x1 + r).min(width),
-        y1: (rect.y1 + r).min(height),
-    }
+fn halo(a: Adaptive, frame: (u32, u32), rect: PixelRect) -> PixelRect {
+    rect.grown(neighbour_radius(a), frame)
 }
 
 /// The tiles covering `rect`, as their top-left pixels, in a scattered order: every
