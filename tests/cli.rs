@@ -476,6 +476,27 @@ fn summary_states_resolution_shading_and_the_cells_samples() {
         err.contains("-l 1, 16x emitter samples in ")
     };
     assert!(outline("16") && !outline("0"));
+    // Emitter samples are numbered from the pixel samples' indices times 16: at the
+    // top of the 32-bit range there are fewer per sample, not an overflow.
+    let top = [
+        "-r",
+        "48",
+        "36",
+        "-s",
+        "2",
+        "-m",
+        "0",
+        "--spp-offset",
+        "4294967290",
+    ];
+    run(command()
+        .args(top)
+        .arg("-f")
+        .arg(dir.path().join("top.exr"))
+        .arg(&scene))
+    .success();
+    let args = ["--emitter-edges", "5000"];
+    run(command().args(args).arg(&scene)).fails_with("5000 is not in 0..=1024");
     assert!(
         radiance.contains("-m 3") && radiance.contains(", 2 spp,"),
         "{radiance}"

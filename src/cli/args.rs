@@ -584,8 +584,9 @@ pub struct RenderArgs {
     /// Emitter-only camera rays per pixel sample in the pixels a light's (or emissive surface's)
     /// outline crosses, found by a one-sample pilot: there they estimate the emission seen
     /// directly, and the paths leave it out. The outline converges far faster (its linear
-    /// error; clamped to 1 in a PNG it hardly shows) for a few percent of the time. 0: off.
-    #[arg(long, value_name = "FACTOR", default_value_t = RenderSettings::DEFAULT_EMITTER_EDGES)]
+    /// error; clamped to 1 in a PNG it hardly shows) for a few percent of the time. 0: off; at most 1024.
+    #[arg(long, value_name = "FACTOR", default_value_t = RenderSettings::DEFAULT_EMITTER_EDGES,
+          value_parser = clap::value_parser!(u32).range(0..=1024))]
     pub emitter_edges: u32,
 
     /// Estimator. auto: where a light (other than ambient or environment) shines on a mirror or glass surface, another surface can receive the caustic, -m is at least 2 and no emissive surface is not a light, caustics (path tracing with light-traced caustics; path tracing with -a); where every light is a point or spot light, nothing is specular or self-emitting and -m is at least 2, light tracing or path tracing, whichever a small pilot render of each finds less noisy per ray traced (light tracing on CBempty, path tracing on CMU462's basic scenes); otherwise path tracing with MIS (light + BSDF sampling) when the scene has glossy surfaces or an ambient or environment (-e) light, light sampling otherwise. A direct-lighting strategy name means path tracing with it. -H forces hemisphere.

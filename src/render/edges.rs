@@ -151,7 +151,11 @@ impl<'a> EmitterEdges<'a> {
         let mut blocks = Vec::new();
         let mut owner = Vec::new();
         for (k, &((x, y), first, count)) in pixels.iter().enumerate() {
-            let (start, end) = (first * self.factor, (first + count) * self.factor);
+            // Sample indices are 32-bit: near the top of their range fewer per sample
+            // (any count is unbiased).
+            let last = u64::from(first) + u64::from(count);
+            let factor = u64::from(self.factor).min(u64::from(u32::MAX) / last.max(1));
+            let (start, end) = ((u64::from(first) * factor) as u32, (last * factor) as u32);
             for f in (start..end).step_by(BLOCK as usize) {
                 blocks.push(PixelSamples {
                     x,
