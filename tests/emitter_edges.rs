@@ -6,6 +6,7 @@ use crate::common;
 use common::{load, render_halves, render_scene};
 use ember::accel::{AccelKind, BvhBuilder};
 use ember::film::Image;
+use ember::integrators::Estimator;
 use ember::render::RenderSettings;
 
 const SCENE: &str = "scenes/cs184/sky/CBspheres_lambertian.dae";
@@ -21,6 +22,14 @@ fn settings(max_depth: u32, spp: u32, edges: u32, seed: u64) -> RenderSettings {
     }
 }
 
+/// The same, light-traced: emitters seen directly come from its camera pass.
+fn light_traced(max_depth: u32, spp: u32, edges: u32, seed: u64) -> RenderSettings {
+    RenderSettings {
+        estimator: Some(Estimator::LightTracing),
+        ..settings(max_depth, spp, edges, seed)
+    }
+}
+
 fn mse(a: &Image, b: &Image) -> f64 {
     a.rmse(b).powi(2)
 }
@@ -31,18 +40,29 @@ fn mse(a: &Image, b: &Image) -> f64 {
 /// all would instead raise it far above the plain render's.
 #[test]
 fn emitter_samples_cut_the_outlines_error_at_depth_zero() {
+    outline_error_falls(settings);
+}
+
+/// Light tracing's camera pass, which gives it the emitters seen directly, likewise.
+#[test]
+fn light_tracings_camera_pass_samples_outlines_apart_too() {
+    outline_error_falls(light_traced);
+}
+
+fn outline_error_falls(make: fn(u32, u32, u32, u64) -> RenderSettings) {
     let scene = load(SCENE);
-    let reference = render_scene(&scene, SIZE, &settings(0, 4096, 0, 99)).image;
+    let reference = render_scene(&scene, SIZE, &make(0, 4096, 0, 99)).image;
     let (mut plain, mut split) = (0.0, 0.0);
     for seed in 1..=4 {
-        plain += mse(
-            &render_scene(&scene, SIZE, &settings(0, 16, 0, seed)).image,
-            &reference,
-        );
-        split += mse(
-            &render_scene(&scene, SIZE, &settings(0, 16, 16, seed)).image,
-            &reference,
-        );
+        let without = render_scene(&scene, SIZE, &make(0, 16, 0, seed));
+        let with = render_scene(&scene, SIZE, &make(0, 16, 16, seed));
+        assert_eq!(without.outline_pixels, 0);
+        // The light's outline, not the frame: a band a few pixels wide.
+        let pixels = u64::from(SIZE.0 * SIZE.1);
+        let marked = with.outline_pixels;
+        assert!((1..pixels / 8).contains(&marked), "{marked} of {pixels}");
+        plain += mse(&without.image, &reference);
+        split += mse(&with.image, &reference);
     }
     assert!(plain > 0.0, "the light's outline should be noisy at 16 spp");
     assert!(

@@ -330,7 +330,10 @@ fn render_rect(
         Estimator::LightTracing => {
             let tracer = LightTracer::new(t);
             let paths = splats::paths_per_pixel(camera, settings.spp.max(1));
-            splats::render(&tracer, camera, paths, rect, progress, stop)
+            // Its camera part (emitters seen directly) samples outlines apart too.
+            let edges = EmitterEdges::new(t, settings.emitter_edges);
+            let emitters = Emitters(edges.as_ref());
+            splats::render(&tracer, emitters, camera, paths, rect, progress, stop)
         }
         Estimator::Path => {
             let integrator = PathIntegrator::new(t);
@@ -355,7 +358,10 @@ fn render_rect(
             let mut out = pixels(&integrator, emitters, None, &camera_progress);
             let paths = caustic_paths(settings, camera, split.divisor);
             let light_progress = |n| light_share.report(n);
-            let caustics = splats::render(&tracer, camera, paths, rect, &light_progress, stop);
+            // No camera part: the camera samples above saw the emitters.
+            let none = Emitters(None);
+            let caustics =
+                splats::render(&tracer, none, camera, paths, rect, &light_progress, stop);
             for (p, c) in out.image.pixels.iter_mut().zip(&caustics.image.pixels) {
                 *p += *c;
             }

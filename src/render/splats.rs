@@ -30,8 +30,10 @@ pub(super) fn paths_per_pixel(camera: &Camera, spp: u32) -> Range<u64> {
 /// image, at the cost of tracing every path (one full frame's work per rectangle).
 /// The image is the splats' sum over the paths traced per pixel, so disjoint ranges
 /// of paths average, weighted by their lengths, to the render of all of them.
+/// `camera_emitters` says how the camera part treats lights' outlines.
 pub(super) fn render(
     tracer: &dyn SplatIntegrator,
+    camera_emitters: pixels::Emitters,
     camera: &Camera,
     paths: Range<u64>,
     rect: PixelRect,
@@ -88,6 +90,7 @@ pub(super) fn render(
             *s / per_pixel as f32
         };
     }
+    let mut outline_pixels = 0;
     if let (Some(direct), true) = (tracer.camera_part(), spp > 0) {
         let settings = RenderSettings {
             spp,
@@ -96,7 +99,7 @@ pub(super) fn render(
         let frame = (camera.width, camera.height);
         let seen = pixels::render(
             direct,
-            pixels::Emitters(None),
+            camera_emitters,
             &settings,
             None,
             frame,
@@ -108,11 +111,12 @@ pub(super) fn render(
             *p += *d;
         }
         nonfinite += seen.nonfinite_samples;
+        outline_pixels = seen.outline_pixels;
     }
     RenderOutput {
         image,
         samples: vec![spp; rect.area() as usize],
         nonfinite_samples: nonfinite,
-        outline_pixels: 0,
+        outline_pixels,
     }
 }
