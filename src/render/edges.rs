@@ -46,18 +46,9 @@ pub(super) struct Marks {
 }
 
 impl Marks {
-    /// No pixel marked.
-    pub fn none() -> Self {
-        Marks {
-            rect: PixelRect::full(0, 0),
-            marked: Vec::new(),
-        }
-    }
-
     /// How many pixels of `rect` are marked.
     pub fn count_in(&self, rect: PixelRect) -> u64 {
-        let pixels = (rect.y0..rect.y1).flat_map(|y| (rect.x0..rect.x1).map(move |x| (x, y)));
-        pixels.filter(|&p| self.get(p)).count() as u64
+        rect.pixels().filter(|&p| self.get(p)).count() as u64
     }
 
     pub fn get(&self, (x, y): (u32, u32)) -> bool {
@@ -96,31 +87,27 @@ impl<'a> EmitterEdges<'a> {
     /// The pixels of `rect` (within the `frame`) that an emitter's edge crosses, as
     /// the pilot sees it.
     pub fn marks(&self, frame: (u32, u32), rect: PixelRect) -> Marks {
-        let (width, height) = frame;
         let halo = rect.grown(1, frame);
         let seen = self.pilot_values(halo);
-        let at = |x: u32, y: u32| seen[((y - halo.y0) * halo.width() + (x - halo.x0)) as usize];
-        let mut marked = Vec::with_capacity(rect.area() as usize);
-        for y in rect.y0..rect.y1 {
-            for x in rect.x0..rect.x1 {
-                let own = at(x, y);
-                let ys = y.saturating_sub(1)..(y + 2).min(height);
-                let differs = ys
-                    .flat_map(|ny| {
-                        (x.saturating_sub(1)..(x + 2).min(width)).map(move |nx| (nx, ny))
-                    })
-                    .any(|(nx, ny)| at(nx, ny) != own);
-                marked.push(differs);
-            }
-        }
+        let at = |(x, y): (u32, u32)| seen[((y - halo.y0) * halo.width() + (x - halo.x0)) as usize];
+        let differs = |(x, y): (u32, u32)| {
+            let own = PixelRect {
+                x0: x,
+                y0: y,
+                x1: x + 1,
+                y1: y + 1,
+            };
+            own.grown(1, frame).pixels().any(|n| at(n) != at((x, y)))
+        };
+        let marked = rect.pixels().map(differs).collect();
         Marks { rect, marked }
     }
 
     /// One pilot sample per pixel of `rect`: the emission it saw on a surface (escaped
     /// rays count as none, so an environment map does not mark the whole frame).
     fn pilot_values(&self, rect: PixelRect) -> Vec<[u32; 3]> {
-        let blocks: Vec<PixelSamples> = (rect.y0..rect.y1)
-            .flat_map(|y| (rect.x0..rect.x1).map(move |x| (x, y)))
+        let blocks: Vec<PixelSamples> = rect
+            .pixels()
             .map(|(x, y)| PixelSamples {
                 x,
                 y,

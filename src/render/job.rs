@@ -44,6 +44,11 @@ impl PixelRect {
         self.width() as u64 * self.height() as u64
     }
 
+    /// Its pixels `(x, y)`, row by row.
+    pub fn pixels(self) -> impl Iterator<Item = (u32, u32)> {
+        (self.y0..self.y1).flat_map(move |y| (self.x0..self.x1).map(move |x| (x, y)))
+    }
+
     /// This rectangle grown by `r` pixels on every side, within a `width × height` frame.
     pub fn grown(&self, r: u32, (width, height): (u32, u32)) -> PixelRect {
         PixelRect {

@@ -34,7 +34,6 @@ use crate::sampling::SamplerKind;
 use crate::scene::Scene;
 use crate::Color;
 use edges::EmitterEdges;
-use pixels::Emitters;
 use std::sync::atomic::{AtomicU64, Ordering};
 
 /// What each pixel shows.
@@ -302,11 +301,11 @@ fn render_rect(
     let frame = (camera.width, camera.height);
     // The pixel loop over `rect` with these settings.
     let pixels = |integrator: &dyn SampleIntegrator,
-                  emitters: Emitters,
+                  edges: Option<&EmitterEdges>,
                   adaptive: Option<Adaptive>,
                   progress: &(dyn Fn(u64) + Sync)| {
         pixels::render(
-            integrator, emitters, settings, adaptive, frame, rect, progress, stop,
+            integrator, edges, settings, adaptive, frame, rect, progress, stop,
         )
     };
     let view = match settings.shading {
@@ -323,7 +322,7 @@ fn render_rect(
             seed: settings.seed,
             sampler: settings.sampler,
         };
-        return pixels(&debug, Emitters(None), None, progress);
+        return pixels(&debug, None, None, progress);
     }
     let mut t = settings.tracing(scene, accel, camera);
     match job.estimator(settings) {
@@ -332,34 +331,32 @@ fn render_rect(
             let paths = splats::paths_per_pixel(camera, settings.spp.max(1));
             // Its camera part (emitters seen directly) samples outlines apart too.
             let edges = EmitterEdges::new(t, settings.emitter_edges);
-            let emitters = Emitters(edges.as_ref());
-            splats::render(&tracer, emitters, camera, paths, rect, progress, stop)
+            splats::render(&tracer, edges.as_ref(), camera, paths, rect, progress, stop)
         }
         Estimator::Path => {
             let integrator = PathIntegrator::new(t);
             let edges = EmitterEdges::new(t, settings.emitter_edges);
-            let emitters = Emitters(edges.as_ref());
-            pixels(&integrator, emitters, settings.adaptive, progress)
+            pixels(&integrator, edges.as_ref(), settings.adaptive, progress)
         }
         Estimator::Caustics => {
             t.s.caustics_by_light = true;
             let integrator = PathIntegrator::new(t);
             let edges = EmitterEdges::new(t, settings.emitter_edges);
-            let emitters = Emitters(edges.as_ref());
+            let edges = edges.as_ref();
             // Nothing to add where no light path can make a caustic (CMU462's glass
             // and mirror spheres, with no other surface to receive one).
             let Some((split, _)) = job.caustics_split(settings) else {
-                return pixels(&integrator, emitters, None, progress);
+                return pixels(&integrator, edges, None, progress);
             };
             let tracer = LightTracer::new(t);
             let camera_share = ProgressShare::new(progress, split.light_rays, false);
             let light_share = ProgressShare::new(progress, split.light_rays, true);
             let camera_progress = |n| camera_share.report(n);
-            let mut out = pixels(&integrator, emitters, None, &camera_progress);
+            let mut out = pixels(&integrator, edges, None, &camera_progress);
             let paths = caustic_paths(settings, camera, split.divisor);
             let light_progress = |n| light_share.report(n);
             // No camera part: the camera samples above saw the emitters.
-            let none = Emitters(None);
+            let none = None;
             let caustics =
                 splats::render(&tracer, none, camera, paths, rect, &light_progress, stop);
             for (p, c) in out.image.pixels.iter_mut().zip(&caustics.image.pixels) {

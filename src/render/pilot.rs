@@ -176,21 +176,13 @@ fn render(
     };
     if let Some(paths) = light_paths {
         let tracer = LightTracer::new(t);
-        return splats::render(
-            &tracer,
-            pixels::Emitters(None),
-            camera,
-            paths,
-            rect,
-            quiet,
-            never,
-        );
+        return splats::render(&tracer, None, camera, paths, rect, quiet, never);
     }
     let integrator = PathIntegrator::new(t);
     let frame = (camera.width, camera.height);
     pixels::render(
         &integrator,
-        pixels::Emitters(None),
+        None,
         &settings,
         None,
         frame,

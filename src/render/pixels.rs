@@ -13,11 +13,6 @@ use rayon::prelude::*;
 /// Tiles are `TILE × TILE` pixels.
 pub(super) const TILE: u32 = 16;
 
-/// How a render estimates emission seen directly: with its pixel samples, or apart
-/// where emitters' edges cross pixels (`edges.rs`).
-#[derive(Clone, Copy)]
-pub(super) struct Emitters<'e, 'a>(pub Option<&'e EmitterEdges<'a>>);
-
 /// Pixel samples and the emitter-only samples of the pixels `marks` holds.
 #[derive(Clone, Copy)]
 struct Sampling<'s, 'a> {
@@ -62,13 +57,14 @@ impl Sampling<'_, '_> {
 }
 
 /// Renders pixels `rect` with `integrator`: `settings.spp` samples per pixel from
-/// `settings.spp_offset`, or adaptively. `progress` is called with the number of
+/// `settings.spp_offset`, or adaptively; with `edges`, emission seen directly apart
+/// where emitters' outlines cross pixels (`edges.rs`). `progress` is called with the number of
 /// pixels finished; once `stop` says so, pixels not started are left black with 0
 /// samples.
 #[allow(clippy::too_many_arguments)]
 pub(super) fn render(
     integrator: &dyn SampleIntegrator,
-    emitters: Emitters,
+    edges: Option<&EmitterEdges>,
     settings: &RenderSettings,
     adaptive: Option<Adaptive>,
     frame: (u32, u32),
@@ -79,19 +75,16 @@ pub(super) fn render(
     let spp = settings.spp.max(1);
     // Adaptive sampling's first batch covers its halo, whose pixels need their marks.
     let marked_rect = adaptive.map_or(rect, |a| halo(a, frame, rect));
-    let marks = match emitters.0 {
-        Some(e) => e.marks(frame, marked_rect),
-        None => Marks::none(),
-    };
+    let marks = edges.map(|e| e.marks(frame, marked_rect));
     let s = Sampling {
         integrator,
-        edges: emitters.0.map(|e| (e, &marks)),
+        edges: edges.zip(marks.as_ref()),
     };
     let stats = match adaptive {
         None => fixed(s, spp, settings.spp_offset, false, rect, progress, stop),
         Some(a) => adaptively(s, spp, a, frame, rect, progress, stop),
     };
-    let outline_pixels = marks.count_in(rect);
+    let outline_pixels = marks.map_or(0, |m| m.count_in(rect));
     let mut image = Image::new(rect.width(), rect.height());
     for (px, p) in image.pixels.iter_mut().zip(&stats) {
         *px = p.mean();

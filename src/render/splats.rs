@@ -3,6 +3,7 @@
 //! added chunk by chunk in order, so the image depends on the seed only; plus what
 //! only camera rays see, from the integrator's camera part.
 
+use super::edges::EmitterEdges;
 use super::{pixels, PixelRect, RenderOutput, RenderSettings, StopToken};
 use crate::camera::Camera;
 use crate::film::Image;
@@ -30,10 +31,10 @@ pub(super) fn paths_per_pixel(camera: &Camera, spp: u32) -> Range<u64> {
 /// image, at the cost of tracing every path (one full frame's work per rectangle).
 /// The image is the splats' sum over the paths traced per pixel, so disjoint ranges
 /// of paths average, weighted by their lengths, to the render of all of them.
-/// `camera_emitters` says how the camera part treats lights' outlines.
+/// `camera_edges`: how the camera part samples lights' outlines.
 pub(super) fn render(
     tracer: &dyn SplatIntegrator,
-    camera_emitters: pixels::Emitters,
+    camera_edges: Option<&EmitterEdges>,
     camera: &Camera,
     paths: Range<u64>,
     rect: PixelRect,
@@ -99,7 +100,7 @@ pub(super) fn render(
         let frame = (camera.width, camera.height);
         let seen = pixels::render(
             direct,
-            camera_emitters,
+            camera_edges,
             &settings,
             None,
             frame,
