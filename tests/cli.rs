@@ -461,10 +461,10 @@ fn summary_states_resolution_shading_and_the_cells_samples() {
     };
     let radiance = summary(&["-s", "2", "-m", "3"]);
     assert!(radiance.contains("; 16x12, path ("), "{radiance}");
-    // The light's outline (a few pixels wide at 48x36) had emitter samples of its
-    // own, unless turned off.
-    let outline = |edges: &str| {
-        let args = ["-r", "48", "36", "-s", "2", "-m", "3", "--emitter-edges"];
+    // The light's outline (a few pixels wide at 48x36) had split samples of its
+    // own, unless turned off (also by the flag's former name).
+    let outline = |flag: &str, edges: &str| {
+        let args = ["-r", "48", "36", "-s", "2", "-m", "3", flag];
         let err = run(command()
             .args(args)
             .arg(edges)
@@ -473,10 +473,11 @@ fn summary_states_resolution_shading_and_the_cells_samples() {
             .arg(&scene))
         .success()
         .stderr();
-        err.contains("-l 1, 16x emitter samples in ")
+        err.contains("-l 1, 16x direct samples in ")
     };
-    assert!(outline("16") && !outline("0"));
-    // Emitter samples are numbered from the pixel samples' indices times 16: at the
+    assert!(outline("--direct-split", "16") && !outline("--direct-split", "0"));
+    assert!(!outline("--emitter-edges", "0"));
+    // Split samples are numbered from the pixel samples' indices times 16: at the
     // top of the 32-bit range there are fewer per sample, not an overflow.
     let top = [
         "-r",
@@ -495,7 +496,7 @@ fn summary_states_resolution_shading_and_the_cells_samples() {
         .arg(dir.path().join("top.exr"))
         .arg(&scene))
     .success();
-    let args = ["--emitter-edges", "5000"];
+    let args = ["--direct-split", "5000"];
     run(command().args(args).arg(&scene)).fails_with("5000 is not in 0..=1024");
     assert!(
         radiance.contains("-m 3") && radiance.contains(", 2 spp,"),

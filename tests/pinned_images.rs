@@ -39,25 +39,25 @@ const CASES: &[Case] = &[
         scene: "scenes/cs184/sky/CBspheres_lambertian.dae",
         max_depth: 1,
         strategy: DirectStrategy::Light,
-        expected: 0x37d4_86a0_b90c_e3a1,
+        expected: 0xdca0_ffa6_4f71_f9c6,
     },
     Case {
         scene: "scenes/cs184/sky/CBspheres_lambertian.dae",
         max_depth: 5,
         strategy: DirectStrategy::Mis,
-        expected: 0x0cf2_bcf1_65da_bd13,
+        expected: 0x360f_dacb_c5d1_738e,
     },
     Case {
         scene: "scenes/cs184/sky/CBspheres.dae",
         max_depth: 5,
         strategy: DirectStrategy::Light,
-        expected: 0x22bb_f52f_435d_a273,
+        expected: 0x4ef4_f5c4_00ac_7534,
     },
     Case {
         scene: "scenes/cs184/sky/CBbunny_microfacet_cu.dae",
         max_depth: 5,
         strategy: DirectStrategy::Mis,
-        expected: 0x0756_1b27_4f4b_4663,
+        expected: 0xe95c_b483_1053_f397,
     },
 ];
 

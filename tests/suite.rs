@@ -19,7 +19,7 @@ mod camera_placement;
 mod cli;
 mod cli_hardening;
 mod cycles_peer;
-mod emitter_edges;
+mod direct_split;
 mod env_light;
 mod export_mitsuba;
 mod farm_dask;

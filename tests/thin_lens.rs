@@ -90,8 +90,8 @@ fn render(lens: ThinLens, seed: u64) -> Image {
         strategy: Some(DirectStrategy::Light),
         seed,
         // Each pixel the mean of its SPP camera samples, as the statistics above
-        // assume: no emitter-only samples on the edge (tests/emitter_edges.rs).
-        emitter_edges: 0,
+        // assume: no split samples (tests/direct_split.rs).
+        direct_split: 0,
         ..RenderSettings::default()
     };
     let out = job.render(&s);

@@ -131,8 +131,8 @@ fn auto(s: &mut RenderSettings) {
 /// The name of ember's default settings, the first method.
 pub const DEFAULT_METHOD: &str = "ember default (auto)";
 
-/// ember's default without emitter-only samples on lights' outlines.
-pub const NO_EMITTER_EDGES: &str = "auto, --emitter-edges 0";
+/// ember's default without split samples of light of few bounces.
+pub const NO_DIRECT_SPLIT: &str = "auto, --direct-split 0";
 
 /// ember's methods beyond `-m 1`. A variant (another sampler, say) is one more row.
 const PATH_METHODS: &[(&str, Tweak)] = &[
@@ -177,12 +177,12 @@ pub fn methods(base: &RenderSettings, scene: &Scene, compare_backends: bool) -> 
     // First ember's default, whatever `--integrator auto` picks for the scene: the
     // method the tables divide by each peer's figure.
     let mut v = vec![with(DEFAULT_METHOD, auto, native)];
-    // What the emitter-only samples on lights' outlines (`--emitter-edges`) are worth.
-    let without_edges: Tweak = |s| {
+    // What the split samples of light of few bounces (`--direct-split`) are worth.
+    let without_split: Tweak = |s| {
         auto(s);
-        s.emitter_edges = 0;
+        s.direct_split = 0;
     };
-    v.push(with(NO_EMITTER_EDGES, without_edges, native));
+    v.push(with(NO_DIRECT_SPLIT, without_split, native));
     v.extend(table.iter().map(|&(name, tweak)| with(name, tweak, native)));
     // Light tracing cannot show specular surfaces to the camera: only where it can
     // converge. (Where a light shines on them, the default light-traces their

@@ -581,13 +581,11 @@ pub struct RenderArgs {
     #[arg(long, value_parser = named::<SamplerKind>(), default_value_t = SamplerKind::Sobol)]
     pub sampler: SamplerKind,
 
-    /// Emitter-only camera rays per pixel sample in the pixels a light's (or emissive surface's)
-    /// outline crosses, found by a one-sample pilot: there they estimate the emission seen
-    /// directly, and the paths leave it out. The outline converges far faster (its linear
-    /// error; clamped to 1 in a PNG it hardly shows) for a few percent of the time. 0: off; at most 1024.
-    #[arg(long, value_name = "FACTOR", default_value_t = RenderSettings::DEFAULT_EMITTER_EDGES,
+    /// Samples of light of at most one bounce (emitters seen directly, direct light at the first surface) per pixel sample, in the pixels where that light is noisy: lights' outlines, glossy reflections of lights. A one-sample pilot finds them; there the paths count only light of more bounces. Those pixels converge far faster (in linear radiance; clamped to 1 in a PNG an outline hardly shows), for 2-12 % more time on the course's Cornell boxes. 0: off; at most 1024. (Formerly --emitter-edges.)
+    #[arg(long, alias = "emitter-edges", value_name = "FACTOR",
+          default_value_t = RenderSettings::DEFAULT_DIRECT_SPLIT,
           value_parser = clap::value_parser!(u32).range(0..=1024))]
-    pub emitter_edges: u32,
+    pub direct_split: u32,
 
     /// Estimator. auto: where a light (other than ambient or environment) shines on a mirror or glass surface, another surface can receive the caustic, -m is at least 2 and no emissive surface is not a light, caustics (path tracing with light-traced caustics; path tracing with -a); where every light is a point or spot light, nothing is specular or self-emitting and -m is at least 2, light tracing or path tracing, whichever a small pilot render of each finds less noisy per ray traced (light tracing on CBempty, path tracing on CMU462's basic scenes); otherwise path tracing with MIS (light + BSDF sampling) when the scene has glossy surfaces or an ambient or environment (-e) light, light sampling otherwise. A direct-lighting strategy name means path tracing with it. -H forces hemisphere.
     #[arg(long, value_parser = integrator(), default_value = AUTO)]

@@ -515,16 +515,13 @@ impl RenderRun<'_> {
             (Some(_), _, _) => format!("mean {mean:.1} spp (at most {}, -a)", s.spp),
             (None, _, _) => format!("mean {mean:.1} spp"),
         };
-        let outlines = match done.output.outline_pixels {
+        let split = match done.output.split_pixels {
             0 => String::new(),
-            n => format!(
-                ", {}x emitter samples in {n} outline pixels",
-                s.emitter_edges
-            ),
+            n => format!(", {}x direct samples in {n} split pixels", s.direct_split),
         };
         let shows = match s.shading {
             Shading::Radiance => format!(
-                "{} estimator, -m {}, -l {}{outlines}",
+                "{} estimator, -m {}, -l {}{split}",
                 ember::image_metadata::estimator_label(s, self.job),
                 s.max_depth,
                 s.light_samples

@@ -217,7 +217,7 @@ pub(super) fn settings_from(args: &RenderArgs) -> Result<RenderSettings> {
         spp_offset: args.spp_offset.unwrap_or(0),
         engine: args.engine,
         sampler: args.sampler,
-        emitter_edges: args.emitter_edges,
+        direct_split: args.direct_split,
     })
 }
 

@@ -35,9 +35,9 @@ pub struct PixelSamples {
     pub y: u32,
     pub first: u32,
     pub count: u32,
-    /// Whether emission the camera rays find directly counts. The render driver turns
-    /// it off where it estimates that light with samples of its own (`render::edges`).
-    pub camera_emission: bool,
+    /// Light found after fewer scattering events than this does not count: the render
+    /// driver estimates it with samples of its own there (`render::split`). 0: all counts.
+    pub min_bounces: u32,
 }
 
 /// What one pixel sample gives.

@@ -120,7 +120,7 @@ impl PathIntegrator<'_> {
             y: 0,
             first: index,
             count: 1,
-            camera_emission: true,
+            min_bounces: 0,
         }];
         let mut kernel = Kernel::new(One, self, &block, &|| false);
         kernel.first_ray = Some((o, d, key));
@@ -216,8 +216,8 @@ struct Kernel<'k, 'a, L: Lanes> {
     first_diffuse: LaneBits,
     /// Lanes whose camera ray met a surface.
     met_surface: LaneBits,
-    /// Lanes whose block leaves out emission seen directly (`PixelSamples::camera_emission`).
-    no_camera_emission: LaneBits,
+    /// Light found after fewer bounces than this does not count (`PixelSamples::min_bounces`).
+    min_bounces: L::F,
     slots: Slots,
     /// Next sample to start, as (block, sample).
     next: (usize, u32),
@@ -260,7 +260,7 @@ impl<'k, 'a, L: Lanes> Kernel<'k, 'a, L> {
             prev_delta: 0,
             first_diffuse: 0,
             met_surface: 0,
-            no_camera_emission: 0,
+            min_bounces: l.f(0.0),
             slots: Slots {
                 block: [usize::MAX; SLOTS],
                 key: [0; SLOTS],
@@ -328,17 +328,12 @@ impl<'k, 'a, L: Lanes> Kernel<'k, 'a, L> {
         self.stream.get_2d_coupled(partner, own)
     }
 
-    /// Lanes of `lanes` where light found after `bounces` scattering events counts.
+    /// Lanes of `lanes` where light found after `bounces` scattering events counts:
+    /// within the settings' depths, and not below the lane's block's `min_bounces`.
     #[inline(always)]
     fn counts(&self, lanes: LaneBits) -> LaneBits {
-        self.depth.counts(self.l, &self.it.t.s, lanes)
-    }
-
-    /// Lanes where emission found by the current ray counts: all but camera rays of
-    /// blocks that leave it out.
-    #[inline(always)]
-    fn emission_counted(&self) -> LaneBits {
-        self.has_prev | !self.no_camera_emission
+        let deep_enough = self.depth.bounces.ge(self.min_bounces).bits();
+        self.depth.counts(self.l, &self.it.t.s, lanes) & deep_enough
     }
 
     /// Lanes of `lanes` at the depth cap.
@@ -360,7 +355,7 @@ impl<'k, 'a, L: Lanes> Kernel<'k, 'a, L> {
     #[inline(always)]
     fn refill(&mut self) {
         let l = self.l;
-        let (fresh, key, index, xy) = self.assign_samples();
+        let (fresh, key, index, xy, min_bounces) = self.assign_samples();
         if fresh == 0 {
             return;
         }
@@ -381,6 +376,7 @@ impl<'k, 'a, L: Lanes> Kernel<'k, 'a, L> {
         let zero = V3::splat(l, Vec3::ZERO);
         self.beta = V3::select(m, V3::splat(l, Vec3::ONE), self.beta);
         self.eta_scale = L::F::select(m, self.f(1.0), self.eta_scale);
+        self.min_bounces = L::F::select(m, l.f_from(min_bounces), self.min_bounces);
         self.radiance = V3::select(m, zero, self.radiance);
         self.depth.start(l, m, 0);
         self.has_prev &= !fresh;
@@ -390,16 +386,26 @@ impl<'k, 'a, L: Lanes> Kernel<'k, 'a, L> {
     }
 
     /// Gives the free lanes the next samples, in order: the lanes started, and per
-    /// lane its pixel's key, the sample's index and the pixel's `(x, y)`.
+    /// lane its pixel's key, the sample's index, the pixel's `(x, y)` and its block's
+    /// `min_bounces`.
     #[allow(clippy::type_complexity)]
     #[inline(always)]
-    fn assign_samples(&mut self) -> (LaneBits, [u32; LANES], [u32; LANES], [[f32; LANES]; 2]) {
+    fn assign_samples(
+        &mut self,
+    ) -> (
+        LaneBits,
+        [u32; LANES],
+        [u32; LANES],
+        [[f32; LANES]; 2],
+        [f32; LANES],
+    ) {
         let width = self.it.t.camera.width as u64;
         let all = self.l.all();
         let mut fresh: LaneBits = 0;
         let mut key = [0u32; LANES];
         let mut index = [0u32; LANES];
         let mut xy = [[0.0f32; LANES]; 2];
+        let mut min_bounces = [0.0f32; LANES];
         while (self.live | fresh) != all && !self.stopped {
             let (b, sample) = self.next;
             let Some(block) = self.blocks.get(b) else {
@@ -428,8 +434,7 @@ impl<'k, 'a, L: Lanes> Kernel<'k, 'a, L> {
             (xy[0][i], xy[1][i]) = (block.x as f32, block.y as f32);
             self.slot[i] = slot as u32;
             self.sample[i] = sample;
-            let skip = LaneBits::from(!block.camera_emission) << i;
-            self.no_camera_emission = (self.no_camera_emission & !(1 << i)) | skip;
+            min_bounces[i] = block.min_bounces as f32;
             fresh |= 1 << i;
             self.next = if sample + 1 < block.count {
                 (b, sample + 1)
@@ -437,7 +442,7 @@ impl<'k, 'a, L: Lanes> Kernel<'k, 'a, L> {
                 (b + 1, 0)
             };
         }
-        (fresh, key, index, xy)
+        (fresh, key, index, xy, min_bounces)
     }
 
     /// Records the values of the lanes in `ended` and frees them; blocks whose
@@ -628,7 +633,7 @@ impl<'k, 'a, L: Lanes> Kernel<'k, 'a, L> {
     /// Light from the lights at infinity reaching the escaped rays of `lanes`.
     #[inline(always)]
     fn escaped(&mut self, lanes: LaneBits, w: V3<L::F>) {
-        let lanes = self.counts(lanes) & self.emission_counted();
+        let lanes = self.counts(lanes);
         if lanes == 0 {
             return;
         }
@@ -650,7 +655,6 @@ impl<'k, 'a, L: Lanes> Kernel<'k, 'a, L> {
     #[inline(always)]
     fn emitted(&mut self, lanes: LaneBits, hit: &Hits<L>, w: V3<L::F>) {
         let scene = self.it.t.scene;
-        let lanes = lanes & self.emission_counted();
         let cos_out = (-w).dot(hit.ng).to_array();
         let on_light = !self.l.u_from(hit.light).eq(self.l.u(NO_LIGHT)).bits();
         let camera_on_light = lanes & on_light & !self.has_prev;

@@ -48,10 +48,25 @@ pub struct PixelStats {
     /// Whether a camera ray of the pixel met a surface (followed only while every
     /// sample is zero: `PixelStats::is_empty`).
     pub met_surface: bool,
-    /// The mean of the pixel's emitter-only samples, added to its samples' mean
-    /// (`render::edges`; zero elsewhere).
-    pub emitters: Color,
+    /// The pixel's split samples (light of few bounces), whose mean adds to its
+    /// samples' mean (`render::split`; none elsewhere).
+    pub split: SplitSums,
     first: Color,
+}
+
+/// A pixel's split samples: their sum and count, and how many of the pixel's own
+/// samples they stand in for (`factor` each).
+#[derive(Clone, Copy, Debug, Default)]
+pub struct SplitSums {
+    pub sum: Color,
+    pub n: u32,
+    pub covers: u32,
+}
+
+impl SplitSums {
+    pub fn mean(&self) -> Color {
+        self.sum / self.n.max(1) as f32
+    }
 }
 
 impl PixelStats {
@@ -100,8 +115,9 @@ impl PixelStats {
             return false;
         }
         let n = self.n as f64;
-        // The emitter-only estimate is part of the pixel's value, its error not in σ.
-        let mu = self.s1 / n + luminance(self.emitters) as f64;
+        // The split estimate is part of the pixel's value, its (factor times smaller)
+        // error not in σ.
+        let mu = self.s1 / n + luminance(self.split.mean()) as f64;
         let var = ((self.s2 - self.s1 * self.s1 / n) / (n - 1.0)).max(0.0);
         1.96 * var.sqrt() / n.sqrt() <= tol as f64 * mu
     }
@@ -117,7 +133,7 @@ impl PixelStats {
     }
 
     pub fn mean(&self) -> Color {
-        self.sum / self.n.max(1) as f32 + self.emitters
+        self.sum / self.n.max(1) as f32 + self.split.mean()
     }
 }
 

@@ -5,13 +5,13 @@
 //! `RenderJob` (job.rs) owns what is rendered.
 
 pub mod adaptive;
-mod edges;
 mod job;
 mod memory;
 pub mod pilot;
 mod pixels;
 mod progressive;
 mod splats;
+mod split;
 mod stop;
 
 /// Camera paths' engine, chosen with the render settings.
@@ -33,7 +33,7 @@ use crate::names::{display_from_table, Named};
 use crate::sampling::SamplerKind;
 use crate::scene::Scene;
 use crate::Color;
-use edges::EmitterEdges;
+use split::{DirectSplit, MAX_SPLIT_BOUNCES};
 use std::sync::atomic::{AtomicU64, Ordering};
 
 /// What each pixel shows.
@@ -125,15 +125,17 @@ pub struct RenderSettings {
     /// shards, `--spp-offset`) merge into one render of all of them. Not with `adaptive`.
     pub spp_offset: u32,
     pub engine: Engine,
-    /// Emitter-only camera rays per pixel sample in the pixels an emitter's edge
-    /// crosses, which estimate emission seen directly there (`edges.rs`); 0: none.
-    pub emitter_edges: u32,
+    /// Samples of light of at most one bounce per pixel sample, in the pixels where
+    /// that light is noisy (lights' outlines, glossy highlights), which estimate it
+    /// apart there (`split.rs`); 0: none.
+    pub direct_split: u32,
 }
 
 impl RenderSettings {
-    /// Emitter-only samples per pixel sample where emitters' edges cross pixels:
-    /// measured on CBbunny `-m 5` (BENCHMARKS §3).
-    pub const DEFAULT_EMITTER_EDGES: u32 = 16;
+    /// Split samples per pixel sample where light of few bounces is noisy: RMSE times
+    /// time is lowest at 8 on CBbunny_microfacet_cu `-m 5` (4 to 16 within 5 %), and
+    /// CBbunny's error is within 2 % of 16's (BENCHMARKS §3).
+    pub const DEFAULT_DIRECT_SPLIT: u32 = 8;
 
     /// The direct-lighting estimator these settings use for `scene`.
     pub fn strategy_for(&self, scene: &Scene) -> DirectStrategy {
@@ -210,7 +212,7 @@ impl Default for RenderSettings {
             sampler: SamplerKind::default(),
             spp_offset: 0,
             engine: Engine::Auto,
-            emitter_edges: RenderSettings::DEFAULT_EMITTER_EDGES,
+            direct_split: RenderSettings::DEFAULT_DIRECT_SPLIT,
         }
     }
 }
@@ -221,9 +223,9 @@ pub struct RenderOutput {
     pub samples: Vec<u32>,
     /// Samples whose radiance was NaN or infinite and were counted as black (should be 0).
     pub nonfinite_samples: u64,
-    /// Pixels whose emission seen directly had samples of its own (lights' outlines,
-    /// `edges.rs`); in a render of passes, the most of any pass.
-    pub outline_pixels: u64,
+    /// Pixels whose light of few bounces had samples of its own (`split.rs`); in a
+    /// render of passes, the most of any pass.
+    pub split_pixels: u64,
 }
 
 impl RenderOutput {
@@ -301,11 +303,11 @@ fn render_rect(
     let frame = (camera.width, camera.height);
     // The pixel loop over `rect` with these settings.
     let pixels = |integrator: &dyn SampleIntegrator,
-                  edges: Option<&EmitterEdges>,
+                  split: Option<&DirectSplit>,
                   adaptive: Option<Adaptive>,
                   progress: &(dyn Fn(u64) + Sync)| {
         pixels::render(
-            integrator, edges, settings, adaptive, frame, rect, progress, stop,
+            integrator, split, settings, adaptive, frame, rect, progress, stop,
         )
     };
     let view = match settings.shading {
@@ -329,30 +331,30 @@ fn render_rect(
         Estimator::LightTracing => {
             let tracer = LightTracer::new(t);
             let paths = splats::paths_per_pixel(camera, settings.spp.max(1));
-            // Its camera part (emitters seen directly) samples outlines apart too.
-            let edges = EmitterEdges::new(t, settings.emitter_edges);
-            splats::render(&tracer, edges.as_ref(), camera, paths, rect, progress, stop)
+            // Its camera part (emitters seen directly) splits them too.
+            let split = DirectSplit::new(t, settings.direct_split, 0);
+            splats::render(&tracer, split.as_ref(), camera, paths, rect, progress, stop)
         }
         Estimator::Path => {
             let integrator = PathIntegrator::new(t);
-            let edges = EmitterEdges::new(t, settings.emitter_edges);
-            pixels(&integrator, edges.as_ref(), settings.adaptive, progress)
+            let split = DirectSplit::new(t, settings.direct_split, MAX_SPLIT_BOUNCES);
+            pixels(&integrator, split.as_ref(), settings.adaptive, progress)
         }
         Estimator::Caustics => {
             t.s.caustics_by_light = true;
             let integrator = PathIntegrator::new(t);
-            let edges = EmitterEdges::new(t, settings.emitter_edges);
-            let edges = edges.as_ref();
+            let direct = DirectSplit::new(t, settings.direct_split, MAX_SPLIT_BOUNCES);
+            let direct = direct.as_ref();
             // Nothing to add where no light path can make a caustic (CMU462's glass
             // and mirror spheres, with no other surface to receive one).
             let Some((split, _)) = job.caustics_split(settings) else {
-                return pixels(&integrator, edges, None, progress);
+                return pixels(&integrator, direct, None, progress);
             };
             let tracer = LightTracer::new(t);
             let camera_share = ProgressShare::new(progress, split.light_rays, false);
             let light_share = ProgressShare::new(progress, split.light_rays, true);
             let camera_progress = |n| camera_share.report(n);
-            let mut out = pixels(&integrator, edges, None, &camera_progress);
+            let mut out = pixels(&integrator, direct, None, &camera_progress);
             let paths = caustic_paths(settings, camera, split.divisor);
             let light_progress = |n| light_share.report(n);
             // No camera part: the camera samples above saw the emitters.

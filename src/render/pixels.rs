@@ -4,7 +4,7 @@
 
 use super::adaptive::NEIGHBOUR_RADIUS;
 use super::adaptive::{may_stop, min_samples_if_zero, neighbour_hit_rates, PixelStats};
-use super::edges::{EmitterEdges, Marks};
+use super::split::{DirectSplit, Marks};
 use super::{Adaptive, PixelRect, RenderOutput, RenderSettings, StopRule, StopToken};
 use crate::film::Image;
 use crate::integrators::{PixelSamples, SampleIntegrator};
@@ -13,58 +13,66 @@ use rayon::prelude::*;
 /// Tiles are `TILE × TILE` pixels.
 pub(super) const TILE: u32 = 16;
 
-/// Pixel samples and the emitter-only samples of the pixels `marks` holds.
+/// Pixel samples and the split samples of the pixels `marks` holds.
 #[derive(Clone, Copy)]
 struct Sampling<'s, 'a> {
     integrator: &'s dyn SampleIntegrator,
-    edges: Option<(&'s EmitterEdges<'a>, &'s Marks)>,
+    split: Option<(&'s DirectSplit<'a>, &'s Marks)>,
 }
 
 impl Sampling<'_, '_> {
     /// Samples `first .. first + count` of pixel `p`.
     fn block(&self, p: (u32, u32), first: u32, count: u32) -> PixelSamples {
-        let marked = self.edges.is_some_and(|(_, m)| m.get(p));
+        let min_bounces = match self.split {
+            Some((split, marks)) if marks.get(p) => split.min_bounces,
+            _ => 0,
+        };
         PixelSamples {
             x: p.0,
             y: p.1,
             first,
             count,
-            camera_emission: !marked,
+            min_bounces,
         }
     }
 
-    /// Gives the marked pixels among `pixels` that have samples (numbered from
-    /// `first`) their emitter-only estimate: `factor` per sample they have.
-    fn add_emitters(&self, pixels: &[(u32, u32)], stats: &mut [PixelStats], first: u32) {
-        let Some((edges, marks)) = self.edges else {
+    /// Gives the marked pixels among `pixels` split samples for the samples they have
+    /// (numbered from `first`) beyond those their split samples cover already:
+    /// `factor` per sample.
+    fn add_split(&self, pixels: &[(u32, u32)], stats: &mut [PixelStats], first: u32) {
+        let Some((split, marks)) = self.split else {
             return;
         };
         let todo: Vec<usize> = (0..pixels.len())
-            .filter(|&i| marks.get(pixels[i]) && stats[i].n > 0)
+            .filter(|&i| marks.get(pixels[i]) && stats[i].n > stats[i].split.covers)
             .collect();
         if todo.is_empty() {
             return;
         }
         let asked: Vec<_> = todo
             .iter()
-            .map(|&i| (pixels[i], first, stats[i].n))
+            .map(|&i| {
+                let (covers, n) = (stats[i].split.covers, stats[i].n);
+                (pixels[i], first + covers, n - covers)
+            })
             .collect();
-        for (&i, (mean, bad)) in todo.iter().zip(edges.estimate(&asked)) {
-            stats[i].emitters = mean;
-            stats[i].nonfinite += bad;
+        for (&i, (sum, n, bad)) in todo.iter().zip(split.estimate(&asked)) {
+            let s = &mut stats[i];
+            (s.split.sum, s.split.n) = (s.split.sum + sum, s.split.n + n);
+            s.split.covers = s.n;
+            s.nonfinite += bad;
         }
     }
 }
 
 /// Renders pixels `rect` with `integrator`: `settings.spp` samples per pixel from
-/// `settings.spp_offset`, or adaptively; with `edges`, emission seen directly apart
-/// where emitters' outlines cross pixels (`edges.rs`). `progress` is called with the number of
-/// pixels finished; once `stop` says so, pixels not started are left black with 0
-/// samples.
+/// `settings.spp_offset`, or adaptively; with `split`, light of few bounces apart
+/// where it is noisy (`split.rs`). `progress` is called with the number of pixels
+/// finished; once `stop` says so, pixels not started are left black with 0 samples.
 #[allow(clippy::too_many_arguments)]
 pub(super) fn render(
     integrator: &dyn SampleIntegrator,
-    edges: Option<&EmitterEdges>,
+    split: Option<&DirectSplit>,
     settings: &RenderSettings,
     adaptive: Option<Adaptive>,
     frame: (u32, u32),
@@ -75,16 +83,16 @@ pub(super) fn render(
     let spp = settings.spp.max(1);
     // Adaptive sampling's first batch covers its halo, whose pixels need their marks.
     let marked_rect = adaptive.map_or(rect, |a| halo(a, frame, rect));
-    let marks = edges.map(|e| e.marks(frame, marked_rect));
+    let marks = split.map(|s| s.marks(marked_rect));
     let s = Sampling {
         integrator,
-        edges: edges.zip(marks.as_ref()),
+        split: split.zip(marks.as_ref()),
     };
     let stats = match adaptive {
         None => fixed(s, spp, settings.spp_offset, false, rect, progress, stop),
         Some(a) => adaptively(s, spp, a, frame, rect, progress, stop),
     };
-    let outline_pixels = marks.map_or(0, |m| m.count_in(rect));
+    let split_pixels = marks.map_or(0, |m| m.count_in(rect));
     let mut image = Image::new(rect.width(), rect.height());
     for (px, p) in image.pixels.iter_mut().zip(&stats) {
         *px = p.mean();
@@ -93,7 +101,7 @@ pub(super) fn render(
         image,
         samples: stats.iter().map(|p| p.n).collect(),
         nonfinite_samples: stats.iter().map(|p| p.nonfinite as u64).sum(),
-        outline_pixels,
+        split_pixels,
     }
 }
 
@@ -132,12 +140,16 @@ fn fixed(
                     }
                     n += 1;
                 });
-            if !stats {
-                sampling.add_emitters(&coords, pixels, first);
-            }
             progress(n);
         });
-    in_rect_order(rect, &tiles, &by_tile)
+    let mut out = in_rect_order(rect, &tiles, &by_tile);
+    if !stats {
+        // Apart from the tiles, spread over the threads: the split pixels crowd into
+        // a few tiles (a light's outline, a highlight).
+        let pixels: Vec<(u32, u32)> = rect.pixels().collect();
+        sampling.add_split(&pixels, &mut out, first);
+    }
+    out
 }
 
 /// Adaptive sampling of `rect` in batches, up to `spp` per pixel: a first batch (the
@@ -157,7 +169,10 @@ fn adaptively(
     let halo = halo(a, frame, rect);
     let r = neighbour_radius(a);
     let batch = a.batch.min(spp);
-    let pilot = fixed(sampling, batch, 0, true, halo, &|_| {}, stop);
+    let mut pilot = fixed(sampling, batch, 0, true, halo, &|_| {}, stop);
+    // Before the stopping rule reads the pixels' means: `factor` per sample of the
+    // first batch.
+    sampling.add_split(&halo.pixels().collect::<Vec<_>>(), &mut pilot, 0);
     let min_if_zero: Vec<u32> = neighbour_hit_rates(&pilot, halo.width(), halo.height(), r)
         .into_iter()
         .map(min_samples_if_zero)
@@ -173,9 +188,6 @@ fn adaptively(
             for (s, &p) in stats.iter_mut().zip(&pixels) {
                 *s = pilot[at(p)];
             }
-            // Before the stopping rule reads the pixels' means: `factor` per sample of
-            // the first batch.
-            sampling.add_emitters(&pixels, stats, 0);
             loop {
                 // Once stopped, a pixel keeps the samples it has.
                 let active: Vec<usize> = (0..pixels.len())
@@ -200,7 +212,11 @@ fn adaptively(
             }
             progress(pixels.len() as u64);
         });
-    in_rect_order(rect, &tiles, &by_tile)
+    let mut out = in_rect_order(rect, &tiles, &by_tile);
+    // Pixels that went on past the first batch: split samples for the rest too, so a
+    // pixel that ran to the cap is the fixed-count render's.
+    sampling.add_split(&rect.pixels().collect::<Vec<_>>(), &mut out, 0);
+    out
 }
 
 /// How far adaptive sampling's stopping rule looks for neighbours.

@@ -39,7 +39,7 @@ pub struct Film {
     sum: Vec<Color>,
     samples: Vec<u32>,
     nonfinite: u64,
-    outline_pixels: u64,
+    split_pixels: u64,
     /// Passes completed (a stopped pass is not counted, though its finished pixels are kept).
     pub passes: u32,
 }
@@ -54,7 +54,7 @@ impl Film {
             sum: vec![Color::ZERO; n],
             samples: vec![0; n],
             nonfinite: 0,
-            outline_pixels: 0,
+            split_pixels: 0,
             passes: 0,
         }
     }
@@ -67,7 +67,7 @@ impl Film {
             *n += k;
         }
         self.nonfinite += pass.nonfinite_samples;
-        self.outline_pixels = self.outline_pixels.max(pass.outline_pixels);
+        self.split_pixels = self.split_pixels.max(pass.split_pixels);
     }
 
     /// Samples per pixel so far.
@@ -96,7 +96,7 @@ impl Film {
             image: self.image(),
             samples: self.samples.clone(),
             nonfinite_samples: self.nonfinite,
-            outline_pixels: self.outline_pixels,
+            split_pixels: self.split_pixels,
         }
     }
 }

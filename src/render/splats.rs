@@ -3,7 +3,7 @@
 //! added chunk by chunk in order, so the image depends on the seed only; plus what
 //! only camera rays see, from the integrator's camera part.
 
-use super::edges::EmitterEdges;
+use super::split::DirectSplit;
 use super::{pixels, PixelRect, RenderOutput, RenderSettings, StopToken};
 use crate::camera::Camera;
 use crate::film::Image;
@@ -31,10 +31,10 @@ pub(super) fn paths_per_pixel(camera: &Camera, spp: u32) -> Range<u64> {
 /// image, at the cost of tracing every path (one full frame's work per rectangle).
 /// The image is the splats' sum over the paths traced per pixel, so disjoint ranges
 /// of paths average, weighted by their lengths, to the render of all of them.
-/// `camera_edges`: how the camera part samples lights' outlines.
+/// `camera_split`: where the camera part samples emitters seen directly apart.
 pub(super) fn render(
     tracer: &dyn SplatIntegrator,
-    camera_edges: Option<&EmitterEdges>,
+    camera_split: Option<&DirectSplit>,
     camera: &Camera,
     paths: Range<u64>,
     rect: PixelRect,
@@ -91,7 +91,7 @@ pub(super) fn render(
             *s / per_pixel as f32
         };
     }
-    let mut outline_pixels = 0;
+    let mut split_pixels = 0;
     if let (Some(direct), true) = (tracer.camera_part(), spp > 0) {
         let settings = RenderSettings {
             spp,
@@ -100,7 +100,7 @@ pub(super) fn render(
         let frame = (camera.width, camera.height);
         let seen = pixels::render(
             direct,
-            camera_edges,
+            camera_split,
             &settings,
             None,
             frame,
@@ -112,12 +112,12 @@ pub(super) fn render(
             *p += *d;
         }
         nonfinite += seen.nonfinite_samples;
-        outline_pixels = seen.outline_pixels;
+        split_pixels = seen.split_pixels;
     }
     RenderOutput {
         image,
         samples: vec![spp; rect.area() as usize],
         nonfinite_samples: nonfinite,
-        outline_pixels,
+        split_pixels,
     }
 }
