@@ -40,6 +40,9 @@ const SAMPLES_SEED: u64 = 0x4544_4745_0002;
 const BLOCK: u32 = 256;
 const PAR_BLOCKS: usize = 8;
 
+/// Pilot pixels per parallel task.
+const PAR_PIXELS: usize = 1024;
+
 /// A pixel is split where its neighbourhood's pilot values spread more than this many
 /// times the frame's mean: on CBbunny and CBbunny_microfacet_cu the marked set (and
 /// the noise it removes) is the same from 4 to 16 (BENCHMARKS §3).
@@ -149,17 +152,20 @@ impl<'a> DirectSplit<'a> {
                 x1: x + 1,
                 y1: y + 1,
             };
-            let near: Vec<f64> = own.grown(1, frame).pixels().map(|n| at(n) as f64).collect();
-            let mean = near.iter().sum::<f64>() / near.len() as f64;
-            let var = near.iter().map(|v| (v - mean) * (v - mean)).sum::<f64>() / near.len() as f64;
-            var.sqrt() as f32
+            let (mut n, mut s1, mut s2) = (0.0, 0.0, 0.0);
+            for v in own.grown(1, frame).pixels().map(|p| f64::from(at(p))) {
+                (n, s1, s2) = (n + 1.0, s1 + v, s2 + v * v);
+            }
+            let mean = s1 / n;
+            (s2 / n - mean * mean).max(0.0).sqrt() as f32
         };
         // A NaN spread (a non-finite pilot value) does not mark.
         let marked = rect.pixels().map(|p| spread(p) > self.threshold).collect();
         Marks { rect, marked }
     }
 
-    /// One pilot sample per pixel of `pixels`: its luminance.
+    /// One pilot sample per pixel of `pixels`: its luminance (in parallel, a chunk of
+    /// pixels per task).
     fn pilot_values(&self, pixels: impl Iterator<Item = (u32, u32)>) -> Vec<f32> {
         let blocks: Vec<PixelSamples> = pixels
             .map(|(x, y)| PixelSamples {
@@ -171,9 +177,13 @@ impl<'a> DirectSplit<'a> {
             })
             .collect();
         let mut seen = vec![0.0; blocks.len()];
-        self.pilot
-            .render_blocks(&blocks, &|| false, &mut |i, values| {
-                seen[i] = luminance(values[0].radiance);
+        seen.par_chunks_mut(PAR_PIXELS)
+            .zip(blocks.par_chunks(PAR_PIXELS))
+            .for_each(|(seen, blocks)| {
+                self.pilot
+                    .render_blocks(blocks, &|| false, &mut |i, values| {
+                        seen[i] = luminance(values[0].radiance)
+                    })
             });
         seen
     }
