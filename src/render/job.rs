@@ -49,6 +49,16 @@ impl PixelRect {
         (self.y0..self.y1).flat_map(move |y| (self.x0..self.x1).map(move |x| (x, y)))
     }
 
+    /// Whether pixel `(x, y)` lies inside.
+    pub fn contains(&self, (x, y): (u32, u32)) -> bool {
+        (self.x0..self.x1).contains(&x) && (self.y0..self.y1).contains(&y)
+    }
+
+    /// The index of pixel `(x, y)` (inside) in a row-major list of this rectangle's.
+    pub fn index(&self, (x, y): (u32, u32)) -> usize {
+        ((y - self.y0) * self.width() + (x - self.x0)) as usize
+    }
+
     /// This rectangle grown by `r` pixels on every side, within a `width × height` frame.
     pub fn grown(&self, r: u32, (width, height): (u32, u32)) -> PixelRect {
         PixelRect {

@@ -36,13 +36,14 @@ impl Sampling<'_, '_> {
         }
     }
 
-    /// Gives the marked pixels among `pixels` split samples for the samples they have
-    /// (numbered from `first`) beyond those their split samples cover already:
-    /// `factor` per sample.
-    fn add_split(&self, pixels: &[(u32, u32)], stats: &mut [PixelStats], first: u32) {
+    /// Gives the marked pixels of `rect` (`stats` in its row-major order) split
+    /// samples for the samples they have (numbered from `first`) beyond those their
+    /// split samples cover already: `factor` per sample.
+    fn add_split(&self, rect: PixelRect, stats: &mut [PixelStats], first: u32) {
         let Some((split, marks)) = self.split else {
             return;
         };
+        let pixels: Vec<(u32, u32)> = rect.pixels().collect();
         let todo: Vec<usize> = (0..pixels.len())
             .filter(|&i| marks.get(pixels[i]) && stats[i].n > stats[i].split.covers)
             .collect();
@@ -146,8 +147,7 @@ fn fixed(
     if !stats {
         // Apart from the tiles, spread over the threads: the split pixels crowd into
         // a few tiles (a light's outline, a highlight).
-        let pixels: Vec<(u32, u32)> = rect.pixels().collect();
-        sampling.add_split(&pixels, &mut out, first);
+        sampling.add_split(rect, &mut out, first);
     }
     out
 }
@@ -172,12 +172,12 @@ fn adaptively(
     let mut pilot = fixed(sampling, batch, 0, true, halo, &|_| {}, stop);
     // Before the stopping rule reads the pixels' means: `factor` per sample of the
     // first batch.
-    sampling.add_split(&halo.pixels().collect::<Vec<_>>(), &mut pilot, 0);
+    sampling.add_split(halo, &mut pilot, 0);
     let min_if_zero: Vec<u32> = neighbour_hit_rates(&pilot, halo.width(), halo.height(), r)
         .into_iter()
         .map(min_samples_if_zero)
         .collect();
-    let at = |(x, y): (u32, u32)| ((y - halo.y0) * halo.width() + (x - halo.x0)) as usize;
+    let at = |p: (u32, u32)| halo.index(p);
     let tiles = tiles(rect);
     let mut by_tile = vec![PixelStats::default(); tiles.len() * (TILE * TILE) as usize];
     by_tile
@@ -215,7 +215,7 @@ fn adaptively(
     let mut out = in_rect_order(rect, &tiles, &by_tile);
     // Pixels that went on past the first batch: split samples for the rest too, so a
     // pixel that ran to the cap is the fixed-count render's.
-    sampling.add_split(&rect.pixels().collect::<Vec<_>>(), &mut out, 0);
+    sampling.add_split(rect, &mut out, 0);
     out
 }
 
@@ -280,7 +280,7 @@ fn in_rect_order(rect: PixelRect, tiles: &[(u32, u32)], by_tile: &[PixelStats]) 
     let mut out = vec![PixelStats::default(); rect.area() as usize];
     for (&tile, stats) in tiles.iter().zip(by_tile.chunks((TILE * TILE) as usize)) {
         for ((x, y), p) in tile_pixels(rect, tile).zip(stats) {
-            out[((y - rect.y0) * rect.width() + (x - rect.x0)) as usize] = *p;
+            out[rect.index((x, y))] = *p;
         }
     }
     out

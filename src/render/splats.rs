@@ -71,8 +71,8 @@ pub(super) fn render(
         for (splats, bad) in results {
             nonfinite += bad as u64;
             for (x, y, v) in splats {
-                if (rect.x0..rect.x1).contains(&x) && (rect.y0..rect.y1).contains(&y) {
-                    sum[((y - rect.y0) * rw + (x - rect.x0)) as usize] += v;
+                if rect.contains((x, y)) {
+                    sum[rect.index((x, y))] += v;
                 }
             }
         }

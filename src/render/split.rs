@@ -81,11 +81,8 @@ impl Marks {
         rect.pixels().filter(|&p| self.get(p)).count() as u64
     }
 
-    pub fn get(&self, (x, y): (u32, u32)) -> bool {
-        let r = self.rect;
-        (r.x0..r.x1).contains(&x)
-            && (r.y0..r.y1).contains(&y)
-            && self.marked[((y - r.y0) * r.width() + (x - r.x0)) as usize]
+    pub fn get(&self, p: (u32, u32)) -> bool {
+        self.rect.contains(p) && self.marked[self.rect.index(p)]
     }
 }
 
@@ -130,13 +127,12 @@ impl<'a> DirectSplit<'a> {
             .step_by(sy as usize)
             .flat_map(|y| (0..w).step_by(sx as usize).map(move |x| (x, y)))
             .collect();
-        let values: Vec<f32> = self
+        let (n, sum) = self
             .pilot_values(grid.into_iter())
             .into_iter()
             .filter(|v| v.is_finite())
-            .collect();
-        let sum: f64 = values.iter().map(|&v| f64::from(v)).sum();
-        (sum / values.len().max(1) as f64) as f32
+            .fold((0u32, 0.0f64), |(n, sum), v| (n + 1, sum + f64::from(v)));
+        (sum / f64::from(n.max(1))) as f32
     }
 
     /// The pixels of `rect` to split, as the pilot sees them.
@@ -144,7 +140,7 @@ impl<'a> DirectSplit<'a> {
         let frame = self.frame;
         let halo = rect.grown(1, frame);
         let seen = self.pilot_values(halo.pixels());
-        let at = |(x, y): (u32, u32)| seen[((y - halo.y0) * halo.width() + (x - halo.x0)) as usize];
+        let at = |p: (u32, u32)| seen[halo.index(p)];
         let spread = |(x, y): (u32, u32)| {
             let own = PixelRect {
                 x0: x,
