@@ -123,7 +123,7 @@ mod tests {
             EmbreeQuality::High,
         ]);
         check(&[Shading::Radiance, Shading::Normals, Shading::BvhCost]);
-        check(&[D::Light, D::Mis, D::Hemisphere, D::Bsdf]);
+        check(&[D::Light, D::Mis, D::MisGlossy, D::Hemisphere, D::Bsdf]);
     }
 
     #[test]

@@ -92,6 +92,7 @@ fn furnace_without_roulette_is_exact_at_every_pixel() {
     for strategy in [
         DirectStrategy::Light,
         DirectStrategy::Mis,
+        DirectStrategy::MisGlossy,
         DirectStrategy::Bsdf,
     ] {
         for (a, m) in [(0.5, 0), (0.5, 1), (0.8, 5), (0.9, 12)] {
@@ -154,6 +155,12 @@ fn lit_floor(albedo: f32, le: f32) -> (Scene, [Vec3; 4]) {
         Vec3::new(1.0, 0.0, 0.0),
         Vec3::new(0.0, 0.0, 0.8),
     );
+    floor_under_light(albedo, le, c, ex, ey)
+}
+
+/// A large Lambertian floor (y = 0) under the area light centred at `c` with edges
+/// `ex`, `ey` (horizontal), facing down; the scene and the light's corners.
+fn floor_under_light(albedo: f32, le: f32, c: Vec3, ex: Vec3, ey: Vec3) -> (Scene, [Vec3; 4]) {
     let normal = Vec3::NEG_Y;
     let q = [
         c - 0.5 * ex - 0.5 * ey,
@@ -220,6 +227,7 @@ fn area_light_irradiance_matches_closed_form() {
         DirectStrategy::Light,
         DirectStrategy::Hemisphere,
         DirectStrategy::Mis,
+        DirectStrategy::MisGlossy,
         DirectStrategy::Bsdf,
     ] {
         let settings = PathSettings {
@@ -262,6 +270,65 @@ fn area_light_irradiance_matches_closed_form() {
             assert!(
                 (mean - want as f64).abs() <= 4.5 * se + 1e-4 * want as f64,
                 "{strategy:?} at {x}: {mean} ± {se}, closed form {want}"
+            );
+        }
+    }
+}
+
+/// A 4 × 4 light 0.1 above the floor: seen from below it spans most of the hemisphere,
+/// so MIS gives BSDF sampling most of the weight. `MisGlossy` on this diffuse floor must
+/// give light sampling all of it (and not trace the BSDF ray at the depth cap): with
+/// MIS's weight on the light samples instead, most of the light would be lost.
+#[test]
+fn mis_at_glossy_vertices_takes_a_diffuse_floors_light_from_light_sampling() {
+    let (albedo, le) = (0.8f32, 2.0f32);
+    let c = Vec3::new(0.1, 0.1, -0.05);
+    let (scene, quad) = floor_under_light(albedo, le, c, Vec3::X * 4.0, Vec3::Z * 4.0);
+    let accel = accel::build(&scene, AccelKind::Native(BvhBuilder::Sah)).unwrap();
+    let camera = Camera::new(&scene.camera, &scene.bounds, 1, 1);
+    // At -m 2 the BSDF ray leaving the floor is traced and meets the light (whose
+    // light must then not count again); nothing reaches the floor in two bounces.
+    for (strategy, m) in [DirectStrategy::Mis, DirectStrategy::MisGlossy]
+        .into_iter()
+        .flat_map(|s| [(s, 1), (s, 2)])
+    {
+        let integ = PathIntegrator::new(Tracing {
+            scene: &scene,
+            accel: accel.as_ref(),
+            camera: &camera,
+            s: PathSettings {
+                max_depth: m,
+                accumulate: true,
+                light_samples: 1,
+                strategy,
+                roulette: Roulette::Off,
+                sampler: SamplerKind::Independent,
+                caustics_by_light: false,
+            },
+            engine: Engine::Scalar,
+            seed: 5,
+        });
+        for (k, x) in [Vec3::ZERO, Vec3::new(1.2, 0.0, 0.9)]
+            .into_iter()
+            .enumerate()
+        {
+            let want = albedo / std::f32::consts::PI
+                * polygon_irradiance(x, Vec3::Y, &quad, le as f64) as f32;
+            let eye = x + Vec3::new(0.01, 0.05, 0.02);
+            let n = 20_000;
+            let (mut s1, mut s2) = (0f64, 0f64);
+            for i in 0..n {
+                let v = integ
+                    .radiance_along(eye, (x - eye).normalize(), k as u32, i)
+                    .y as f64;
+                s1 += v;
+                s2 += v * v;
+            }
+            let mean = s1 / n as f64;
+            let se = ((s2 / n as f64 - mean * mean).max(0.0) / n as f64).sqrt();
+            assert!(
+                (mean - want as f64).abs() <= 4.5 * se + 1e-4 * want as f64,
+                "{strategy:?} -m {m} at {x}: {mean} ± {se}, closed form {want}"
             );
         }
     }
@@ -332,6 +399,7 @@ fn tilted_shading_normals_do_not_leak_light() {
     for strategy in [
         DirectStrategy::Light,
         DirectStrategy::Mis,
+        DirectStrategy::MisGlossy,
         DirectStrategy::Hemisphere,
         DirectStrategy::Bsdf,
     ] {

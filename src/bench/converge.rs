@@ -995,7 +995,8 @@ mod tests {
     }
 
     /// The first method is what `ember SCENE` renders (`--integrator auto`), not
-    /// `RenderSettings::default()`'s light sampling: on glossy spheres that is MIS.
+    /// `RenderSettings::default()`'s light sampling: on glossy spheres that is MIS at the
+    /// glossy vertices.
     #[test]
     fn the_first_method_is_embers_default() {
         let path = format!(
@@ -1007,10 +1008,13 @@ mod tests {
         let all = methods(&base, &scene, false);
         assert_eq!(all[0].name, DEFAULT_METHOD);
         let s = &all[0].settings;
-        assert_eq!(s.strategy_for(&scene), DirectStrategy::Mis);
+        assert_eq!(s.strategy_for(&scene), DirectStrategy::MisGlossy);
         assert_eq!(s.estimator, None, "the default method is auto's choice");
         let adaptive = all.iter().find(|m| m.settings.adaptive.is_some()).unwrap();
-        assert_eq!(adaptive.settings.strategy_for(&scene), DirectStrategy::Mis);
+        assert_eq!(
+            adaptive.settings.strategy_for(&scene),
+            DirectStrategy::MisGlossy
+        );
     }
 
     #[test]

@@ -135,6 +135,10 @@ pub enum DirectStrategy {
     Light,
     /// Light sampling and BSDF sampling combined by the power heuristic.
     Mis,
+    /// MIS at glossy vertices, light sampling alone at diffuse ones: where a lobe is
+    /// broad, BSDF-sampled emission adds little but its cost (and at the depth cap a
+    /// ray of its own), so only glossy vertices pay for it.
+    MisGlossy,
     /// BSDF sampling alone: no light sampling; emission found by the path's own
     /// BSDF-sampled rays counts in full. Like `Hemisphere`, it cannot see delta lights;
     /// it exists to show where BSDF sampling is the better half of MIS.
@@ -149,6 +153,11 @@ impl Named for DirectStrategy {
             DirectStrategy::Mis,
             "mis",
             "Light and BSDF sampling, power heuristic",
+        ),
+        (
+            DirectStrategy::MisGlossy,
+            "mis-glossy",
+            "MIS at glossy surfaces, light sampling alone at diffuse ones",
         ),
         (
             DirectStrategy::Hemisphere,
@@ -169,14 +178,16 @@ impl DirectStrategy {
     /// light sampling is 5–50 % more efficient on purely diffuse scenes (MIS pays for
     /// BSDF-sampled emission that carries little weight), while MIS is an order of
     /// magnitude better as soon as glossy surfaces reflect a light, or when an ambient
-    /// light is sampled by a cosine about +Y that is poor near the horizon.
+    /// light is sampled by a cosine about +Y that is poor near the horizon. So a
+    /// glossy scene gets MIS at its glossy vertices only (the diffuse ones keep light
+    /// sampling), and a scene with an ambient or environment light MIS everywhere.
     pub fn auto_for(scene: &crate::scene::Scene) -> DirectStrategy {
         let glossy = scene.materials.iter().any(|m| m.flags().glossy);
         let ambient = scene.lights.iter().any(|l| l.is_environment());
-        if glossy || ambient {
-            DirectStrategy::Mis
-        } else {
-            DirectStrategy::Light
+        match (ambient, glossy) {
+            (true, _) => DirectStrategy::Mis,
+            (false, true) => DirectStrategy::MisGlossy,
+            (false, false) => DirectStrategy::Light,
         }
     }
 }

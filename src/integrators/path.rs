@@ -74,7 +74,9 @@ impl<'a> PathIntegrator<'a> {
             .collect();
         let direct_pairs = match s.strategy {
             DirectStrategy::Hemisphere => n,
-            DirectStrategy::Light | DirectStrategy::Mis => light_samples.iter().sum(),
+            DirectStrategy::Light | DirectStrategy::Mis | DirectStrategy::MisGlossy => {
+                light_samples.iter().sum()
+            }
             DirectStrategy::Bsdf => 0,
         };
         PathIntegrator {
@@ -102,7 +104,7 @@ impl<'a> PathIntegrator<'a> {
     /// or when the scene has emitters that light sampling cannot pick.
     fn bsdf_rays_find_light(&self) -> bool {
         match self.t.s.strategy {
-            DirectStrategy::Mis | DirectStrategy::Bsdf => true,
+            DirectStrategy::Mis | DirectStrategy::MisGlossy | DirectStrategy::Bsdf => true,
             DirectStrategy::Hemisphere => false,
             DirectStrategy::Light => self.unsampled_emitters,
         }
@@ -211,6 +213,9 @@ struct Kernel<'k, 'a, L: Lanes> {
     prev_p: V3<L::F>,
     prev_pdf: L::F,
     prev_delta: LaneBits,
+    /// Lanes whose previous vertex was glossy (`DirectStrategy::MisGlossy` weights
+    /// the emission their ray finds; from a diffuse vertex it is light sampling's).
+    prev_glossy: LaneBits,
     /// Lanes whose first vertex from the camera is not specular (light tracing can
     /// connect it to the camera).
     first_diffuse: LaneBits,
@@ -258,6 +263,7 @@ impl<'k, 'a, L: Lanes> Kernel<'k, 'a, L> {
             prev_p: zero,
             prev_pdf: l.f(0.0),
             prev_delta: 0,
+            prev_glossy: 0,
             first_diffuse: 0,
             met_surface: 0,
             min_bounces: l.f(0.0),
@@ -381,6 +387,7 @@ impl<'k, 'a, L: Lanes> Kernel<'k, 'a, L> {
         self.depth.start(l, m, 0);
         self.has_prev &= !fresh;
         self.prev_delta &= !fresh;
+        self.prev_glossy &= !fresh;
         self.met_surface &= !fresh;
         self.live |= fresh;
     }
@@ -540,16 +547,27 @@ impl<'k, 'a, L: Lanes> Kernel<'k, 'a, L> {
             // Nothing else estimates direct light: the BSDF-sampled ray counts in full.
             (DirectStrategy::Bsdf, _) | (_, None) => one,
             (DirectStrategy::Light, Some(_)) => zero,
-            (DirectStrategy::Mis, Some(pdf)) => power_heuristic(
-                one,
-                self.prev_pdf,
-                self.f(self.it.t.s.light_samples as f32),
-                pdf,
-            ),
+            (DirectStrategy::Mis | DirectStrategy::MisGlossy, Some(pdf)) => {
+                let n = self.f(self.it.t.s.light_samples as f32);
+                let w = power_heuristic(one, self.prev_pdf, n, pdf);
+                L::F::select(self.mask(self.hits_weighted()), w, zero)
+            }
         };
         // From the camera or a delta vertex, nothing else could have found it.
         let full = !self.has_prev | self.prev_delta;
         L::F::select(self.mask(full & lanes), one, w)
+    }
+
+    /// The lanes whose ray's emission from a light that light sampling picks gets a
+    /// weight above zero (`hit_weight`): the rest leave it to light sampling.
+    #[inline(always)]
+    fn hits_weighted(&self) -> LaneBits {
+        let full = !self.has_prev | self.prev_delta;
+        full | match self.it.t.s.strategy {
+            DirectStrategy::Hemisphere | DirectStrategy::Light => 0,
+            DirectStrategy::Mis | DirectStrategy::Bsdf => self.l.all(),
+            DirectStrategy::MisGlossy => self.prev_glossy,
+        }
     }
 
     /// For the lanes in `lanes` (all with a previous vertex): the area light that the
@@ -609,7 +627,7 @@ impl<'k, 'a, L: Lanes> Kernel<'k, 'a, L> {
             best_light = L::U::select(m, l.u(k as u32), best_light);
             best |= take;
         }
-        let counted = self.counts(best);
+        let counted = self.counts(best) & self.hits_weighted();
         if counted != 0 {
             let lights = &self.it.t.scene.lights;
             let ids = best_light.to_array();
@@ -687,7 +705,9 @@ impl<'k, 'a, L: Lanes> Kernel<'k, 'a, L> {
         let acc = match self.it.t.s.strategy {
             DirectStrategy::Bsdf => return,
             DirectStrategy::Hemisphere => self.direct_hemisphere(lanes, v),
-            DirectStrategy::Light | DirectStrategy::Mis => self.direct_lights(lanes, v),
+            DirectStrategy::Light | DirectStrategy::Mis | DirectStrategy::MisGlossy => {
+                self.direct_lights(lanes, v)
+            }
         };
         self.add_radiance(lanes, acc);
     }
@@ -701,7 +721,11 @@ impl<'k, 'a, L: Lanes> Kernel<'k, 'a, L> {
         let (hit, bsdf, frame, wo) = (&v.hit, &v.bsdf, &v.frame, v.wo);
         // (From the local `wo`, as it always was: `-w` can differ in the last bit.)
         let wo_world = frame.world(wo);
-        let mis = self.it.t.s.strategy == DirectStrategy::Mis;
+        let mis = match self.it.t.s.strategy {
+            DirectStrategy::Mis => lanes,
+            DirectStrategy::MisGlossy => lanes & v.bsdf.glossy,
+            _ => 0,
+        };
         let mut acc = V3::splat(l, Vec3::ZERO);
         let mut shadow = RayPacket {
             skip: hit.prim,
@@ -742,10 +766,12 @@ impl<'k, 'a, L: Lanes> Kernel<'k, 'a, L> {
                 if lit == 0 {
                     continue;
                 }
-                let weight = if mis && !light.is_delta() {
-                    power_heuristic(nf, ls.pdf, self.f(1.0), bsdf.pdf(l, wo, wi))
+                let one = self.f(1.0);
+                let weight = if mis & lit != 0 && !light.is_delta() {
+                    let w = power_heuristic(nf, ls.pdf, one, bsdf.pdf(l, wo, wi));
+                    L::F::select(self.mask(mis), w, one)
                 } else {
-                    self.f(1.0)
+                    one
                 };
                 let contrib = f * ls.li * (wi.z.abs() * weight / ls.pdf);
                 acc = V3::select(self.mask(lit), acc + contrib / nf, acc);
@@ -834,6 +860,8 @@ impl<'k, 'a, L: Lanes> Kernel<'k, 'a, L> {
         // finds still traces it, or a delta lobe (whose light nothing else finds).
         if !self.it.bsdf_rays_find_light() {
             ended |= cap & !v.bsdf.delta;
+        } else if self.it.t.s.strategy == DirectStrategy::MisGlossy && !self.it.unsampled_emitters {
+            ended |= cap & !v.bsdf.delta & !v.bsdf.glossy;
         }
         let go = lanes & !ended;
         let beta = self.beta * bs.weight;
@@ -855,6 +883,7 @@ impl<'k, 'a, L: Lanes> Kernel<'k, 'a, L> {
             self.prev_pdf = L::F::select(m, bs.pdf, self.prev_pdf);
             self.has_prev |= survive;
             self.prev_delta = (self.prev_delta & !survive) | (v.bsdf.delta & survive);
+            self.prev_glossy = (self.prev_glossy & !survive) | (v.bsdf.glossy & survive);
             let origin = v.hit.spawn_origins(l, survive, wi_world);
             let (t_max, skip) = (self.f(f32::INFINITY), l.u_from(v.hit.prim));
             self.rays

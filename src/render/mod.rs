@@ -444,7 +444,7 @@ fn render_warnings(job: &RenderJob, s: &RenderSettings) -> Vec<String> {
         _ if light_tracing => None,
         DirectStrategy::Hemisphere => Some("hemisphere sampling (-H)"),
         DirectStrategy::Bsdf => Some("BSDF sampling alone"),
-        DirectStrategy::Light | DirectStrategy::Mis => None,
+        DirectStrategy::Light | DirectStrategy::Mis | DirectStrategy::MisGlossy => None,
     };
     if let (Some(name), Shading::Radiance, true) = (blind, s.shading, s.max_depth > 0) {
         let delta = scene.lights.iter().filter(|l| l.is_delta()).count();
