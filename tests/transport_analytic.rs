@@ -148,6 +148,22 @@ fn furnace_converges_to_geometric_series_limit() {
     );
 }
 
+/// The mean green radiance from `x` toward `eye` over `n` paths of stream `key`, and
+/// its standard error.
+fn radiance_mean(integ: &PathIntegrator, eye: Vec3, x: Vec3, key: u32, n: u32) -> (f64, f64) {
+    let (mut s1, mut s2) = (0f64, 0f64);
+    for i in 0..n {
+        let v = integ.radiance_along(eye, (x - eye).normalize(), key, i).y as f64;
+        s1 += v;
+        s2 += v * v;
+    }
+    let mean = s1 / n as f64;
+    (
+        mean,
+        ((s2 / n as f64 - mean * mean).max(0.0) / n as f64).sqrt(),
+    )
+}
+
 /// A large Lambertian floor (y = 0) under a 1.0 × 0.8 area light at height 1.2 facing down.
 fn lit_floor(albedo: f32, le: f32) -> (Scene, [Vec3; 4]) {
     let (c, ex, ey) = (
@@ -257,16 +273,7 @@ fn area_light_irradiance_matches_closed_form() {
             } else {
                 20_000
             };
-            let (mut s1, mut s2) = (0f64, 0f64);
-            for i in 0..n {
-                let v = integ
-                    .radiance_along(eye, (x - eye).normalize(), k as u32, i)
-                    .y as f64;
-                s1 += v;
-                s2 += v * v;
-            }
-            let mean = s1 / n as f64;
-            let se = ((s2 / n as f64 - mean * mean).max(0.0) / n as f64).sqrt();
+            let (mean, se) = radiance_mean(&integ, eye, x, k as u32, n);
             assert!(
                 (mean - want as f64).abs() <= 4.5 * se + 1e-4 * want as f64,
                 "{strategy:?} at {x}: {mean} ± {se}, closed form {want}"
@@ -316,16 +323,7 @@ fn mis_at_glossy_vertices_takes_a_diffuse_floors_light_from_light_sampling() {
                 * polygon_irradiance(x, Vec3::Y, &quad, le as f64) as f32;
             let eye = x + Vec3::new(0.01, 0.05, 0.02);
             let n = 20_000;
-            let (mut s1, mut s2) = (0f64, 0f64);
-            for i in 0..n {
-                let v = integ
-                    .radiance_along(eye, (x - eye).normalize(), k as u32, i)
-                    .y as f64;
-                s1 += v;
-                s2 += v * v;
-            }
-            let mean = s1 / n as f64;
-            let se = ((s2 / n as f64 - mean * mean).max(0.0) / n as f64).sqrt();
+            let (mean, se) = radiance_mean(&integ, eye, x, k as u32, n);
             assert!(
                 (mean - want as f64).abs() <= 4.5 * se + 1e-4 * want as f64,
                 "{strategy:?} -m {m} at {x}: {mean} ± {se}, closed form {want}"
