@@ -724,7 +724,7 @@ impl<'k, 'a, L: Lanes> Kernel<'k, 'a, L> {
         let mis = match self.it.t.s.strategy {
             DirectStrategy::Mis => lanes,
             DirectStrategy::MisGlossy => lanes & v.bsdf.glossy,
-            _ => 0,
+            DirectStrategy::Light | DirectStrategy::Hemisphere | DirectStrategy::Bsdf => 0,
         };
         let mut acc = V3::splat(l, Vec3::ZERO);
         let mut shadow = RayPacket {
