@@ -99,16 +99,6 @@ impl<'a> PathIntegrator<'a> {
                 .collect(),
         }
     }
-
-    /// Whether a BSDF-sampled ray leaving a non-delta vertex can add light: with MIS,
-    /// or when the scene has emitters that light sampling cannot pick.
-    fn bsdf_rays_find_light(&self) -> bool {
-        match self.t.s.strategy {
-            DirectStrategy::Mis | DirectStrategy::MisGlossy | DirectStrategy::Bsdf => true,
-            DirectStrategy::Hemisphere => false,
-            DirectStrategy::Light => self.unsampled_emitters,
-        }
-    }
 }
 
 impl PathIntegrator<'_> {
@@ -553,21 +543,34 @@ impl<'k, 'a, L: Lanes> Kernel<'k, 'a, L> {
                 L::F::select(self.mask(self.hits_weighted()), w, zero)
             }
         };
-        // From the camera or a delta vertex, nothing else could have found it.
-        let full = !self.has_prev | self.prev_delta;
-        L::F::select(self.mask(full & lanes), one, w)
+        L::F::select(self.mask(self.found_in_full() & lanes), one, w)
+    }
+
+    /// Lanes whose ray left the camera or a delta vertex: nothing else could have found
+    /// the emission it finds, which counts in full.
+    #[inline(always)]
+    fn found_in_full(&self) -> LaneBits {
+        !self.has_prev | self.prev_delta
+    }
+
+    /// Of vertices whose glossy lanes are `glossy`, the lanes where emission from a
+    /// light that light sampling picks, found by the BSDF-sampled ray leaving them,
+    /// gets a weight above zero (MIS, or BSDF sampling alone); elsewhere light sampling
+    /// takes it all.
+    #[inline(always)]
+    fn bsdf_rays_weighted(&self, glossy: LaneBits) -> LaneBits {
+        match self.it.t.s.strategy {
+            DirectStrategy::Hemisphere | DirectStrategy::Light => 0,
+            DirectStrategy::Mis | DirectStrategy::Bsdf => self.l.all(),
+            DirectStrategy::MisGlossy => glossy,
+        }
     }
 
     /// The lanes whose ray's emission from a light that light sampling picks gets a
     /// weight above zero (`hit_weight`): the rest leave it to light sampling.
     #[inline(always)]
     fn hits_weighted(&self) -> LaneBits {
-        let full = !self.has_prev | self.prev_delta;
-        full | match self.it.t.s.strategy {
-            DirectStrategy::Hemisphere | DirectStrategy::Light => 0,
-            DirectStrategy::Mis | DirectStrategy::Bsdf => self.l.all(),
-            DirectStrategy::MisGlossy => self.prev_glossy,
-        }
+        self.found_in_full() | self.bsdf_rays_weighted(self.prev_glossy)
     }
 
     /// For the lanes in `lanes` (all with a previous vertex): the area light that the
@@ -721,11 +724,8 @@ impl<'k, 'a, L: Lanes> Kernel<'k, 'a, L> {
         let (hit, bsdf, frame, wo) = (&v.hit, &v.bsdf, &v.frame, v.wo);
         // (From the local `wo`, as it always was: `-w` can differ in the last bit.)
         let wo_world = frame.world(wo);
-        let mis = match self.it.t.s.strategy {
-            DirectStrategy::Mis => lanes,
-            DirectStrategy::MisGlossy => lanes & v.bsdf.glossy,
-            DirectStrategy::Light | DirectStrategy::Hemisphere | DirectStrategy::Bsdf => 0,
-        };
+        // MIS where the BSDF-sampled ray's emission also counts.
+        let mis = lanes & self.bsdf_rays_weighted(v.bsdf.glossy);
         let mut acc = V3::splat(l, Vec3::ZERO);
         let mut shadow = RayPacket {
             skip: hit.prim,
@@ -856,13 +856,17 @@ impl<'k, 'a, L: Lanes> Kernel<'k, 'a, L> {
         let (bs, wi_world, go) = v.sample_next(l, lanes, u_lobe, u);
         let mut ended = lanes & !go;
         let cap = self.at_depth_cap(lanes);
-        // At the depth cap only a strategy that weights the light a BSDF-sampled ray
-        // finds still traces it, or a delta lobe (whose light nothing else finds).
-        if !self.it.bsdf_rays_find_light() {
-            ended |= cap & !v.bsdf.delta;
-        } else if self.it.t.s.strategy == DirectStrategy::MisGlossy && !self.it.unsampled_emitters {
-            ended |= cap & !v.bsdf.delta & !v.bsdf.glossy;
-        }
+        // At the depth cap the BSDF-sampled ray is traced only where the light it finds
+        // counts: weighted against light sampling, from emitters light sampling cannot
+        // pick (every strategy but hemisphere sampling, which finds them itself), or
+        // through a delta lobe (whose light nothing else finds).
+        let unsampled =
+            self.it.unsampled_emitters && self.it.t.s.strategy != DirectStrategy::Hemisphere;
+        let finds_light = match unsampled {
+            true => l.all(),
+            false => self.bsdf_rays_weighted(v.bsdf.glossy),
+        };
+        ended |= cap & !v.bsdf.delta & !finds_light;
         let go = lanes & !ended;
         let beta = self.beta * bs.weight;
         let eta_scale = self.eta_scale / v.bsdf.radiance_scale(l, v.wo, bs.wi);
