@@ -99,14 +99,7 @@ fn split_samples_leave_the_expected_image_unchanged() {
         let kind = AccelKind::Native(BvhBuilder::Sah);
         let plain = render_halves(&scene, SIZE, &settings(5, 64, 0, 5), kind);
         let split = render_halves(&scene, SIZE, &settings(5, 64, 16, 5), kind);
-        let (a, b) = (plain.avg.mean(), split.avg.mean());
-        let se = (plain.noise_of_mean().powi(2) + split.noise_of_mean().powi(2)).sqrt();
-        for c in 0..3 {
-            assert!(
-                ((a[c] - b[c]) as f64).abs() <= 4.5 * se,
-                "{name}: channel {c}: without {a} vs with {b} (se {se})"
-            );
-        }
+        plain.assert_same_mean(&split, &format!("{name}: without vs with the split"));
         // The split pixels are the noisiest: their error is what falls.
         // (Less on the glossy spheres, whose indirect light carries more of the noise.)
         let bound = if name == DIFFUSE { 0.8 } else { 0.9 };

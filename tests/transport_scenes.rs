@@ -29,20 +29,8 @@ fn hemisphere_and_light_sampling_agree_on_cbspheres_lambertian() {
     let light = run(32, DirectStrategy::Light);
     let hemi = run(256, DirectStrategy::Hemisphere);
     let mis = run(32, DirectStrategy::Mis);
-    let (ml, mh, mm) = (light.avg.mean(), hemi.avg.mean(), mis.avg.mean());
-    // The two means differ by noise only: 4.5 combined standard errors.
-    let se_lh = (light.noise_of_mean().powi(2) + hemi.noise_of_mean().powi(2)).sqrt();
-    let se_lm = (light.noise_of_mean().powi(2) + mis.noise_of_mean().powi(2)).sqrt();
-    for c in 0..3 {
-        assert!(
-            ((ml[c] - mh[c]) as f64).abs() <= 4.5 * se_lh,
-            "channel {c}: light {ml} vs hemisphere {mh} (se {se_lh})"
-        );
-        assert!(
-            ((ml[c] - mm[c]) as f64).abs() <= 4.5 * se_lm,
-            "channel {c}: light {ml} vs MIS {mm} (se {se_lm})"
-        );
-    }
+    light.assert_same_mean(&hemi, "light vs hemisphere");
+    light.assert_same_mean(&mis, "light vs MIS");
     // And light sampling is the less noisy one at equal samples, as it should be.
     assert!(light.noise_per_pixel() < hemi.noise_per_pixel() * (256f64 / 32.0).sqrt());
 }
@@ -68,14 +56,7 @@ fn mis_at_glossy_vertices_agrees_with_mis_everywhere() {
             render_halves(&scene, (80, 60), &s, AccelKind::Native(BvhBuilder::Sah))
         };
         let (mis, mixed) = (run(DirectStrategy::Mis), run(DirectStrategy::MisGlossy));
-        let (a, b) = (mis.avg.mean(), mixed.avg.mean());
-        let se = (mis.noise_of_mean().powi(2) + mixed.noise_of_mean().powi(2)).sqrt();
-        for c in 0..3 {
-            assert!(
-                ((a[c] - b[c]) as f64).abs() <= 4.5 * se,
-                "-m {m} channel {c}: MIS {a} vs MIS at glossy vertices {b} (se {se})"
-            );
-        }
+        mis.assert_same_mean(&mixed, &format!("-m {m}: MIS vs MIS at glossy vertices"));
     }
 }
 

@@ -74,6 +74,20 @@ impl HalfRenders {
     pub fn noise_of_mean(&self) -> f64 {
         self.noise_per_pixel() / (self.avg.pixels.len() as f64).sqrt()
     }
+
+    /// Panics unless the averaged images of `self` and `other` (`what` names them)
+    /// have the same mean in every channel within 4.5 combined standard errors: two
+    /// unbiased estimators of one image differ by noise only.
+    pub fn assert_same_mean(&self, other: &HalfRenders, what: &str) {
+        let (a, b) = (self.avg.mean(), other.avg.mean());
+        let se = (self.noise_of_mean().powi(2) + other.noise_of_mean().powi(2)).sqrt();
+        for c in 0..3 {
+            assert!(
+                ((a[c] - b[c]) as f64).abs() <= 4.5 * se,
+                "{what}: channel {c}: {a} vs {b} (se {se})"
+            );
+        }
+    }
 }
 
 /// A uniformly random point of a uniformly chosen triangle of `scene` (which must
