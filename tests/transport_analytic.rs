@@ -699,6 +699,44 @@ fn caustics_of_point_and_directional_lights_off_a_mirror() {
     }
 }
 
+/// Smooth metal in place of the mirror (`Material::focuses`): path tracing finds the
+/// light it casts by light sampling at the metal, and `Caustics` hands that light to
+/// light tracing, dropping it from its camera paths. The two images' means must agree
+/// within 4.5 standard errors; the metal's light is over 20 of them, so counting it
+/// twice (or not at all) would show.
+#[test]
+fn caustics_off_smooth_metal_from_point_and_directional_lights() {
+    for directional in [false, true] {
+        let (mut scene, cam, irradiance) = mirror_beside_a_delta_light(directional);
+        scene.materials[1] = Material::microfacet(0.05, Color::splat(0.2), Color::splat(3.0));
+        let radiance = 0.8 / std::f64::consts::PI;
+        let without = closed_form_image(&scene, &cam, |hit| {
+            radiance * irradiance(hit.expect("the camera sees only the floor").p).0
+        });
+        let job = RenderJob::with_camera(scene, AccelKind::Native(BvhBuilder::Sah), cam).unwrap();
+        let render = |estimator| {
+            let s = RenderSettings {
+                spp: 256,
+                max_depth: 2,
+                estimator: Some(estimator),
+                roulette: Roulette::Off,
+                seed: 13,
+                ..Default::default()
+            };
+            finite_luminance(&job.render(&s))
+        };
+        let (path, caustics) = (render(Estimator::Path), render(Estimator::Caustics));
+        let d: Vec<f64> = caustics.iter().zip(&path).map(|(c, p)| c - p).collect();
+        let (diff, se) = mean_and_stderr(&d);
+        let metal = mean_and_stderr(&path).0 - mean_and_stderr(&without).0;
+        let what = format!(
+            "directional {directional}: caustics − path {diff} (se {se}); the metal's light {metal}"
+        );
+        assert!(diff.abs() <= 4.5 * se, "{what}");
+        assert!(metal > 20.0 * se, "{what}");
+    }
+}
+
 /// Every bounce draws its own numbers (issue 24): were the roulette numbers of two
 /// bounces the same, a path would survive the second whenever it survived the first,
 /// and the furnace's mean under fixed roulette would be far off. With q = ½ from

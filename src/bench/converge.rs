@@ -43,7 +43,7 @@ pub struct ConvergeOptions {
     pub width: u32,
     pub height: u32,
     pub max_depth: u32,
-    /// Largest spp of the doubling sequence.
+    /// Largest spp of ember's doubling sequence (peers go one count further).
     pub max_spp: u32,
     /// A method stops doubling once one render takes longer than this.
     pub max_seconds_per_point: f64,
@@ -525,7 +525,9 @@ fn seed_offset(spp: u32, k: u32) -> u64 {
 /// Mitsuba takes 32-bit seeds: refused before the long run if the largest point seed
 /// would not fit.
 fn check_peer_seeds(opts: &ConvergeOptions) -> Result<()> {
-    let most = u64::from(u32::MAX) - seed_offset(opts.max_spp, opts.seeds.max(1) - 1);
+    // Peers go one count past --max-spp, at most 4× it (`MitsubaRunner::sample_counts`).
+    let largest = opts.max_spp.saturating_mul(4);
+    let most = u64::from(u32::MAX) - seed_offset(largest, opts.seeds.max(1) - 1);
     if opts.mitsuba.is_some() && opts.seed > most {
         bail!(
             "--seed {}: Mitsuba takes 32-bit seeds; with these --max-spp and --seeds, --seed must be at most {most}",

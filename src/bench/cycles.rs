@@ -51,10 +51,10 @@ impl CyclesRunner {
         "Blender Cycles 4.5".into()
     }
 
-    /// 2, 4, … up to `max_spp`: the script subtracts a 1-spp render as fixed cost,
-    /// so a 1-spp point has no time of its own.
+    /// 2, 4, … up to `max_spp` and one step beyond (as Mitsuba's counts): the script
+    /// subtracts a 1-spp render as fixed cost, so a 1-spp point has no time of its own.
     pub fn sample_counts(&self, max_spp: u32) -> Vec<u32> {
-        super::doubling(2, max_spp).collect()
+        super::doubling(2, max_spp.saturating_mul(2)).collect()
     }
 
     /// Whether the script can translate `scene` exactly (`Err` says what it cannot),

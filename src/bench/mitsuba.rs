@@ -90,12 +90,15 @@ impl MitsubaRunner {
     }
 
     /// The sample counts of the doubling sequence 1, 2, 4, … up to `max_spp` as
-    /// this sampler takes them (rounded up as Mitsuba does, repeats dropped).
+    /// this sampler takes them (rounded up as Mitsuba does, repeats dropped), and
+    /// the first count it takes beyond: ember's render at `max_spp` often takes
+    /// longer than a peer's, and the equal-time table compares at ember's times.
     pub fn sample_counts(&self, max_spp: u32) -> Vec<u32> {
         let mut v: Vec<u32> = super::doubling(1, max_spp)
             .map(|n| self.sampler.sample_count(n))
             .filter(|&n| n <= max_spp)
             .collect();
+        v.push(self.sampler.sample_count(max_spp.saturating_mul(2)));
         v.dedup();
         v
     }
@@ -281,6 +284,27 @@ mod tests {
             assert!(text.contains(&want), "{roulette:?}: {text}");
         }
         std::fs::remove_dir_all(&dir).unwrap();
+    }
+
+    /// Each sampler's counts up to the largest, as it takes them, then one past it.
+    #[test]
+    fn peer_counts_go_one_past_the_largest() {
+        let counts = |sampler| {
+            let runner = MitsubaRunner {
+                python: PathBuf::new(),
+                script: PathBuf::new(),
+                variant: "scalar_rgb".into(),
+                sampler,
+                roulette: MitsubaRoulette::Ember,
+                dir: PathBuf::new(),
+            };
+            runner.sample_counts(256)
+        };
+        assert_eq!(counts(MitsubaSampler::Ldsampler), [4, 16, 64, 256, 1024]);
+        let multijitter = counts(MitsubaSampler::Multijitter);
+        assert_eq!(multijitter[..3], [1, 2, 4]);
+        assert_eq!(multijitter[multijitter.len() - 2..], [256, 528]);
+        assert_eq!(counts(MitsubaSampler::Independent).last(), Some(&512));
     }
 
     #[test]

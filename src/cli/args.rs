@@ -388,7 +388,7 @@ pub struct BenchConvergeArgs {
     /// Resolution.
     #[arg(short = 'r', num_args = 2, action = clap::ArgAction::Set, value_names = ["WIDTH", "HEIGHT"], default_values_t = [160, 120])]
     pub resolution: Vec<u32>,
-    /// Largest spp of the doubling sequence 1, 2, 4, ...
+    /// Largest spp of ember's doubling sequence 1, 2, 4, ... (peers go one count further, so that ember's time at it falls within their curves)
     #[arg(long, default_value_t = 1024)]
     pub max_spp: u32,
     /// Stop doubling a method once one render takes longer than this (seconds).
@@ -587,7 +587,7 @@ pub struct RenderArgs {
           value_parser = clap::value_parser!(u32).range(0..=1024))]
     pub direct_split: u32,
 
-    /// Estimator. auto: where a light (other than ambient or environment) shines on a mirror or glass surface, another surface can receive the caustic, -m is at least 2 and no emissive surface is not a light, caustics (path tracing with light-traced caustics; path tracing with -a); where every light is a point or spot light, nothing is specular or self-emitting and -m is at least 2, light tracing or path tracing, whichever a small pilot render of each finds less noisy per ray traced (light tracing on CBempty, path tracing on CMU462's basic scenes); otherwise path tracing with MIS (light + BSDF sampling) when the scene has an ambient or environment (-e) light, MIS at glossy surfaces and light sampling at diffuse ones (mis-glossy) when it has glossy surfaces, light sampling otherwise. A direct-lighting strategy name means path tracing with it. -H forces hemisphere.
+    /// Estimator. auto: where a light (other than ambient or environment) shines on a mirror, glass or smooth metal (microfacet alpha at most 0.3) surface, another surface can receive the caustic, -m is at least 2 and no emissive surface is not a light, caustics (path tracing with light-traced caustics; path tracing with -a); where every light is a point or spot light, nothing is specular or self-emitting and -m is at least 2, light tracing or path tracing, whichever a small pilot render of each finds less noisy per ray traced (light tracing on CBempty, path tracing on CMU462's basic scenes); otherwise path tracing with MIS (light + BSDF sampling) when the scene has an ambient or environment (-e) light, MIS at glossy surfaces and light sampling at diffuse ones (mis-glossy) when it has glossy surfaces, light sampling otherwise. A direct-lighting strategy name means path tracing with it. -H forces hemisphere.
     #[arg(long, value_parser = integrator(), default_value = AUTO)]
     pub integrator: IntegratorChoice,
 

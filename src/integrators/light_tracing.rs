@@ -23,7 +23,10 @@
 use super::path::{geometrically_consistent, occluded, trace};
 use super::vertex::{Depth, Scattering, Vertex};
 use super::Engine;
-use super::{PathIntegrator, PathSettings, SampleIntegrator, Splat, SplatIntegrator, Tracing};
+use super::{
+    starts_caustic_paths, PathIntegrator, PathSettings, SampleIntegrator, Splat, SplatIntegrator,
+    Tracing,
+};
 use crate::geometry::NO_PRIM;
 use crate::lanes::rays::{HitPacket, RayPacket};
 use crate::lanes::{
@@ -54,7 +57,7 @@ pub struct LightTracer<'a> {
     scattering: Scattering,
     /// Cumulative light-selection probabilities, proportional to emitted power.
     light_cdf: Vec<f32>,
-    /// For caustics: the sphere around the mirrors and glass, which point and
+    /// For caustics: the sphere around the focusing surfaces, which point and
     /// directional lights aim their paths at (every other path ends at its first hit).
     aim: Option<EmissionAim>,
     /// Emitters seen directly (0-bounce paths), which only camera rays can find.
@@ -129,31 +132,15 @@ impl<'a> LightTracer<'a> {
     }
 }
 
-/// Whether `light` starts the light paths of `Estimator::Caustics`, so that each path
-/// is counted once:
-/// - area lights: the path tracer drops exactly the caustic paths that end on an
-///   area light (`PathIntegrator::area_light_on_line`);
-/// - point, spot and directional lights: the path tracer never finds a path whose
-///   vertex next to the light is a mirror or glass (neither a shadow ray nor a
-///   BSDF-sampled ray can reach a point or a single direction through one), so
-///   without light tracing those caustics would be missing;
-/// - ambient and environment lights: the path tracer finds their light through
-///   mirrors and glass by BSDF sampling, and keeps it.
-pub fn starts_caustic_paths(light: &Light) -> bool {
-    match light {
-        Light::Area(_) | Light::Point { .. } | Light::Spot(_) | Light::Directional { .. } => true,
-        Light::Ambient { .. } | Light::Environment(_) => false,
-    }
-}
-
 /// Whether `Estimator::Caustics` differs from path tracing on `scene` at `max_depth`:
-/// a mirror or glass surface, a light that starts caustic paths and emits, a
+/// a focusing surface (`Material::focuses`), a light that starts caustic paths and
+/// emits, a
 /// surface that is neither to receive them, and at least two bounces (light →
 /// specular → non-specular surface seen by the camera).
 pub fn caustics_possible(scene: &Scene, max_depth: u32) -> bool {
-    let receives = |m: &Material| m.scatters() && !m.is_delta();
+    let receives = |m: &Material| m.scatters() && !m.focuses();
     max_depth >= 2
-        && scene.materials.iter().any(|m| m.is_delta())
+        && scene.materials.iter().any(|m| m.focuses())
         && scene.materials.iter().any(receives)
         && scene.lights.iter().any(starts_emitting_caustic_paths)
 }
@@ -163,14 +150,14 @@ fn starts_emitting_caustic_paths(light: &Light) -> bool {
     starts_caustic_paths(light) && light.power(1.0) > 0.0
 }
 
-/// The bounding sphere of the scene's mirror and glass surfaces, if it has any.
+/// The bounding sphere of the scene's focusing surfaces, if it has any.
 fn specular_bounds(scene: &Scene) -> Option<EmissionAim> {
     // Primitive ids number the triangles first, then the spheres.
     let materials = (scene.triangles.iter().map(|t| t.material))
         .chain(scene.spheres.iter().map(|s| s.material));
     let b = (0..)
         .zip(materials)
-        .filter(|&(_, m)| scene.materials[m as usize].is_delta())
+        .filter(|&(_, m)| scene.materials[m as usize].focuses())
         .map(|(prim, _)| scene.prim_bounds(prim))
         .reduce(|a, b| a.union(&b))?;
     EmissionAim::around(&b)
@@ -375,10 +362,10 @@ impl<'k, 'a, L: Lanes> LightKernel<'k, 'a, L> {
         let v = Vertex::new(l, it.t.scene, lanes, hit, w);
         let first = self.from_light & lanes;
         self.from_light &= !live;
-        // Caustics only: a path whose first vertex is not specular is the path
+        // Caustics only: a path whose first vertex does not focus light is the path
         // tracer's.
         let lanes = if it.t.s.caustics_by_light {
-            let not_caustic = first & !v.bsdf.delta;
+            let not_caustic = first & !v.bsdf.focus;
             ended |= not_caustic;
             lanes & !not_caustic
         } else {
@@ -389,7 +376,13 @@ impl<'k, 'a, L: Lanes> LightKernel<'k, 'a, L> {
         }
         // The pairs of this bounce: the lens point, the BSDF direction, lobe and roulette.
         self.depth.advance(l, l.mask(lanes), PAIRS_PER_BOUNCE);
-        let connect = self.depth.counts(l, &it.t.s, lanes) & !v.bsdf.delta;
+        // Caustics only: the path tracer takes the paths whose vertex seen by the
+        // camera focuses light.
+        let unconnected = match it.t.s.caustics_by_light {
+            true => v.bsdf.focus,
+            false => v.bsdf.delta,
+        };
+        let connect = self.depth.counts(l, &it.t.s, lanes) & !unconnected;
         if connect != 0 {
             let u_lens = self.stream.get_2d(self.depth.pair_base);
             self.connect_to_camera(connect, &v, u_lens);

@@ -22,6 +22,7 @@ pub use path::PathIntegrator;
 use crate::accel::Accel;
 use crate::camera::Camera;
 use crate::lanes::Real;
+use crate::lights::Light;
 use crate::names::{display_from_table, Named};
 use crate::sampling::SamplerKind;
 use crate::scene::Scene;
@@ -234,11 +235,12 @@ pub enum Estimator {
     /// Paths start on the lights and connect to the camera (`light_tracing`).
     LightTracing,
     /// Path tracing, with light tracing for the caustics it finds only by chance, or
-    /// never: paths whose first surface from the camera is not specular and that
-    /// reach a light through mirrors or glass from a surface that is not
-    /// (`x₁ D … D S⁺ L`). From an area light the path tracer finds them by chance and
-    /// drops them here; from a point, spot or directional light it cannot find them
-    /// at all (`light_tracing::starts_caustic_paths`). The two take disjoint sets
+    /// never: paths whose first surface from the camera does not focus light and
+    /// whose last surface before a light does (`x₁ D … D F L`; focusing: mirrors,
+    /// glass and smooth metal, `Material::focuses`). From an area light the path
+    /// tracer finds them by chance (through a smooth metal also by light sampling)
+    /// and drops them here; from a point, spot or directional light it cannot find them
+    /// at all (`starts_caustic_paths`). The two take disjoint sets
     /// of paths, so their sum is unbiased (README). How many light paths it traces
     /// per camera sample is a pilot's choice (`render::pilot::CausticsSplit`). Its
     /// light paths are numbered by camera sample index, so sample ranges merge, and
@@ -264,7 +266,7 @@ impl Named for Estimator {
         (
             Estimator::Caustics,
             "caustics",
-            "Path tracing, with light tracing (1 light path per 1 to 64 camera samples, as a small pilot render finds best for the scene) for the light that mirrors and glass focus onto surfaces the camera sees: far fewer fireflies under area lights, and the caustics of point, spot and directional lights, which path tracing cannot find; auto's choice wherever a light shines on mirrors or glass. Not with -a",
+            "Path tracing, with light tracing (1 light path per 1 to 64 camera samples, as a small pilot render finds best for the scene) for the light that mirrors, glass and smooth metal (microfacet alpha at most 0.3) focus onto surfaces the camera sees: far fewer fireflies under area lights, and the caustics of point, spot and directional lights, which path tracing cannot find; auto's choice wherever a light shines on mirrors or glass. Not with -a",
         ),
     ];
 }
@@ -278,10 +280,11 @@ impl Estimator {
     /// - Path tracing at `max_depth` ≤ 1: a point light's direct light is then exact
     ///   per camera sample, which light tracing only approaches by chance.
     /// - Path tracing with light-traced caustics (`Caustics`) wherever a light
-    ///   shines on a mirror or glass surface and a surface that is neither can
-    ///   receive the caustic (`light_tracing::caustics_possible`). From area lights
-    ///   it was 1.15–2.6× more efficient (noise² × time) than path tracing on every
-    ///   such shipped scene, CS184's CBcoil the closest (BENCHMARKS §3); from point,
+    ///   shines on a focusing surface and a surface that is not can receive the
+    ///   caustic (`light_tracing::caustics_possible`). From area lights it was
+    ///   1.15–2.6× more efficient (noise² × time) than path tracing on every such
+    ///   shipped scene with mirrors or glass, CS184's CBcoil the closest, and
+    ///   1.2–2× on the microfacet spheres and copper bunny (BENCHMARKS §3); from point,
     ///   spot and directional lights path tracing misses the caustic altogether.
     ///   Not where emissive surfaces that are not lights sit in the scene. Only
     ///   BSDF sampling finds those, at every bounce, so their noise dwarfs the
@@ -316,6 +319,23 @@ impl Estimator {
         } else {
             Some(Estimator::Path)
         }
+    }
+}
+
+/// Whether `light` starts the light paths of `Estimator::Caustics`, so that each path
+/// is counted once:
+/// - area, point, spot and directional lights: the path tracer drops exactly the
+///   caustic paths that end on them, found by light sampling at a focusing glossy
+///   vertex or by a BSDF-sampled ray leaving one (`PathIntegrator::direct_lights`,
+///   `area_light_on_line`); through mirrors and glass it never reaches a point or a
+///   single direction at all, so without light tracing those caustics would be
+///   missing;
+/// - ambient and environment lights: the path tracer finds their light through
+///   focusing surfaces by BSDF sampling, and keeps it.
+pub fn starts_caustic_paths(light: &Light) -> bool {
+    match light {
+        Light::Area(_) | Light::Point { .. } | Light::Spot(_) | Light::Directional { .. } => true,
+        Light::Ambient { .. } | Light::Environment(_) => false,
     }
 }
 

@@ -13,11 +13,11 @@
 //! run each kind present (`BsdfLanes`), masked.
 
 use super::vertex::{Depth, Scattering, Vertex};
-use super::Engine;
 use super::{
     power_heuristic, DirectStrategy, PathSettings, PixelSamples, SampleIntegrator, SampleValue,
     Tracing,
 };
+use super::{starts_caustic_paths, Engine};
 use crate::accel::Accel;
 use crate::geometry::NO_PRIM;
 use crate::lanes::rays::{HitPacket, RayPacket};
@@ -206,9 +206,11 @@ struct Kernel<'k, 'a, L: Lanes> {
     /// Lanes whose previous vertex was glossy (`DirectStrategy::MisGlossy` weights
     /// the emission their ray finds; from a diffuse vertex it is light sampling's).
     prev_glossy: LaneBits,
-    /// Lanes whose first vertex from the camera is not specular (light tracing can
-    /// connect it to the camera).
-    first_diffuse: LaneBits,
+    /// Lanes whose first vertex from the camera does not focus light
+    /// (`BsdfLanes::focus`): `Estimator::Caustics` light-traces their caustics.
+    first_unfocused: LaneBits,
+    /// Lanes whose previous vertex focuses light.
+    prev_focus: LaneBits,
     /// Lanes whose camera ray met a surface.
     met_surface: LaneBits,
     /// Light found after fewer bounces than this does not count (`PixelSamples::min_bounces`).
@@ -254,7 +256,8 @@ impl<'k, 'a, L: Lanes> Kernel<'k, 'a, L> {
             prev_pdf: l.f(0.0),
             prev_delta: 0,
             prev_glossy: 0,
-            first_diffuse: 0,
+            first_unfocused: 0,
+            prev_focus: 0,
             met_surface: 0,
             min_bounces: l.f(0.0),
             slots: Slots {
@@ -514,7 +517,7 @@ impl<'k, 'a, L: Lanes> Kernel<'k, 'a, L> {
         }
         let v = Vertex::new(l, scene, lanes, hit, w);
         let first = lanes & !self.has_prev;
-        self.first_diffuse = (self.first_diffuse & !first) | (first & !v.bsdf.delta);
+        self.first_unfocused = (self.first_unfocused & !first) | (first & !v.bsdf.focus);
         self.depth
             .advance(l, self.mask(lanes), self.it.layout.per_bounce);
         let direct = self.counts(lanes) & !v.bsdf.delta;
@@ -641,9 +644,9 @@ impl<'k, 'a, L: Lanes> Kernel<'k, 'a, L> {
             let pdf = per_lane(w.x, |i| area(i).pdf_li(at(&p, i), at(&d, i)));
             let mut weight = self.hit_weight(counted, Some(pdf));
             if self.it.t.s.caustics_by_light {
-                // Through mirrors or glass from a surface light tracing connects to the
+                // Through a focusing surface from one light tracing connects to the
                 // camera: light tracing's path (`Estimator::Caustics`).
-                let caustic = self.prev_delta & self.first_diffuse & self.has_prev & counted;
+                let caustic = self.prev_focus & self.first_unfocused & self.has_prev & counted;
                 weight = L::F::select(self.mask(caustic), self.f(0.0), weight);
             }
             self.add_radiance(counted, le * weight);
@@ -731,9 +734,14 @@ impl<'k, 'a, L: Lanes> Kernel<'k, 'a, L> {
             skip: hit.prim,
             ..RayPacket::default()
         };
+        let caustic = self.caustic_vertices(lanes, v);
         let mut k = 0;
         for (light, &n) in self.it.t.scene.lights.iter().zip(&self.it.light_samples) {
             let nf = self.f(n as f32);
+            let lanes = match starts_caustic_paths(light) {
+                true => lanes & !caustic,
+                false => lanes,
+            };
             for _ in 0..n {
                 let u = self.light_2d(k);
                 k += 1;
@@ -780,8 +788,19 @@ impl<'k, 'a, L: Lanes> Kernel<'k, 'a, L> {
         acc
     }
 
+    /// Of `lanes`, the focusing vertices after an unfocused first one: light tracing
+    /// takes the light that reaches them straight from the lights it starts from
+    /// (`Estimator::Caustics`).
+    #[inline(always)]
+    fn caustic_vertices(&self, lanes: LaneBits, v: &Vertex<L>) -> LaneBits {
+        match self.it.t.s.caustics_by_light {
+            true => lanes & v.bsdf.focus & self.first_unfocused,
+            false => 0,
+        }
+    }
+
     /// `-H`: `-l` uniform directions on the hemisphere of `wo`, counting whatever
-    /// emission they find.
+    /// emission they find (but the area lights' at caustic vertices).
     #[inline(always)]
     fn direct_hemisphere(&mut self, lanes: LaneBits, v: &Vertex<L>) -> V3<L::F> {
         let l = self.l;
@@ -789,6 +808,7 @@ impl<'k, 'a, L: Lanes> Kernel<'k, 'a, L> {
         let n = self.it.t.s.light_samples;
         let (hit, bsdf, frame, wo) = (&v.hit, &v.bsdf, &v.frame, v.wo);
         let wo_world = frame.world(wo);
+        let caustic = self.caustic_vertices(lanes, v);
         let mut acc = V3::splat(l, Vec3::ZERO);
         let mut rays = RayPacket::default();
         let mut found = HitPacket::default();
@@ -825,7 +845,8 @@ impl<'k, 'a, L: Lanes> Kernel<'k, 'a, L> {
                     }
                     match scene.lights.get(there.light[i] as usize) {
                         Some(Light::Area(a))
-                            if a.intersect(hit.p.lane(i), wi_world.lane(i)).is_some() =>
+                            if caustic >> i & 1 == 0
+                                && a.intersect(hit.p.lane(i), wi_world.lane(i)).is_some() =>
                         {
                             a.emitted(cos_out.lane(i))
                         }
@@ -888,6 +909,7 @@ impl<'k, 'a, L: Lanes> Kernel<'k, 'a, L> {
             self.has_prev |= survive;
             self.prev_delta = (self.prev_delta & !survive) | (v.bsdf.delta & survive);
             self.prev_glossy = (self.prev_glossy & !survive) | (v.bsdf.glossy & survive);
+            self.prev_focus = (self.prev_focus & !survive) | (v.bsdf.focus & survive);
             let origin = v.hit.spawn_origins(l, survive, wi_world);
             let (t_max, skip) = (self.f(f32::INFINITY), l.u_from(v.hit.prim));
             self.rays

@@ -27,7 +27,7 @@ pub struct EmissionSample {
 }
 
 /// A sphere that every light path worth tracing must enter: for caustics, the one
-/// around the mirrors and glass, which a caustic path's first segment meets. Point
+/// around the focusing surfaces, which a caustic path's first segment meets. Point
 /// and directional lights then emit only toward it (a point light inside it emits
 /// everywhere); the other lights ignore it.
 #[derive(Clone, Copy, Debug, PartialEq)]

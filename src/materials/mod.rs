@@ -98,6 +98,12 @@ pub trait Scatter<F: Real>: Copy {
     fn sample(&self, wo: V3<F>, u_lobe: F, u: (F, F)) -> BsdfSample<F>;
     /// The kind and its parameters, for `ember info`: `lambertian: albedo (0.5, 0.5, 0.5)`.
     fn describe(one: &Self::One) -> String;
+    /// Whether this BSDF focuses light into caustics that path tracing finds only by
+    /// chance: delta lobes, and glossy lobes narrow enough to act like them
+    /// (`Estimator::Caustics` light-traces the paths that reach a light through one).
+    fn focuses(_one: &Self::One) -> bool {
+        Self::FLAGS.delta
+    }
     /// The factor by which radiance (not importance) is scaled along `wo ← wi`:
     /// `(ηi/ηt)²` across a refracting interface, else 1 (for adjoint transport).
     #[inline(always)]
@@ -193,6 +199,11 @@ macro_rules! bsdfs {
                 match self { $(Bsdf::$kind(_) => <$ty as Scatter<f32>>::FLAGS,)* }
             }
 
+            /// Whether this BSDF focuses light into caustics (`Scatter::focuses`).
+            pub fn focuses(&self) -> bool {
+                match self { $(Bsdf::$kind(b) => <$ty as Scatter<f32>>::focuses(b),)* }
+            }
+
             /// The kind's name, as the loader and `ember info` say it.
             pub fn name(&self) -> &'static str {
                 match self { $(Bsdf::$kind(_) => $name,)* }
@@ -212,6 +223,8 @@ macro_rules! bsdfs {
             pub delta: LaneBits,
             pub scattering: LaneBits,
             pub glossy: LaneBits,
+            /// Lanes whose BSDF focuses light into caustics (`Scatter::focuses`).
+            pub focus: LaneBits,
         }
 
         impl<L: Lanes> BsdfLanes<L> {
@@ -230,7 +243,7 @@ macro_rules! bsdfs {
                     }
                     all[i] = Some(b);
                 }
-                let (mut delta, mut scattering, mut glossy) = (0, 0, 0);
+                let (mut delta, mut scattering, mut glossy, mut focus) = (0, 0, 0, 0);
                 $(#[allow(non_snake_case)] let $kind = {
                     let k = Kind::$kind as usize;
                     if of_kind[k] != 0 {
@@ -239,6 +252,7 @@ macro_rules! bsdfs {
                         for i in each_lane(of_kind[k]) {
                             if let Some(Bsdf::$kind(b)) = all[i] {
                                 each[i] = b;
+                                if <$ty as Scatter<f32>>::focuses(&b) { focus |= 1 << i; }
                             }
                         }
                         let flags = <$ty as Scatter<f32>>::FLAGS;
@@ -250,7 +264,7 @@ macro_rules! bsdfs {
                         None
                     }
                 };)*
-                BsdfLanes { $($kind,)* delta, scattering, glossy }
+                BsdfLanes { $($kind,)* delta, scattering, glossy, focus }
             }
 
             /// `f(wo, wi)` of each lane's BSDF.
@@ -431,6 +445,11 @@ impl Material {
     /// light sampling is pointless there.
     pub fn is_delta(&self) -> bool {
         self.flags().delta
+    }
+
+    /// Whether the material focuses light into caustics (`Scatter::focuses`).
+    pub fn focuses(&self) -> bool {
+        self.bsdf.focuses()
     }
 
     /// Whether the material scatters light at all.
