@@ -284,7 +284,7 @@ impl Estimator {
     ///   caustic (`light_tracing::caustics_possible`). From area lights it was
     ///   1.15–2.6× more efficient (noise² × time) than path tracing on every such
     ///   shipped scene with mirrors or glass, CS184's CBcoil the closest, and
-    ///   1.2–2× on the microfacet spheres and copper bunny (BENCHMARKS §3); from point,
+    ///   1.7× on the microfacet spheres and the copper bunny (BENCHMARKS §3); from point,
     ///   spot and directional lights path tracing misses the caustic altogether.
     ///   Not where emissive surfaces that are not lights sit in the scene. Only
     ///   BSDF sampling finds those, at every bounce, so their noise dwarfs the
