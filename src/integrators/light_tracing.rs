@@ -134,9 +134,8 @@ impl<'a> LightTracer<'a> {
 
 /// Whether `Estimator::Caustics` differs from path tracing on `scene` at `max_depth`:
 /// a focusing surface (`Material::focuses`), a light that starts caustic paths and
-/// emits, a
-/// surface that is neither to receive them, and at least two bounces (light →
-/// specular → non-specular surface seen by the camera).
+/// emits, a scattering surface that does not focus to receive them, and at least two
+/// bounces (light → focusing → unfocused surface seen by the camera).
 pub fn caustics_possible(scene: &Scene, max_depth: u32) -> bool {
     let receives = |m: &Material| m.scatters() && !m.focuses();
     max_depth >= 2

@@ -266,7 +266,7 @@ impl Named for Estimator {
         (
             Estimator::Caustics,
             "caustics",
-            "Path tracing, with light tracing (1 light path per 1 to 64 camera samples, as a small pilot render finds best for the scene) for the light that mirrors, glass and smooth metal (microfacet alpha at most 0.3) focus onto surfaces the camera sees: far fewer fireflies under area lights, and the caustics of point, spot and directional lights, which path tracing cannot find; auto's choice wherever a light shines on mirrors or glass. Not with -a",
+            "Path tracing, with light tracing (1 light path per 1 to 64 camera samples, as a small pilot render finds best for the scene) for the light that mirrors, glass and smooth metal (microfacet alpha at most 0.3) focus onto surfaces the camera sees: far fewer fireflies under area lights, and the caustics of point, spot and directional lights, which path tracing cannot find; auto's choice wherever a light shines on such a surface. Not with -a",
         ),
     ];
 }

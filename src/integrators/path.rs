@@ -209,8 +209,9 @@ struct Kernel<'k, 'a, L: Lanes> {
     /// Lanes whose first vertex from the camera does not focus light
     /// (`BsdfLanes::focus`): `Estimator::Caustics` light-traces their caustics.
     first_unfocused: LaneBits,
-    /// Lanes whose previous vertex focuses light.
-    prev_focus: LaneBits,
+    /// Lanes whose previous vertex is a caustic vertex (`caustic_vertices`): the
+    /// light their ray finds is light tracing's.
+    prev_caustic: LaneBits,
     /// Lanes whose camera ray met a surface.
     met_surface: LaneBits,
     /// Light found after fewer bounces than this does not count (`PixelSamples::min_bounces`).
@@ -257,7 +258,7 @@ impl<'k, 'a, L: Lanes> Kernel<'k, 'a, L> {
             prev_delta: 0,
             prev_glossy: 0,
             first_unfocused: 0,
-            prev_focus: 0,
+            prev_caustic: 0,
             met_surface: 0,
             min_bounces: l.f(0.0),
             slots: Slots {
@@ -381,6 +382,7 @@ impl<'k, 'a, L: Lanes> Kernel<'k, 'a, L> {
         self.has_prev &= !fresh;
         self.prev_delta &= !fresh;
         self.prev_glossy &= !fresh;
+        self.prev_caustic &= !fresh;
         self.met_surface &= !fresh;
         self.live |= fresh;
     }
@@ -642,13 +644,10 @@ impl<'k, 'a, L: Lanes> Kernel<'k, 'a, L> {
             let (p, d) = (prev.to_arrays(), w.to_arrays());
             let at = |v: &[[f32; LANES]; 3], i: usize| Vec3::new(v[0][i], v[1][i], v[2][i]);
             let pdf = per_lane(w.x, |i| area(i).pdf_li(at(&p, i), at(&d, i)));
-            let mut weight = self.hit_weight(counted, Some(pdf));
-            if self.it.t.s.caustics_by_light {
-                // Through a focusing surface from one light tracing connects to the
-                // camera: light tracing's path (`Estimator::Caustics`).
-                let caustic = self.prev_focus & self.first_unfocused & self.has_prev & counted;
-                weight = L::F::select(self.mask(caustic), self.f(0.0), weight);
-            }
+            let weight = self.hit_weight(counted, Some(pdf));
+            // Light tracing's paths (`Estimator::Caustics`).
+            let caustic = self.mask(self.prev_caustic & counted);
+            let weight = L::F::select(caustic, self.f(0.0), weight);
             self.add_radiance(counted, le * weight);
         }
         best
@@ -909,7 +908,8 @@ impl<'k, 'a, L: Lanes> Kernel<'k, 'a, L> {
             self.has_prev |= survive;
             self.prev_delta = (self.prev_delta & !survive) | (v.bsdf.delta & survive);
             self.prev_glossy = (self.prev_glossy & !survive) | (v.bsdf.glossy & survive);
-            self.prev_focus = (self.prev_focus & !survive) | (v.bsdf.focus & survive);
+            let caustic = self.caustic_vertices(survive, v);
+            self.prev_caustic = (self.prev_caustic & !survive) | caustic;
             let origin = v.hit.spawn_origins(l, survive, wi_world);
             let (t_max, skip) = (self.f(f32::INFINITY), l.u_from(v.hit.prim));
             self.rays
