@@ -39,6 +39,7 @@ use crate::sampling::{pixel_key, SampleStream};
 use crate::scene::{Hits, Scene};
 use crate::Color;
 use glam::{Vec2, Vec3};
+use std::cell::RefCell;
 
 /// Light paths per chunk: each chunk's paths are one stratified set (the chunk plays
 /// the part of a pixel), and a render's splats are added chunk by chunk, in order.
@@ -194,14 +195,21 @@ struct LightKernel<'k, 'a, L: Lanes> {
     first: u64,
     next: u64,
     end: u64,
-    /// Splats with their path number, and non-finite contributions dropped.
+    /// Splats with their path number (the worker's buffer, `TAGGED`), and
+    /// non-finite contributions dropped.
     splats: Vec<(u64, Splat)>,
     nonfinite: u32,
 }
 
 impl<'k, 'a, L: Lanes> LightKernel<'k, 'a, L> {
     #[inline(always)]
-    fn new(l: L, it: &'k LightTracer<'a>, first: u64, count: u64) -> Self {
+    fn new(
+        l: L,
+        it: &'k LightTracer<'a>,
+        first: u64,
+        count: u64,
+        splats: Vec<(u64, Splat)>,
+    ) -> Self {
         let zero = V3::splat(l, Vec3::ZERO);
         LightKernel {
             l,
@@ -223,14 +231,15 @@ impl<'k, 'a, L: Lanes> LightKernel<'k, 'a, L> {
             first,
             next: first,
             end: first + count,
-            splats: Vec::new(),
+            splats,
             nonfinite: 0,
         }
     }
 
-    /// Traces every path of the range; its splats in path order.
+    /// Traces every path of the range; its splats in path order. Returns the count of
+    /// non-finite contributions, and the (emptied) tagged buffer for the next range.
     #[inline(always)]
-    fn run(mut self, out: &mut Vec<Splat>) -> u32 {
+    fn run(mut self, out: &mut Vec<Splat>) -> (u32, Vec<(u64, Splat)>) {
         let mut hits = HitPacket::default();
         loop {
             self.refill();
@@ -246,7 +255,8 @@ impl<'k, 'a, L: Lanes> LightKernel<'k, 'a, L> {
         } else {
             in_path_order(&self.splats, self.first, self.end, out);
         }
-        self.nonfinite
+        self.splats.clear();
+        (self.nonfinite, self.splats)
     }
 
     /// Starts the next paths in the free lanes: a light, a point and a direction.
@@ -495,28 +505,39 @@ struct PathsTask<'t, 'a> {
     it: &'t LightTracer<'a>,
     first: u64,
     count: u64,
+    tagged: Vec<(u64, Splat)>,
     splats: &'t mut Vec<Splat>,
 }
 
 impl SimdTask for PathsTask<'_, '_> {
-    type Output = u32;
+    type Output = (u32, Vec<(u64, Splat)>);
     #[inline(always)]
-    fn run<S: Simd>(self, s: S) -> u32 {
-        LightKernel::new(s, self.it, self.first, self.count).run(self.splats)
+    fn run<S: Simd>(self, s: S) -> Self::Output {
+        LightKernel::new(s, self.it, self.first, self.count, self.tagged).run(self.splats)
     }
+}
+
+thread_local! {
+    /// Each worker's buffer of tagged splats, kept from chunk to chunk: a chunk's
+    /// fill a few hundred kB, which a new vector would grow and fault in page by page.
+    static TAGGED: RefCell<Vec<(u64, Splat)>> = const { RefCell::new(Vec::new()) };
 }
 
 impl SplatIntegrator for LightTracer<'_> {
     fn trace_paths(&self, first: u64, count: u64, splats: &mut Vec<Splat>) -> u32 {
-        match self.t.engine {
-            Engine::Scalar => LightKernel::new(One, self, first, count).run(splats),
+        let tagged = TAGGED.take();
+        let (nonfinite, tagged) = match self.t.engine {
+            Engine::Scalar => LightKernel::new(One, self, first, count, tagged).run(splats),
             Engine::Auto | Engine::Packet => dispatch(PathsTask {
                 it: self,
                 first,
                 count,
+                tagged,
                 splats,
             }),
-        }
+        };
+        TAGGED.set(tagged);
+        nonfinite
     }
 
     fn camera_part(&self) -> Option<&dyn SampleIntegrator> {

@@ -13,7 +13,8 @@ use crate::Color;
 use rayon::prelude::*;
 use std::ops::Range;
 
-/// Chunks traced in parallel before their splats are added (bounds memory).
+/// Chunks traced in parallel before their splats are added (bounds memory: two
+/// groups' splats are held at once).
 const CHUNKS_PER_GROUP: u64 = 64;
 
 /// Pixels in `camera`'s image.
@@ -54,30 +55,50 @@ pub(super) fn render(
     let mut sum = vec![Color::ZERO; rect.area() as usize];
     let mut nonfinite = 0u64;
     let done = |c: u64| c * rect.area() / chunks.max(1);
-    let mut group = first_chunk;
-    while group < end_chunk && !stop.should_stop() {
-        let end = (group + CHUNKS_PER_GROUP).min(end_chunk);
-        let results: Vec<(Vec<Splat>, u32)> = (group..end)
-            .into_par_iter()
-            .map(|c| {
-                let mut splats = Vec::new();
-                let r = span(c);
-                let bad = tracer.trace_paths(r.start, r.end - r.start, &mut splats);
-                let k = c - first_chunk;
-                progress(done(k + 1) - done(k));
-                (splats, bad)
-            })
-            .collect();
-        for (splats, bad) in results {
+    let trace = |chunk: u64, mut splats: Vec<Splat>| {
+        splats.clear();
+        let r = span(chunk);
+        let bad = tracer.trace_paths(r.start, r.end - r.start, &mut splats);
+        let k = chunk - first_chunk;
+        progress(done(k + 1) - done(k));
+        (splats, bad)
+    };
+    // A group's splats are added while the next group is traced (the adding is one
+    // thread's work, in order); their buffers then serve the group after.
+    let mut add = |traced: Vec<(Vec<Splat>, u32)>| {
+        let mut emptied = Vec::with_capacity(traced.len());
+        for (splats, bad) in traced {
             nonfinite += bad as u64;
-            for (x, y, v) in splats {
+            for &(x, y, v) in &splats {
                 if rect.contains((x, y)) {
                     sum[rect.index((x, y))] += v;
                 }
             }
+            emptied.push(splats);
         }
+        emptied
+    };
+    let mut spare: Vec<Vec<Splat>> = Vec::new();
+    let mut pending = Vec::new();
+    let mut group = first_chunk;
+    while group < end_chunk && !stop.should_stop() {
+        let end = (group + CHUNKS_PER_GROUP).min(end_chunk);
+        let buffers: Vec<Vec<Splat>> = (group..end)
+            .map(|_| spare.pop().unwrap_or_default())
+            .collect();
+        let (emptied, traced) = rayon::join(
+            || add(std::mem::take(&mut pending)),
+            || {
+                (buffers.into_par_iter().enumerate())
+                    .map(|(k, b)| trace(group + k as u64, b))
+                    .collect::<Vec<_>>()
+            },
+        );
+        spare.extend(emptied);
+        pending = traced;
         group = end;
     }
+    add(pending);
     // A stopped render divides by the paths it traced (the range's length when
     // complete), and sees emitters directly with as many camera samples.
     let traced = (group * CHUNK_PATHS).clamp(paths.start, paths.end) - paths.start;
