@@ -59,6 +59,13 @@ const CASES: &[Case] = &[
         strategy: DirectStrategy::Mis,
         expected: 0xe95c_b483_1053_f397,
     },
+    // Light tracing from a point light (what `auto` runs here).
+    Case {
+        scene: "scenes/cs184/sky/CBempty.dae",
+        max_depth: 5,
+        strategy: DirectStrategy::Light,
+        expected: 0xac25_fc45_44b7_c66c,
+    },
 ];
 
 fn render_hash(case: &Case, threads: usize) -> u64 {

@@ -63,6 +63,15 @@ pub struct LightTracer<'a> {
     aim: Option<EmissionAim>,
     /// Emitters seen directly (0-bounce paths), which only camera rays can find.
     direct: Option<PathIntegrator<'a>>,
+    draws: StartDraws,
+}
+
+/// Which numbers a path's start reads: the light's choice (when more than one light
+/// emits) and the point on it (unless every light that emits is a point).
+#[derive(Clone, Copy)]
+struct StartDraws {
+    choice: bool,
+    position: bool,
 }
 
 impl<'a> LightTracer<'a> {
@@ -74,6 +83,11 @@ impl<'a> LightTracer<'a> {
         let power: Vec<f32> = (scene.lights.iter())
             .map(|l| if starts(l) { l.power(radius) } else { 0.0 })
             .collect();
+        let emitting = || (scene.lights.iter().zip(&power)).filter(|&(_, &p)| p > 0.0);
+        let draws = StartDraws {
+            choice: emitting().count() > 1,
+            position: emitting().any(|(l, _)| l.samples_position()),
+        };
         let total: f32 = power.iter().sum();
         let mut acc = 0.0;
         let light_cdf = power
@@ -109,6 +123,7 @@ impl<'a> LightTracer<'a> {
                 .then(|| specular_bounds(scene))
                 .flatten(),
             direct,
+            draws,
         }
     }
 
@@ -298,8 +313,17 @@ impl<'k, 'a, L: Lanes> LightKernel<'k, 'a, L> {
     #[inline(always)]
     fn start(&mut self, fresh: LaneBits) {
         let l = self.l;
-        let choice = self.pair_arrays(CHOICE_PAIR);
-        let pos = self.pair_arrays(POSITION_PAIR);
+        // Numbers no light reads are not drawn (each pair is drawn by its number, so
+        // the others do not change).
+        let unread = ([0.0f32; LANES], [0.0f32; LANES]);
+        let choice = match self.it.draws.choice {
+            true => self.pair_arrays(CHOICE_PAIR),
+            false => unread,
+        };
+        let pos = match self.it.draws.position {
+            true => self.pair_arrays(POSITION_PAIR),
+            false => unread,
+        };
         let dir = self.pair_arrays(DIRECTION_PAIR);
         let [mut o, mut d, mut from, mut beta] = [[[0.0f32; LANES]; 3]; 4];
         let mut beta0 = [1.0f32; LANES];
@@ -393,7 +417,11 @@ impl<'k, 'a, L: Lanes> LightKernel<'k, 'a, L> {
         };
         let connect = self.depth.counts(l, &it.t.s, lanes) & !unconnected;
         if connect != 0 {
-            let u_lens = self.stream.get_2d(self.depth.pair_base);
+            // A pinhole has no lens point to draw.
+            let u_lens = match it.t.camera.lens.is_pinhole() {
+                true => (l.f(0.0), l.f(0.0)),
+                false => self.stream.get_2d(self.depth.pair_base),
+            };
             self.connect_to_camera(connect, &v, u_lens);
         }
         ended |= self.depth.at_cap(l, &it.t.s, lanes);
@@ -411,13 +439,17 @@ impl<'k, 'a, L: Lanes> LightKernel<'k, 'a, L> {
         let l = self.l;
         let base = self.depth.pair_base;
         let u = self.stream.get_2d(base.wrapping_add(l.u(1)));
-        let (u_lobe, u_roulette) = self.stream.get_2d(base.wrapping_add(l.u(2)));
+        // The lobe and roulette pair only where a BSDF chooses a lobe or roulette plays.
+        let draw_lobe_pair = || self.stream.get_2d(base.wrapping_add(l.u(2)));
+        let lobe_pair = (lanes & v.bsdf.chooses_lobe != 0).then(draw_lobe_pair);
+        let u_lobe = lobe_pair.map_or(l.f(0.0), |p| p.0);
         let (bs, w_next, go) = v.sample_next(l, lanes, u_lobe, u);
         let adjoint = adjoint_factor(l, v, bs.wi, w_next);
         let beta = self.beta * (bs.weight * adjoint);
         let roulette = &self.it.t.s.roulette;
         let read = beta / self.beta0;
         let bounces = self.depth.bounces;
+        let u_roulette = || lobe_pair.unwrap_or_else(draw_lobe_pair).1;
         let (survive, beta) = roulette.play_l(l, bounces, (go, 0), (beta, read), u_roulette);
         if survive != 0 {
             let m = l.mask(survive);

@@ -408,9 +408,9 @@ impl Roulette {
 
     /// Plays roulette for the paths of `lanes` after `bounces` scattering events, with
     /// throughput `beta`, the probability read from `read` (the throughput as roulette
-    /// sees it) and the uniform numbers `u`, sparing the lanes of `spared` (they go on
-    /// for sure): the lanes that go on with a finite, non-zero throughput, and the
-    /// throughput divided by the probability.
+    /// sees it) and the uniform numbers `u` (drawn only if some lane plays), sparing
+    /// the lanes of `spared` (they go on for sure): the lanes that go on with a finite,
+    /// non-zero throughput, and the throughput divided by the probability.
     #[inline(always)]
     pub fn play_l<L: crate::lanes::Lanes>(
         &self,
@@ -418,12 +418,15 @@ impl Roulette {
         bounces: L::F,
         (lanes, spared): (crate::lanes::LaneBits, crate::lanes::LaneBits),
         (beta, read): (crate::lanes::V3<L::F>, crate::lanes::V3<L::F>),
-        u: L::F,
+        u: impl FnOnce() -> L::F,
     ) -> (crate::lanes::LaneBits, crate::lanes::V3<L::F>) {
         use crate::lanes::LaneMask;
         let q = self.continue_prob_l(l, bounces, lanes & !spared, read);
         let play = lanes & q.lt(l.f(1.0)).bits();
-        let survive = lanes & !(play & u.ge(q).bits());
+        let survive = match play {
+            0 => lanes,
+            _ => lanes & !(play & u().ge(q).bits()),
+        };
         let beta = beta / q;
         (survive & (beta.is_finite() & !beta.is_zero()).bits(), beta)
     }

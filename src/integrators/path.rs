@@ -872,7 +872,10 @@ impl<'k, 'a, L: Lanes> Kernel<'k, 'a, L> {
     fn scatter(&mut self, lanes: LaneBits, v: &Vertex<L>) -> LaneBits {
         let l = self.l;
         let u = self.bounce_2d(BSDF_PAIR);
-        let (u_lobe, u_roulette) = self.bounce_2d(LOBE_PAIR);
+        // The lobe and roulette pair only where a BSDF chooses a lobe or roulette plays
+        // (each pair is drawn by its number: leaving one undrawn changes no other).
+        let lobe_pair = (lanes & v.bsdf.chooses_lobe != 0).then(|| self.bounce_2d(LOBE_PAIR));
+        let u_lobe = lobe_pair.map_or(self.f(0.0), |p| p.0);
         let (bs, wi_world, go) = v.sample_next(l, lanes, u_lobe, u);
         let mut ended = lanes & !go;
         let cap = self.at_depth_cap(lanes);
@@ -897,6 +900,7 @@ impl<'k, 'a, L: Lanes> Kernel<'k, 'a, L> {
         // sampling cannot pick, delta lobes): ending it would save that one ray and
         // nothing after it, at the cost of the variance roulette adds. It is spared.
         let played = (go, cap & go);
+        let u_roulette = || lobe_pair.unwrap_or_else(|| self.bounce_2d(LOBE_PAIR)).1;
         let (survive, beta) = roulette.play_l(l, bounces, played, (beta, read), u_roulette);
         ended |= lanes & !survive;
         if survive != 0 {

@@ -49,6 +49,14 @@ impl EmissionAim {
 }
 
 impl Light {
+    /// Whether `sample_le` reads its `u_pos` (lights of a single point do not).
+    pub fn samples_position(&self) -> bool {
+        match self {
+            Light::Point { .. } | Light::Spot(_) | Light::Environment(_) => false,
+            Light::Area(_) | Light::Directional { .. } | Light::Ambient { .. } => true,
+        }
+    }
+
     /// Draws a point and a direction of emitted light. Lights at infinity (directional,
     /// ambient) emit through a disk of the radius of `bounds`' bounding sphere, facing the
     /// direction of travel, just outside that sphere; with an `aim`, point and

@@ -33,6 +33,9 @@ pub struct BsdfFlags {
     pub glossy: bool,
     /// A broad non-delta lobe.
     pub diffuse: bool,
+    /// `sample` reads its `u_lobe` (a choice between lobes): the integrators draw
+    /// that number only for lanes whose BSDF does.
+    pub chooses_lobe: bool,
 }
 
 impl BsdfFlags {
@@ -40,6 +43,7 @@ impl BsdfFlags {
         delta: false,
         glossy: false,
         diffuse: false,
+        chooses_lobe: false,
     };
     pub const DELTA: BsdfFlags = BsdfFlags {
         delta: true,
@@ -225,6 +229,8 @@ macro_rules! bsdfs {
             pub glossy: LaneBits,
             /// Lanes whose BSDF focuses light into caustics (`Scatter::focuses`).
             pub focus: LaneBits,
+            /// Lanes whose BSDF reads `u_lobe` (`BsdfFlags::chooses_lobe`).
+            pub chooses_lobe: LaneBits,
         }
 
         impl<L: Lanes> BsdfLanes<L> {
@@ -244,6 +250,7 @@ macro_rules! bsdfs {
                     all[i] = Some(b);
                 }
                 let (mut delta, mut scattering, mut glossy, mut focus) = (0, 0, 0, 0);
+                let mut chooses_lobe = 0;
                 $(#[allow(non_snake_case)] let $kind = {
                     let k = Kind::$kind as usize;
                     if of_kind[k] != 0 {
@@ -257,6 +264,7 @@ macro_rules! bsdfs {
                         }
                         let flags = <$ty as Scatter<f32>>::FLAGS;
                         if flags.delta { delta |= of_kind[k]; }
+                        if flags.chooses_lobe { chooses_lobe |= of_kind[k]; }
                         if flags.glossy { glossy |= of_kind[k]; }
                         if flags.scatters() { scattering |= of_kind[k]; }
                         Some((<$ty<L::F> as Scatter<L::F>>::gather(l, &each), l.mask(of_kind[k])))
@@ -264,7 +272,7 @@ macro_rules! bsdfs {
                         None
                     }
                 };)*
-                BsdfLanes { $($kind,)* delta, scattering, glossy, focus }
+                BsdfLanes { $($kind,)* delta, scattering, glossy, focus, chooses_lobe }
             }
 
             /// `f(wo, wi)` of each lane's BSDF.
@@ -528,6 +536,48 @@ impl fmt::Display for Material {
         match self.bsdf {
             Bsdf::NonScattering(_) if self.emits() => f.write_str("emission"),
             b => f.write_str(b.name()),
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use glam::{Vec2, Vec3};
+
+    /// A material of every kind (a new kind fails the test below until it is added).
+    fn every_kind() -> Vec<Material> {
+        let c = Color::new(0.9, 0.5, 0.2);
+        vec![
+            Material::lambertian(c),
+            Material::mirror(c),
+            Material::glass(1.5, c, c),
+            Material::refraction(1.5, c),
+            Material::microfacet(0.3, c, c),
+            Material::light_surface(),
+        ]
+    }
+
+    /// The integrators draw `u_lobe` only for BSDFs whose flags say they read it, so
+    /// a BSDF that reads it without saying so would sample from a constant. Each kind
+    /// is sampled with two lobe numbers at many points: only kinds that choose a lobe
+    /// may differ, and those do (else the flag costs draws for nothing).
+    #[test]
+    fn only_bsdfs_that_choose_a_lobe_read_its_number() {
+        let materials = every_kind();
+        let kinds: std::collections::HashSet<_> =
+            materials.iter().map(|m| m.bsdf.kind() as usize).collect();
+        assert_eq!(kinds.len(), KINDS, "every_kind() must hold every kind");
+        for m in materials {
+            let mut differs = false;
+            for i in 0..64 {
+                let t = (i as f32 + 0.5) / 64.0;
+                let wo = Vec3::new(0.6 * t, -0.3, 1.0 - t).normalize();
+                let wo = if i % 2 == 0 { wo } else { -wo };
+                let u = Vec2::new(t, (t * 7.31).fract());
+                differs |= m.sample(wo, 0.02, u) != m.sample(wo, 0.98, u);
+            }
+            assert_eq!(differs, m.flags().chooses_lobe, "{}", m.bsdf.name());
         }
     }
 }

@@ -78,7 +78,11 @@ pub struct Glass<F = f32> {
 
 impl<F: Real> Scatter<F> for Glass<F> {
     type One = Glass;
-    const FLAGS: BsdfFlags = BsdfFlags::DELTA;
+    /// `u_lobe` chooses reflection or transmission.
+    const FLAGS: BsdfFlags = BsdfFlags {
+        chooses_lobe: true,
+        ..BsdfFlags::DELTA
+    };
 
     #[inline(always)]
     fn gather<L: Lanes<F = F>>(l: L, each: &F::Array<Glass>) -> Self {
