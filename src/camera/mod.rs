@@ -221,7 +221,7 @@ impl Camera {
     /// pinhole): `None` behind the lens or outside the frame. The pixel is where the ray
     /// from the lens point through `p` crosses the focal plane, seen from the eye.
     pub fn connect(&self, p: Vec3, u_lens: Vec2) -> Option<CameraConnection> {
-        let c = self.connect_l(One, 1, p.into(), (u_lens.x, u_lens.y));
+        let c = self.connect_l(One, 1, p.into(), || (u_lens.x, u_lens.y));
         let (x, y) = self.pixel_at(c.u, c.v);
         (c.seen != 0).then_some(CameraConnection {
             x,
@@ -236,13 +236,14 @@ impl Camera {
     /// [`connect`](Self::connect) for the points `p` of `lanes`: the lanes that see
     /// theirs, and per lane where in the image `(u, v) ∈ [0,1)²` (`pixel_at` turns it
     /// into the pixel), the lens point, the direction to it and the importance.
+    /// `u_lens` draws the lens point's numbers, only with a lens.
     #[inline(always)]
     pub fn connect_l<L: Lanes>(
         &self,
         l: L,
         lanes: LaneBits,
         p: V3<L::F>,
-        u_lens: (L::F, L::F),
+        u_lens: impl FnOnce() -> (L::F, L::F),
     ) -> LensConnections<L::F> {
         let (zero, one) = (l.f(0.0), l.f(1.0));
         let pinhole = self.lens.is_pinhole();
@@ -254,7 +255,7 @@ impl Camera {
         let origin = if pinhole {
             eye
         } else {
-            let (lx, ly) = self.lens_offset(l, u_lens);
+            let (lx, ly) = self.lens_offset(l, u_lens());
             (eye + right * lx) + up * ly
         };
         let d = p - origin;

@@ -417,12 +417,7 @@ impl<'k, 'a, L: Lanes> LightKernel<'k, 'a, L> {
         };
         let connect = self.depth.counts(l, &it.t.s, lanes) & !unconnected;
         if connect != 0 {
-            // A pinhole has no lens point to draw.
-            let u_lens = match it.t.camera.lens.is_pinhole() {
-                true => (l.f(0.0), l.f(0.0)),
-                false => self.stream.get_2d(self.depth.pair_base),
-            };
-            self.connect_to_camera(connect, &v, u_lens);
+            self.connect_to_camera(connect, &v);
         }
         ended |= self.depth.at_cap(l, &it.t.s, lanes);
         let lanes = lanes & !ended;
@@ -466,11 +461,13 @@ impl<'k, 'a, L: Lanes> LightKernel<'k, 'a, L> {
     /// Connects the non-specular vertices of `lanes`, lit along `w_light` (`wl` in
     /// the shading frame) with power `beta`, to the eye, splatting what it sees.
     #[inline(always)]
-    fn connect_to_camera(&mut self, lanes: LaneBits, v: &Vertex<L>, u_lens: (L::F, L::F)) {
+    fn connect_to_camera(&mut self, lanes: LaneBits, v: &Vertex<L>) {
         let l = self.l;
         let (hit, bsdf, frame) = (&v.hit, &v.bsdf, &v.frame);
         let (wl, w_light) = (v.wo, v.wo_world);
         let camera = self.it.t.camera;
+        // The lens point's pair is this bounce's first (drawn only with a lens).
+        let u_lens = || self.stream.get_2d(self.depth.pair_base);
         let c = camera.connect_l(l, lanes, hit.p, u_lens);
         let seen = c.seen;
         if seen == 0 {
