@@ -7,7 +7,7 @@
 //! at once. Packets that have thinned out to a few rays finish one ray at a time.
 
 #[cfg(target_arch = "x86_64")]
-use super::wide::Avx2Boxes;
+use super::wide::{Avx2Boxes, Avx512Boxes};
 use super::wide::{ChildRef, ScalarBoxes, EXIT_SLACK, WIDTH};
 use super::Bvh;
 use crate::accel::TraversalStats;
@@ -216,7 +216,14 @@ impl Bvh {
                 ..packet.ray(i)
             };
             let mut stats = TraversalStats::default();
-            let hit = if S::AVX2 {
+            let hit = if S::AVX512 {
+                #[cfg(target_arch = "x86_64")]
+                {
+                    self.traverse_from::<Avx512Boxes, ANY, false>(&ray, child, &mut stats)
+                }
+                #[cfg(not(target_arch = "x86_64"))]
+                unreachable!()
+            } else if S::AVX2 {
                 #[cfg(target_arch = "x86_64")]
                 {
                     self.traverse_from::<Avx2Boxes, ANY, false>(&ray, child, &mut stats)

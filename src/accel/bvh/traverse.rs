@@ -34,11 +34,26 @@ impl Bvh {
         stats: &mut TraversalStats,
     ) -> Option<PrimHit> {
         #[cfg(target_arch = "x86_64")]
+        if super::wide::avx512_available() {
+            // SAFETY: AVX-512 was detected on this CPU.
+            return unsafe { self.traverse_avx512::<ANY, COUNT>(ray, stats) };
+        }
+        #[cfg(target_arch = "x86_64")]
         if super::wide::simd_available() {
             // SAFETY: AVX2 was detected on this CPU.
             return unsafe { self.traverse_avx2::<ANY, COUNT>(ray, stats) };
         }
         self.traverse_with::<super::wide::ScalarBoxes, ANY, COUNT>(ray, stats)
+    }
+
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx512f,avx2")]
+    unsafe fn traverse_avx512<const ANY: bool, const COUNT: bool>(
+        &self,
+        ray: &Ray,
+        stats: &mut TraversalStats,
+    ) -> Option<PrimHit> {
+        self.traverse_with::<super::wide::Avx512Boxes, ANY, COUNT>(ray, stats)
     }
 
     #[cfg(target_arch = "x86_64")]

@@ -48,6 +48,8 @@ pub const ALL_LANES: LaneBits = (1 << LANES) - 1;
 pub unsafe trait Simd: Copy + Send + Sync + 'static {
     /// Whether AVX2 code (e.g. the single-ray BVH box test) may run here.
     const AVX2: bool;
+    /// Whether AVX-512 code (the one-pass single-ray box test of 16-wide nodes) may run.
+    const AVX512: bool;
 
     type F: Copy;
     type U: Copy;

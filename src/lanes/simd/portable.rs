@@ -22,6 +22,7 @@ fn mask(a: Fa, b: Fa, f: impl Fn(f32, f32) -> bool) -> LaneBits {
 // SAFETY: plain Rust; available everywhere.
 unsafe impl Simd for Portable {
     const AVX2: bool = false;
+    const AVX512: bool = false;
     type F = Fa;
     type U = Ua;
     type M = LaneBits;

@@ -45,6 +45,7 @@ impl Avx2 {
 // SAFETY: the token is only made by `detect`, after checking every feature used.
 unsafe impl Simd for Avx512 {
     const AVX2: bool = true;
+    const AVX512: bool = true;
     type F = __m512;
     type U = __m512i;
     type M = __mmask16;
@@ -369,6 +370,7 @@ unsafe fn mullo64(a: __m256i, b: __m256i) -> __m256i {
 // SAFETY: the token is only made by `detect`, after checking every feature used.
 unsafe impl Simd for Avx2 {
     const AVX2: bool = true;
+    const AVX512: bool = false;
     type F = F2;
     type U = U2;
     /// Lane masks as all-ones/all-zeros floats.
