@@ -414,26 +414,26 @@ mod tests {
         let mut e = [0.0; WIDTH];
         let m = ScalarBoxes::hits(&wr, node, t_max, &mut e);
         #[cfg(target_arch = "x86_64")]
-        if simd_available() {
-            let mut e2 = [0.0; WIDTH];
-            // SAFETY: AVX2 was detected.
-            let m2 = unsafe { avx2_hits(&wr, node, t_max, &mut e2) };
-            assert_eq!(m, m2, "{r:?}");
-            for c in 0..WIDTH {
-                if m & 1 << c != 0 {
-                    assert_eq!(e[c].to_bits(), e2[c].to_bits(), "{r:?}");
+        {
+            use crate::lanes::{widest_instruction_set, InstructionSet};
+            let widest = widest_instruction_set();
+            type Test = unsafe fn(&WideRay, &WideNode, f32, &mut [f32; WIDTH]) -> u32;
+            let tests: [(InstructionSet, Test); 2] = [
+                (InstructionSet::Avx2, avx2_hits),
+                (InstructionSet::Avx512, avx512_hits),
+            ];
+            for (set, test) in tests {
+                if widest < set {
+                    continue;
                 }
-            }
-        }
-        #[cfg(target_arch = "x86_64")]
-        if crate::lanes::widest_instruction_set() == crate::lanes::InstructionSet::Avx512 {
-            let mut e3 = [0.0; WIDTH];
-            // SAFETY: AVX-512 was detected.
-            let m3 = unsafe { avx512_hits(&wr, node, t_max, &mut e3) };
-            assert_eq!(m, m3, "{r:?}");
-            for c in 0..WIDTH {
-                if m & 1 << c != 0 {
-                    assert_eq!(e[c].to_bits(), e3[c].to_bits(), "{r:?}");
+                let mut e2 = [0.0; WIDTH];
+                // SAFETY: this CPU has the instruction set.
+                let m2 = unsafe { test(&wr, node, t_max, &mut e2) };
+                assert_eq!(m, m2, "{set:?} {r:?}");
+                for c in 0..WIDTH {
+                    if m & 1 << c != 0 {
+                        assert_eq!(e[c].to_bits(), e2[c].to_bits(), "{set:?} {r:?}");
+                    }
                 }
             }
         }
