@@ -9,6 +9,11 @@ and Mitsuba variant, ember and Mitsuba run alternately (ember, Mitsuba, ember,
 summary line), Mitsuba's its second, warm render call (JIT compilation
 excluded). The table gives the medians, the median and range of the per-round
 ratios, and which engine and estimator ember ran (from its summary line).
+
+Where ember light-traces a scene (`--integrator auto` picks light tracing for
+its error per time), Mitsuba's particle tracer (`ptracer`, the same scene file,
+spp x pixels light paths like ember's) runs in the same rounds too, and gets a
+row of its own: the like-for-like figure beside the path tracer's.
 """
 import argparse
 import json
@@ -91,6 +96,19 @@ def mitsuba_run(xml, variant, seed):
     return runs[-1]["samples_per_second"]
 
 
+def particle_tracer_xml(xml):
+    """The exported scene with Mitsuba's path tracer swapped for its particle tracer
+    (the same max_depth, rr_depth and hide_emitters parameters)."""
+    with open(xml) as f:
+        text = f.read()
+    if '<integrator type="path">' not in text:
+        sys.exit(f"bench-mitsuba: {xml}: no path integrator to swap for ptracer")
+    out = xml[:-len(".xml")] + "_ptracer.xml"
+    with open(out, "w") as f:
+        f.write(text.replace('<integrator type="path">', '<integrator type="ptracer">', 1))
+    return out
+
+
 def export(a, scene, m, tmp, name):
     folder = os.path.join(tmp, name)
     os.makedirs(folder, exist_ok=True)
@@ -141,19 +159,27 @@ def main():
             name = os.path.splitext(os.path.basename(path))[0]
             xml = export(a, path, m, tmp, f"{name}_m{m}")
             for variant in a.variants.split(","):
-                ember, mitsuba, engines = [], [], set()
+                ember, mitsuba, ptracer, engines, ptracer_xml = [], [], [], set(), None
                 for i in range(a.rounds):
                     rate, engine = ember_run(a, path, m, tmp)
                     ember.append(rate)
                     engines.add(engine)
                     mitsuba.append(mitsuba_run(xml, variant, seed=2 * i))
-                    print(f"  {name} -m {m} {variant} round {i + 1}: ember {ember[-1] / 1e6:.2f}, "
-                          f"Mitsuba {mitsuba[-1] / 1e6:.2f} M samples/s ({time.time() - start:.0f} s)",
-                          file=sys.stderr)
-                ratios = [e / mi for e, mi in zip(ember, mitsuba)]
-                rows.append((name, m, "yes" if ref else "no", " / ".join(sorted(engines)), variant,
-                             statistics.median(ember), statistics.median(mitsuba),
-                             statistics.median(ratios), min(ratios), max(ratios)))
+                    line = (f"  {name} -m {m} {variant} round {i + 1}: ember {ember[-1] / 1e6:.2f}, "
+                            f"Mitsuba {mitsuba[-1] / 1e6:.2f}")
+                    if "light-tracing" in engine:
+                        ptracer_xml = ptracer_xml or particle_tracer_xml(xml)
+                        ptracer.append(mitsuba_run(ptracer_xml, variant, seed=2 * i))
+                        line += f", Mitsuba ptracer {ptracer[-1] / 1e6:.2f}"
+                    print(f"{line} M samples/s ({time.time() - start:.0f} s)", file=sys.stderr)
+                engine = " / ".join(sorted(engines))
+                for label, theirs in [(variant, mitsuba), (f"{variant} ptracer", ptracer)]:
+                    if len(theirs) != len(ember):
+                        continue
+                    ratios = [e / mi for e, mi in zip(ember, theirs)]
+                    rows.append((name, m, "yes" if ref else "no", engine, label,
+                                 statistics.median(ember), statistics.median(theirs),
+                                 statistics.median(ratios), min(ratios), max(ratios)))
     print(f"CPU: {cpu_model()}, {os.cpu_count()} threads; {a.r[0]}x{a.r[1]}, {a.spp} spp, each scene at its "
           f"reference's -m (extras at the -m given), {a.rounds} interleaved round(s), render-only medians; "
           f"Mitsuba 3.9.1 sampler {a.sampler}; ember flags: '{a.ember_args}'; {time.time() - start:.0f} s")

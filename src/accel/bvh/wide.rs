@@ -9,10 +9,10 @@
 //! incoherent rays 1.14× and shadow rays 1.15× faster, with 5.7 instead of 7.6
 //! node visits per incoherent ray: its traversal waits on memory, and a level
 //! less is a dependent cache miss less. CBbunny (in cache): incoherent 1.08×,
-//! shadow 1.11×, camera 0.98×. A 16-wide node is one AVX-512 pass or two AVX2 passes. (With the
-//! earlier greedy collapse, 8 wide had beaten 4 wide: 4 wide made 1.7× the
-//! nodes and rays visited more of them.) The width is this one constant; 4, 8
-//! and 16 keep compiling.
+//! shadow 1.11×, camera 0.98×. A 16-wide node is one AVX-512 pass or two AVX2
+//! passes. (With the earlier greedy collapse, 8 wide had beaten 4 wide: 4 wide
+//! made 1.7× the nodes and rays visited more of them.) The width is this one
+//! constant; 4, 8 and 16 keep compiling.
 //!
 //! Child boxes quantised to a byte per coordinate (Embree's compressed nodes;
 //! 192 instead of 448 bytes a node, bounds checked to contain the exact ones)
@@ -334,7 +334,7 @@ impl BoxTest for ScalarBoxes {
     }
 }
 
-/// The AVX2 box test, all children in one pass.
+/// The AVX2 box test (a 16-wide node in two passes).
 #[cfg(target_arch = "x86_64")]
 pub(crate) struct Avx2Boxes;
 
