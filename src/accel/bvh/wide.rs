@@ -362,14 +362,17 @@ impl BoxTest for Avx512Boxes {
     }
 }
 
-/// Whether the AVX-512 box test may run: this CPU has AVX-512 and the
-/// instruction-set cap (`--simd`) allows it.
+/// Whether the AVX-512 box test may run: this CPU has AVX-512F besides what
+/// [`simd_available`] asks, and the instruction-set cap (`--simd`) allows it. Asked
+/// per ray, so it checks only the features the test and the leaf test use.
 #[inline(always)]
 pub(crate) fn avx512_available() -> bool {
     #[cfg(target_arch = "x86_64")]
     {
-        use crate::lanes::{instruction_set_limit, widest_instruction_set, InstructionSet};
-        widest_instruction_set().min(instruction_set_limit()) == InstructionSet::Avx512
+        use crate::lanes::{instruction_set_limit, InstructionSet};
+        std::is_x86_feature_detected!("avx512f")
+            && simd_available()
+            && instruction_set_limit() >= InstructionSet::Avx512
     }
     #[cfg(not(target_arch = "x86_64"))]
     {
