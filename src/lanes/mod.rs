@@ -21,9 +21,9 @@ mod vec3;
 
 pub use real::{LaneMask, Real, UInt};
 pub use simd::{
-    dispatch, instruction_set, instruction_set_limit, limit_instruction_set, prefetch,
-    widest_instruction_set, F32s, InstructionSet, LaneBits, Mask, Simd, SimdTask, U32s, ALL_LANES,
-    LANES,
+    capped_instruction_set, dispatch, instruction_set, instruction_set_limit,
+    limit_instruction_set, prefetch, widest_instruction_set, F32s, InstructionSet, LaneBits, Mask,
+    Simd, SimdTask, U32s, ALL_LANES, LANES,
 };
 pub use vec3::{clamp, max_nonnan, V3};
 

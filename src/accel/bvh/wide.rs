@@ -362,38 +362,19 @@ impl BoxTest for Avx512Boxes {
     }
 }
 
-/// Whether the AVX-512 box test may run: this CPU has AVX-512F besides what
-/// [`simd_available`] asks, and the instruction-set cap (`--simd`) allows it. Asked
-/// per ray, so it checks only the features the test and the leaf test use.
+/// Whether the AVX-512 box test may run: the instruction set `dispatch` would use
+/// outside the unit tests (this CPU's, within the `--simd` cap) includes AVX-512.
+/// Asked per ray; the detection behind it is kept after its first answer.
 #[inline(always)]
 pub(crate) fn avx512_available() -> bool {
-    #[cfg(target_arch = "x86_64")]
-    {
-        use crate::lanes::{instruction_set_limit, InstructionSet};
-        std::is_x86_feature_detected!("avx512f")
-            && simd_available()
-            && instruction_set_limit() >= InstructionSet::Avx512
-    }
-    #[cfg(not(target_arch = "x86_64"))]
-    {
-        false
-    }
+    crate::lanes::capped_instruction_set() >= crate::lanes::InstructionSet::Avx512
 }
 
-/// Whether the SIMD box test (and the SIMD leaf test) may run: this CPU has AVX2
-/// (the standard library caches the CPUID result) and the instruction-set cap
-/// (`--simd`) allows it.
+/// Whether the AVX2 box test (and the SIMD leaf test) may run: as
+/// [`avx512_available`], for AVX2.
 #[inline(always)]
 pub(crate) fn simd_available() -> bool {
-    #[cfg(target_arch = "x86_64")]
-    {
-        use crate::lanes::{instruction_set_limit, InstructionSet};
-        std::is_x86_feature_detected!("avx2") && instruction_set_limit() >= InstructionSet::Avx2
-    }
-    #[cfg(not(target_arch = "x86_64"))]
-    {
-        false
-    }
+    crate::lanes::capped_instruction_set() >= crate::lanes::InstructionSet::Avx2
 }
 
 #[cfg(test)]

@@ -519,14 +519,19 @@ pub fn widest_instruction_set() -> InstructionSet {
     InstructionSet::Portable
 }
 
-/// The instruction set [`dispatch`] runs with now: the widest this CPU has,
-/// within [`limit_instruction_set`]'s cap.
+/// The widest instruction set this CPU has, within [`limit_instruction_set`]'s cap
+/// (in every build; the library's unit tests' `dispatch` runs portable regardless).
+pub fn capped_instruction_set() -> InstructionSet {
+    widest_instruction_set().min(instruction_set_limit())
+}
+
+/// The instruction set [`dispatch`] runs with now: [`capped_instruction_set`].
 pub fn instruction_set() -> InstructionSet {
     if cfg!(test) {
         // What the unit tests' `dispatch` runs.
         return InstructionSet::Portable;
     }
-    widest_instruction_set().min(instruction_set_limit())
+    capped_instruction_set()
 }
 
 /// Runs `task` with [`instruction_set`].
