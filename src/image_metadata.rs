@@ -186,22 +186,51 @@ pub fn fnv1a64(bytes: &[u8]) -> u64 {
     })
 }
 
-/// The CPU model from /proc/cpuinfo, or "unknown".
+/// The CPU model from /proc/cpuinfo, or "unknown". On x86 its family and model
+/// numbers follow the name: some virtual machines name every Xeon generation alike
+/// ("Intel(R) Xeon(R) Processor"), and a speed ratio means little without the core.
 pub fn cpu_model() -> String {
     std::fs::read_to_string("/proc/cpuinfo")
         .ok()
-        .and_then(|s| {
-            s.lines()
-                .find(|l| l.starts_with("model name"))
-                .and_then(|l| l.split_once(':'))
-                .map(|(_, v)| v.trim().to_string())
-        })
+        .and_then(|s| cpu_model_of(&s))
         .unwrap_or_else(|| "unknown".into())
+}
+
+fn cpu_model_of(cpuinfo: &str) -> Option<String> {
+    let field = |key: &str| {
+        cpuinfo
+            .lines()
+            .take_while(|l| !l.trim().is_empty())
+            .filter_map(|l| l.split_once(':'))
+            .find(|(k, _)| k.trim() == key)
+            .map(|(_, v)| v.trim().to_string())
+    };
+    let name = field("model name")?;
+    Some(match (field("cpu family"), field("model")) {
+        (Some(family), Some(model)) => format!("{name} (family {family}, model {model})"),
+        _ => name,
+    })
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn cpu_model_names_family_and_model() {
+        let info = "processor\t: 0\nvendor_id\t: GenuineIntel\ncpu family\t: 6\nmodel\t\t: 207\n\
+                    model name\t: Intel(R) Xeon(R) Processor\n\nprocessor\t: 1\nmodel\t\t: 1\n";
+        assert_eq!(
+            cpu_model_of(info).as_deref(),
+            Some("Intel(R) Xeon(R) Processor (family 6, model 207)")
+        );
+        let arm = "processor\t: 0\nmodel name\t: ARMv8 Processor rev 1 (v8l)\n";
+        assert_eq!(
+            cpu_model_of(arm).as_deref(),
+            Some("ARMv8 Processor rev 1 (v8l)")
+        );
+        assert_eq!(cpu_model_of("processor\t: 0\n"), None);
+    }
 
     #[test]
     fn settings_read_as_words_not_rust_syntax() {
