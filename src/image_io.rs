@@ -21,7 +21,7 @@ pub enum ImageIoError {
     },
     #[error("{path}: is a directory, not an image file")]
     IsDirectory { path: String },
-    #[error("{path}: the output would overwrite the input scene; choose another -f")]
+    #[error("{path}: is also an input of this command (the scene, a map or a part); choose another output file")]
     SameAsInput { path: String },
     #[error("{path}: cannot encode: {msg}")]
     Encode { path: String, msg: String },

@@ -232,6 +232,40 @@ fn identical_centroids_build_bounded_leaves() {
     }
 }
 
+/// One triangle spanning ±3e38 (a scene built through the library, which the loader
+/// would refuse) overflows the surface areas above it to infinity: the builders still
+/// make leaves of at most a block, never a panic, and the small triangles beside it
+/// are hit as the brute-force search hits them.
+#[test]
+fn overflowing_bounds_build_bounded_leaves() {
+    let big = 3e38;
+    let mut positions = vec![
+        Vec3::new(-big, -big, 50.0),
+        Vec3::new(big, -big, 50.0),
+        Vec3::new(0.0, big, 50.0),
+    ];
+    let mut tris = vec![[0, 1, 2]];
+    for k in 0..64u32 {
+        let z = k as f32;
+        positions.extend([
+            Vec3::new(-1.0, -1.0, z),
+            Vec3::new(1.0, -1.0, z),
+            Vec3::new(0.0, 1.0, z),
+        ]);
+        tris.push([3 * k + 3, 3 * k + 4, 3 * k + 5]);
+    }
+    let scene = scene_from(positions, tris, vec![]);
+    let ray = Ray::new(Vec3::new(0.0, 0.0, 10.5), Vec3::Z);
+    let brute = BruteForce::new(&scene).intersect(&ray).map(|h| h.t);
+    assert_eq!(brute, Some(0.5));
+    for builder in builders() {
+        let bvh = Bvh::build(&scene, builder);
+        assert_eq!(bvh.stats().prims, 65);
+        assert_eq!(bvh.intersect(&ray).map(|h| h.t), brute);
+        assert!(bvh.occluded(&ray));
+    }
+}
+
 #[test]
 fn trees_are_the_same_whatever_the_thread_count() {
     let spec = SoupSpec {

@@ -122,6 +122,87 @@ fn output_equal_to_input_is_refused() {
     assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 1);
 }
 
+/// `camera --save` and `export`'s copy of the `-e` map refuse to write over their
+/// own input, as a render's `-f` does.
+#[test]
+fn camera_and_export_do_not_overwrite_their_inputs() {
+    let dir = tempfile::tempdir().unwrap();
+    let same = dir.path().join("scene.dae");
+    std::fs::copy(scene(), &same).unwrap();
+    let before = std::fs::read(&same).unwrap();
+    run(command().args(["camera", "--save"]).arg(&same).arg(&same))
+        .fails_with("--save would overwrite");
+    assert_eq!(
+        std::fs::read(&same).unwrap(),
+        before,
+        "the scene was changed"
+    );
+    let map = dir.path().join("scene_env.exr");
+    let mut env = ember::film::Image::new(8, 4);
+    env.pixels.fill(ember::Vec3::ONE);
+    ember::image_io::write_image(&env, &map).unwrap();
+    let map_before = std::fs::read(&map).unwrap();
+    run(command()
+        .args(["export", "--out"])
+        .arg(dir.path())
+        .arg("-e")
+        .arg(&map)
+        .arg(&same))
+    .fails_with("would overwrite this -e input");
+    assert_eq!(
+        std::fs::read(&map).unwrap(),
+        map_before,
+        "the map was changed"
+    );
+}
+
+/// Flags that contradict each other, or ask for what cannot run, stop before any work.
+#[test]
+fn contradictory_or_impossible_flags_are_refused() {
+    let out = tempfile::tempdir().unwrap();
+    let f = out.path().join("x.png");
+    let render = |extra: &[&str]| {
+        let mut c = command();
+        c.args(["-s", "1", "-r", "8", "6", "-f"])
+            .arg(&f)
+            .args(extra)
+            .arg(scene());
+        run(&mut c)
+    };
+    render(&["-t", "100000"]).fails_with("at most 1024 worker threads");
+    render(&["-H", "--integrator", "mis"]).fails_with("two ways of sampling direct light");
+    render(&["-H", "--integrator", "light-tracing"]).fails_with("light tracing");
+    for (flag, value) in [
+        ("--max-spp", "0"),
+        ("--reference-spp", "0"),
+        ("--max-seconds", "nan"),
+        ("--reference-noise", "-1"),
+    ] {
+        run(command()
+            .args(["bench", "converge", flag, value])
+            .arg(scene()))
+        .fails_with(flag);
+    }
+    run(command().args(["bench", "render", "--repeats", "0"])).fails_with("--repeats");
+    assert_eq!(std::fs::read_dir(out.path()).unwrap().count(), 0);
+    render(&["-H", "--integrator", "path"]).success();
+}
+
+/// `--data` and `--simd` apply to every command, also when written before its name;
+/// a render option written there is said to belong to the command.
+#[test]
+fn options_before_a_subcommand() {
+    run(command()
+        .arg("--data")
+        .arg(repo(""))
+        .arg("info")
+        .arg(scene()))
+    .success();
+    run(command().args(["--simd", "portable", "info"]).arg(scene())).success();
+    run(command().args(["-t", "1", "info"]).arg(scene()))
+        .fails_with("the options before `info` are read as its own");
+}
+
 /// A one-line error in which every ": "-separated part of the message appears once.
 fn assert_said_once(o: Run) {
     let err = o.fails_with("").stderr();

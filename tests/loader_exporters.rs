@@ -46,6 +46,18 @@ fn load_grid(prim: &str) -> Scene {
     parse_ok(&scene_doc("Y_UP", &grid_geometry("g", prim), &nodes))
 }
 
+/// The error `prim` gives (one line, naming the file), which must hold `needles`.
+fn load_grid_err(prim: &str, needles: &[&str]) -> String {
+    let nodes = format!(
+        "<node>{}</node>",
+        geometry_instance("g", "grey-sym", "grey")
+    );
+    parse_err(
+        &scene_doc("Y_UP", &grid_geometry("g", prim), &nodes),
+        needles,
+    )
+}
+
 fn area(s: &Scene) -> f32 {
     (0..s.triangles.len())
         .map(|i| {
@@ -99,7 +111,7 @@ fn tristrips_and_trifans_are_triangulated() {
     // The stub is skipped with a warning naming the element (the other warning:
     // scene_doc's scene has no camera).
     assert_eq!(s.warnings.len(), 2, "{:?}", s.warnings);
-    let stub = "<geometry id=\"g\">/mesh/trifans: a <p> of fewer than 3 corners makes no triangle; skipped";
+    let stub = "<geometry id=\"g\">/mesh/trifans: a face of fewer than 3 corners makes no triangle; skipped";
     assert!(
         s.warnings.iter().any(|w| w.ends_with(stub)),
         "{:?}",
@@ -116,6 +128,62 @@ fn tristrips_and_trifans_are_triangulated() {
         .iter()
         .filter(|w| w.contains("fewer than 3 corners"));
     assert_eq!(stubs.count(), 1, "{:?}", s.warnings);
+}
+
+/// FBX and OpenCOLLADA exports carry faces of two corners (and `vcount` zeros) where
+/// the source mesh had loose edges: the face is skipped with one warning, the rest
+/// of the primitive loads.
+#[test]
+fn faces_of_fewer_than_three_corners_are_skipped_with_one_warning() {
+    let short = |s: &ember::scene::Scene| {
+        s.warnings
+            .iter()
+            .filter(|w| w.contains("fewer than 3 corners"))
+            .count()
+    };
+    let s = load_grid(
+        r##"<polylist material="grey-sym" count="4"><input semantic="VERTEX" source="#g-vtx" offset="0"/>
+             <vcount>4 2 0 3</vcount><p>0 1 4 3  1 2  4 5 8</p></polylist>"##,
+    );
+    assert_eq!(s.triangles.len(), 3);
+    assert!((area(&s) - 1.5).abs() < 1e-6, "{}", area(&s));
+    assert_eq!(short(&s), 1, "{:?}", s.warnings);
+    let s = load_grid(
+        r##"<polygons material="grey-sym" count="3"><input semantic="VERTEX" source="#g-vtx" offset="0"/>
+             <p>0 1 4 3</p><p>1 2</p><ph><p>4 5</p><h>0 1 2</h></ph></polygons>"##,
+    );
+    assert_eq!(s.triangles.len(), 2);
+    assert_eq!(short(&s), 1, "{:?}", s.warnings);
+    // A corner cut in half is still an error, naming the element.
+    load_grid_err(
+        r##"<polylist material="grey-sym" count="1"><input semantic="VERTEX" source="#g-vtx" offset="0"/>
+             <input semantic="TEXTANGENT" source="#g-vtx" offset="1"/>
+             <vcount>3</vcount><p>0 0 1 1 4</p></polylist>"##,
+        &["polylist/vcount", "<p> has 5 indices"],
+    );
+}
+
+/// COLLADA gives `<triangles>` one `<p>`; exporters that write one per batch of
+/// faces lose none of them, with one warning, and `count` covers all of them.
+#[test]
+fn triangles_with_several_p_are_all_read() {
+    let prim = |count: &str| {
+        format!(
+            r##"<triangles material="grey-sym"{count}><input semantic="VERTEX" source="#g-vtx" offset="0"/>
+             <p>0 1 4  0 4 3</p><p>1 2 5</p><p>1 5 4</p></triangles>"##
+        )
+    };
+    for count in ["", " count=\"4\""] {
+        let s = load_grid(&prim(count));
+        assert_eq!(s.triangles.len(), 4, "{count}");
+        assert!((area(&s) - 2.0).abs() < 1e-6, "{}", area(&s));
+        let several = s.warnings.iter().filter(|w| w.contains("several <p>"));
+        assert_eq!(several.count(), 1, "{:?}", s.warnings);
+    }
+    load_grid_err(
+        &prim(" count=\"2\""),
+        &["triangles", "count is 2 but 4 faces"],
+    );
 }
 
 #[test]
@@ -705,4 +773,222 @@ fn concave_polygons_are_ear_clipped_and_convex_ones_fanned() {
     assert!(
         close(quad[0][2], Vec3::new(1.0, 1.0, 0.0)) && close(quad[1][1], Vec3::new(1.0, 1.0, 0.0))
     );
+}
+
+fn count_warnings(s: &Scene, needle: &str) -> usize {
+    s.warnings.iter().filter(|w| w.contains(needle)).count()
+}
+
+/// Blender 2.80 and later export a point or spot light's colour times its power in
+/// watts; the intensity that power gives is P/4π. Older Blender (the course's
+/// exporter) and other tools keep the colour as the intensity; a sun is irradiance.
+#[test]
+fn blender_watts_become_intensity() {
+    let point = |s: &Scene| match s.lights[0] {
+        Light::Point { intensity, .. } => intensity,
+        ref l => panic!("{l:?}"),
+    };
+    let four_pi = 4.0 * std::f32::consts::PI;
+    for (tool, scale) in [
+        ("Blender 2.80.75 commit date:2019-07-29", 1.0 / four_pi),
+        ("Blender 4.5.1 LTS", 1.0 / four_pi),
+        ("Blender 2.79.0 commit date:2017-09-11", 1.0),
+        ("Blender 2.74.0 commit date:2015-03-31", 1.0),
+        ("3ds Max", 1.0),
+    ] {
+        let s = parse_ok(&with_tool(tool));
+        assert!(close(point(&s), Vec3::new(1.0, 2.0, 3.0) * scale), "{tool}");
+        let warned = count_warnings(&s, "watts");
+        assert_eq!(
+            warned,
+            usize::from(scale != 1.0),
+            "{tool}: {:?}",
+            s.warnings
+        );
+    }
+    // With the course's extension the course's units stand, whichever Blender wrote it.
+    let course = edit(
+        "<asset><up_axis>Z_UP</up_axis></asset>",
+        "<asset><contributor><authoring_tool>Blender 3.6.0</authoring_tool></contributor><up_axis>Z_UP</up_axis></asset>",
+    );
+    let s = parse_ok(&course);
+    assert!(close(point(&s), Vec3::new(1.0, 2.0, 3.0)));
+    assert_eq!(count_warnings(&s, "watts"), 0);
+    let sun = with_tool("Blender 3.6.0").replace(
+        "<point><color>1 2 3</color></point>",
+        "<directional><color>1 2 3</color></directional>",
+    );
+    let s = parse_ok(&sun);
+    assert!(
+        matches!(s.lights[0], Light::Directional { irradiance, .. } if irradiance == Vec3::new(1.0, 2.0, 3.0))
+    );
+    assert_eq!(count_warnings(&s, "watts"), 0);
+}
+
+/// `url="#Cube%20mesh"` names `id="Cube mesh"`, as a URI fragment escapes a space.
+#[test]
+fn percent_escaped_references_are_decoded() {
+    let doc = edit("<geometry id=\"quad\">", "<geometry id=\"quad mesh\">").replacen(
+        "url=\"#quad\"",
+        "url=\"#quad%20mesh\"",
+        1,
+    );
+    let s = parse_ok(&doc);
+    assert_eq!(s.triangles.len(), 2);
+    assert!(s.warnings.is_empty(), "{:?}", s.warnings);
+}
+
+/// Assimp writes `inf` for a spot light whose inner and outer cones are equal.
+#[test]
+fn an_infinite_spot_falloff_exponent_is_read_as_a_hard_edge() {
+    let doc = edit(
+        "<point><color>1 2 3</color></point>",
+        "<spot><color>1 2 3</color><falloff_angle>60</falloff_angle><falloff_exponent>inf</falloff_exponent></spot>",
+    );
+    let s = parse_ok(&doc);
+    assert!(matches!(s.lights[0], Light::Spot(_)));
+    assert_eq!(
+        count_warnings(&s, "infinite falloff exponent"),
+        1,
+        "{:?}",
+        s.warnings
+    );
+    let nan = doc.replace(">inf<", ">nan<");
+    parse_err(&nan, &["falloff_exponent", "nan"]);
+}
+
+#[test]
+fn common_profile_colours_by_reference_constant_shading_and_vertex_colours() {
+    // <diffuse><param ref> names a <newparam> holding the colour (the spec's own example).
+    let s = parse_ok(&effect_doc(
+        "<lambert><diffuse><param ref=\"base\"/></diffuse></lambert>",
+    ).replace(
+        "<technique sid=\"common\">",
+        "<newparam sid=\"base\"><float4>0.2 0.4 0.6 1</float4></newparam><technique sid=\"common\">",
+    ));
+    let m = s.materials[s.triangles[0].material as usize];
+    assert!(
+        matches!(m.bsdf, Bsdf::Lambertian(b) if close(b.albedo.vec3(), Vec3::new(0.2, 0.4, 0.6))),
+        "{m:?}"
+    );
+    // A reference to nothing: the default colour, with a warning naming it.
+    let s = parse_ok(&effect_doc(
+        "<lambert><diffuse><param ref=\"nowhere\"/></diffuse></lambert>",
+    ));
+    assert_eq!(count_warnings(&s, "ref=\"nowhere\""), 1, "{:?}", s.warnings);
+    // <constant> is unlit: its emission alone, no reflection.
+    let s = parse_ok(&effect_doc(
+        "<constant><emission><color>1 0 0 1</color></emission></constant>",
+    ));
+    let m = s.materials[s.triangles[0].material as usize];
+    assert!(m.emits());
+    assert!(matches!(m.bsdf, Bsdf::Lambertian(b) if b.albedo.vec3() == Vec3::ZERO));
+    // Vertex colours are not read: one warning however many primitives carry them.
+    let colour = "<input semantic=\"COLOR\" source=\"#quad-nrm\" offset=\"1\"/>";
+    let doc = edit(
+        "<input semantic=\"NORMAL\" source=\"#quad-nrm\" offset=\"1\"/>",
+        &format!("<input semantic=\"NORMAL\" source=\"#quad-nrm\" offset=\"1\"/>{colour}"),
+    );
+    let s = parse_ok(&doc);
+    assert_eq!(count_warnings(&s, "vertex colours"), 1, "{:?}", s.warnings);
+}
+
+/// Reflectances are checked: a negative colour is an error naming the element, one
+/// above 1 (energy from nowhere, or a colour written 0-255) a warning.
+#[test]
+fn negative_colours_are_errors_and_gains_are_warned() {
+    parse_err(
+        &edit("<color>1 2 3</color>", "<color>-8 8 8</color>"),
+        &["point/color", "-8 is negative"],
+    );
+    parse_err(
+        &effect_doc("<lambert><diffuse><color>-0.7 0.3 0.3 1</color></diffuse></lambert>"),
+        &["diffuse/color", "negative"],
+    );
+    parse_err(
+        &edit(
+            "<reflectance>0.9 0.9 0.9</reflectance>",
+            "<reflectance>-1 0.9 0.9</reflectance>",
+        ),
+        &["mirror/reflectance", "negative"],
+    );
+    let s = parse_ok(&effect_doc(
+        "<lambert><diffuse><color>7 0.3 0.3 1</color></diffuse></lambert>",
+    ));
+    assert_eq!(count_warnings(&s, "above 1"), 1, "{:?}", s.warnings);
+}
+
+/// A bare `<!DOCTYPE COLLADA>` defines no entities: read past with one warning. One
+/// with an internal subset could expand without bound: an error.
+#[test]
+fn a_bare_doctype_loads_with_a_warning() {
+    let doc = TEMPLATE.replacen("<COLLADA ", "<!DOCTYPE COLLADA>\n<COLLADA ", 1);
+    let s = parse_ok(&doc);
+    assert_eq!(s.triangles.len(), 2);
+    assert_eq!(count_warnings(&s, "DOCTYPE"), 1, "{:?}", s.warnings);
+    let bomb = TEMPLATE.replacen(
+        "<COLLADA ",
+        "<!DOCTYPE COLLADA [<!ENTITY a \"aaaa\"><!ENTITY b \"&a;&a;&a;\">]>\n<COLLADA ",
+        1,
+    );
+    parse_err(&bomb, &["DOCTYPE", "internal subset"]);
+}
+
+/// A VERTEX input naming the positions' `<source>` directly (some writers skip
+/// `<vertices>`) reads them, with one warning.
+#[test]
+fn vertex_input_naming_a_source_reads_its_positions() {
+    let doc = edit(
+        "<input semantic=\"VERTEX\" source=\"#quad-vtx\" offset=\"0\"/>",
+        "<input semantic=\"VERTEX\" source=\"#quad-pos\" offset=\"0\"/>",
+    );
+    let s = parse_ok(&doc);
+    assert_eq!(s.triangles.len(), 2);
+    assert!((area(&s) - 1.0).abs() < 1e-6);
+    assert_eq!(
+        count_warnings(&s, "VERTEX names a <source>"),
+        1,
+        "{:?}",
+        s.warnings
+    );
+}
+
+/// Coordinates beyond ±1e18 overflow the BVH's `f32` areas: an error naming the node,
+/// not a panic. A transform that flattens a whole mesh to nothing is said once.
+#[test]
+fn huge_and_flattened_placements() {
+    let huge = edit(
+        "<matrix>1 0 0 0 0 1 0 0 0 0 1 0 0 0 0 1</matrix>",
+        "<scale>1e20 1e20 1e20</scale>",
+    );
+    parse_err(&huge, &["<node id=\"quad-node\">", "beyond"]);
+    let huge_ball = edit(
+        "<translate>0 0 1</translate>",
+        "<scale>1e38 1e38 1e38</scale>",
+    );
+    parse_err(&huge_ball, &["<node id=\"ball-node\">", "beyond"]);
+    let flat = edit(
+        "<matrix>1 0 0 0 0 1 0 0 0 0 1 0 0 0 0 1</matrix>",
+        "<scale>0 0 0</scale>",
+    );
+    let s = parse_ok(&flat);
+    assert_eq!(count_warnings(&s, "zero area"), 1, "{:?}", s.warnings);
+    // Flattening a mesh along the axis it already lies flat on changes nothing.
+    let s = parse_ok(&edit(
+        "<matrix>1 0 0 0 0 1 0 0 0 0 1 0 0 0 0 1</matrix>",
+        "<scale>1 1 0</scale>",
+    ));
+    assert_eq!(count_warnings(&s, "zero area"), 0, "{:?}", s.warnings);
+}
+
+/// An `<instance_camera>` naming nothing is one problem: one warning, which says
+/// what the render does instead.
+#[test]
+fn a_dangling_camera_gives_one_warning() {
+    let s = parse_ok(&edit(
+        "<instance_camera url=\"#cam\"/>",
+        "<instance_camera url=\"#gone\"/>",
+    ));
+    assert_eq!(s.warnings.len(), 1, "{:?}", s.warnings);
+    assert!(s.warnings[0].contains("#gone") && s.warnings[0].contains("default view"));
 }

@@ -378,6 +378,12 @@ fn camera_field_of_view_rules() {
     assert!((c.tan_half_x.unwrap() - 2.0 * t(30.0)).abs() < 1e-6);
     let c = camera_doc("<yfov>30</yfov>", "").camera;
     assert_eq!(c.tan_half_x, None);
+    // SketchUp's and Assimp's aspect ratio 0 means "not given": one warning.
+    let s = camera_doc("<xfov>60</xfov><aspect_ratio>0</aspect_ratio>", "");
+    assert!((s.camera.tan_half_x.unwrap() - t(60.0)).abs() < 1e-6);
+    assert_eq!(s.camera.tan_half_y, None);
+    let zero = s.warnings.iter().filter(|w| w.contains("aspect ratio 0"));
+    assert_eq!(zero.count(), 1, "{:?}", s.warnings);
     let c = camera_doc(
         "<xfov>50</xfov><yfov>20</yfov><aspect_ratio>9</aspect_ratio>",
         "",

@@ -150,7 +150,7 @@ pub struct ReportArgs {
     #[arg(long, value_name = "PYTHON")]
     pub mitsuba: Option<PathBuf>,
     /// Worker threads (default: all cores). The figures do not depend on it.
-    #[arg(short = 't', value_name = "THREADS", value_parser = at_least_one::<usize>)]
+    #[arg(short = 't', value_name = "THREADS", value_parser = thread_count)]
     pub threads: Option<usize>,
 }
 
@@ -310,10 +310,10 @@ pub struct BenchRenderArgs {
     #[arg(short = 'm', default_value_t = 5)]
     pub max_depth: u32,
     /// Repetitions per scene (the median is reported).
-    #[arg(long, default_value_t = 3)]
+    #[arg(long, default_value_t = 3, value_parser = at_least_one::<u32>)]
     pub repeats: u32,
     /// Worker threads (default: all cores).
-    #[arg(short = 't', value_name = "THREADS", value_parser = at_least_one::<usize>)]
+    #[arg(short = 't', value_name = "THREADS", value_parser = thread_count)]
     pub threads: Option<usize>,
     /// Backend (auto: the native BVH and, in builds with Embree, Embree as `--accel embree`
     /// renders, in one table).
@@ -343,13 +343,13 @@ pub struct BenchAccelArgs {
     #[arg(value_parser = parse_bench_scene)]
     pub scenes: Vec<ember::bench::accel::BenchScene>,
     /// Incoherent and shadow rays per measurement (camera rays: one per pixel of a 480x360 render).
-    #[arg(long, default_value_t = 500_000)]
+    #[arg(long, default_value_t = 500_000, value_parser = at_least_one::<usize>)]
     pub rays: usize,
     /// Thread counts to measure: `-t 1 2` or `-t 1,2` (scenes go before the options, or after `--`).
     #[arg(short = 't', long, num_args = 1.., value_delimiter = ',', default_values_t = [1, 2])]
     pub threads: Vec<usize>,
     /// Each figure is the median of this many runs.
-    #[arg(long, default_value_t = 5)]
+    #[arg(long, default_value_t = 5, value_parser = at_least_one::<usize>)]
     pub repeats: usize,
     /// Embree's build quality in the main table (the Embree modes table has all three).
     #[arg(long, value_parser = named::<EmbreeQuality>(), default_value_t = EmbreeQuality::default())]
@@ -380,7 +380,7 @@ pub struct BenchConvergeArgs {
     pub reference: Option<PathBuf>,
     /// Per-pixel RMS noise of --reference, subtracted from every MSE. Default: from the manifest.json beside --reference
     /// (as tests/data/references has), else taken as negligible.
-    #[arg(long)]
+    #[arg(long, value_parser = non_negative_number)]
     pub reference_noise: Option<f64>,
     /// Max ray depth.
     #[arg(short = 'm', default_value_t = 1)]
@@ -389,13 +389,13 @@ pub struct BenchConvergeArgs {
     #[arg(short = 'r', num_args = 2, action = clap::ArgAction::Set, value_names = ["WIDTH", "HEIGHT"], default_values_t = [160, 120])]
     pub resolution: Vec<u32>,
     /// Largest spp of ember's doubling sequence 1, 2, 4, ... (peers go one count further, so that ember's time at it falls within their curves)
-    #[arg(long, default_value_t = 1024)]
+    #[arg(long, default_value_t = 1024, value_parser = at_least_one::<u32>)]
     pub max_spp: u32,
     /// Stop doubling a method once one render takes longer than this (seconds).
-    #[arg(long, default_value_t = 8.0)]
+    #[arg(long, default_value_t = 8.0, value_parser = positive_seconds)]
     pub max_seconds: f64,
     /// spp of ember's own reference.
-    #[arg(long, default_value_t = 8192)]
+    #[arg(long, default_value_t = 8192, value_parser = at_least_one::<u32>)]
     pub reference_spp: u32,
     /// Output folder.
     #[arg(long, default_value = "bench-out/converge")]
@@ -429,7 +429,7 @@ pub struct BenchConvergeArgs {
     #[arg(long, value_name = "PYTHON")]
     pub cycles: Option<PathBuf>,
     /// Worker threads (default: all cores).
-    #[arg(short = 't', value_name = "THREADS", value_parser = at_least_one::<usize>)]
+    #[arg(short = 't', value_name = "THREADS", value_parser = thread_count)]
     pub threads: Option<usize>,
 }
 
@@ -457,7 +457,7 @@ pub struct BenchEstimatorsArgs {
     #[arg(long, default_value = "bench-out/estimators")]
     pub out: PathBuf,
     /// Worker threads (default: all cores).
-    #[arg(short = 't', value_name = "THREADS", value_parser = at_least_one::<usize>)]
+    #[arg(short = 't', value_name = "THREADS", value_parser = thread_count)]
     pub threads: Option<usize>,
 }
 
@@ -474,7 +474,7 @@ pub struct BenchStabilityArgs {
     #[arg(long, default_value_t = 0)]
     pub seed: u64,
     /// Worker threads (default: all cores).
-    #[arg(short = 't', value_name = "THREADS", value_parser = at_least_one::<usize>)]
+    #[arg(short = 't', value_name = "THREADS", value_parser = thread_count)]
     pub threads: Option<usize>,
 }
 
@@ -489,7 +489,7 @@ pub struct RenderArgs {
     pub scene: Option<PathBuf>,
 
     /// Worker threads (default: all cores). The image does not depend on it.
-    #[arg(short = 't', value_name = "THREADS", value_parser = at_least_one::<usize>)]
+    #[arg(short = 't', value_name = "THREADS", value_parser = thread_count)]
     pub threads: Option<usize>,
 
     /// Camera rays (samples) per pixel; with -a, the most a pixel takes [default: 1; with --time, no cap].
@@ -630,6 +630,40 @@ pub struct RenderArgs {
 }
 
 /// A count of at least 1 (`-s`, `-t`): "-s 0" and "-s -1" get the same message.
+/// The most worker threads `-t` takes: far beyond any machine's cores (more only
+/// slow a render), and short of what the system refuses to start.
+pub(super) const MAX_THREADS: usize = 1024;
+
+/// `-t`: 1 to [`MAX_THREADS`].
+fn thread_count(s: &str) -> Result<usize, String> {
+    let n = at_least_one::<usize>(s)?;
+    if n > MAX_THREADS {
+        return Err(format!(
+            "at most {MAX_THREADS} worker threads (this machine has {})",
+            std::thread::available_parallelism().map_or(1, |c| c.get())
+        ));
+    }
+    Ok(n)
+}
+
+/// A finite number of at least 0.
+#[cfg(feature = "bench")]
+fn non_negative_number(s: &str) -> Result<f64, String> {
+    match s.parse::<f64>() {
+        Ok(v) if v.is_finite() && v >= 0.0 => Ok(v),
+        _ => Err("expected a finite number of at least 0".into()),
+    }
+}
+
+/// A finite number of seconds above 0.
+#[cfg(feature = "bench")]
+fn positive_seconds(s: &str) -> Result<f64, String> {
+    match s.parse::<f64>() {
+        Ok(v) if v.is_finite() && v > 0.0 => Ok(v),
+        _ => Err("expected a finite number of seconds above 0".into()),
+    }
+}
+
 fn at_least_one<T: TryFrom<u64>>(s: &str) -> Result<T, String> {
     let n: i128 = s
         .parse()

@@ -7,7 +7,7 @@ use super::convert::{
     output_path, part_plan, run_plan, settings_from, RunPlan,
 };
 use super::interrupt::{self, Interrupted};
-use anyhow::{bail, Result};
+use anyhow::{bail, Context, Result};
 use ember::accel;
 use ember::camera::course_file::CourseCameraFile;
 use ember::image_io::{OutputFormat, PendingImage};
@@ -620,9 +620,20 @@ pub(super) fn camera(a: CameraArgs) -> Result<()> {
     let text = CourseCameraFile::from_camera(&camera, &scene.bounds).to_text();
     match &a.save {
         None => ember::out!("{text}")?,
+        Some(path) if is_same_file(path, &a.scene) => {
+            bail!(
+                "{}: is the input scene; --save would overwrite it",
+                path.display()
+            )
+        }
         Some(path) => write_text_file(path, &text)?,
     }
     Ok(())
+}
+
+/// Whether `a` and `b` name one existing file.
+fn is_same_file(a: &Path, b: &Path) -> bool {
+    matches!((a.canonicalize(), b.canonicalize()), (Ok(a), Ok(b)) if a == b)
 }
 
 /// Writes `text` to `path` through a temporary sibling, so no partial file is ever left.
@@ -688,7 +699,10 @@ fn load_scene(path: &Path) -> Result<Scene> {
 
 /// The pool of `-t` threads (at least 1, as the flag's parser checks), all cores without it.
 pub(super) fn thread_pool(threads: Option<usize>) -> Result<rayon::ThreadPool> {
-    Ok(accel::tracing_pool(threads)?)
+    accel::tracing_pool(threads).with_context(|| match threads {
+        Some(t) => format!("could not start {t} worker threads (-t)"),
+        None => "could not start the worker threads".into(),
+    })
 }
 
 fn progress_bar(total: u64, quiet: bool) -> ProgressBar {
@@ -732,6 +746,17 @@ pub(super) fn export(a: ExportArgs) -> Result<()> {
         .scene
         .file_stem()
         .map_or("scene".into(), |s| s.to_string_lossy().into_owned());
+    if let Some(map) = &a.env_map {
+        // The map is exported as `<stem>_env.exr` beside the scene file.
+        let exported = a.out.join(format!("{stem}_env.exr"));
+        if is_same_file(map, &exported) {
+            bail!(
+                "{}: the exported map {} would overwrite this -e input; choose another --out",
+                map.display(),
+                exported.display()
+            );
+        }
+    }
     let ExportFormat::Mitsuba = a.format;
     let settings = ember::export::MitsubaSettings {
         sampler: a.sampler,

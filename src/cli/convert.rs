@@ -41,7 +41,9 @@ pub(super) fn run_plan(args: &RenderArgs, settings: &RenderSettings) -> Result<R
             Duration::try_from_secs_f64(s)
                 .ok()
                 .filter(|d| !d.is_zero())
-                .with_context(|| format!("{flag}: expected a positive number of seconds, got {s}"))
+                .with_context(|| {
+                    format!("{flag}: expected a positive number of seconds, got {s:?}")
+                })
         })
         .transpose()
     };
@@ -190,6 +192,18 @@ pub(super) fn settings_from(args: &RenderArgs) -> Result<RenderSettings> {
     };
     if args.env_map.is_some() && estimator(args) == Some(Estimator::LightTracing) {
         bail!("-e: light tracing does not support environment maps; use path tracing (--integrator auto, light or mis)");
+    }
+    if args.hemisphere {
+        if let Some(named) = args
+            .integrator
+            .strategy
+            .filter(|&s| s != DirectStrategy::Hemisphere)
+        {
+            bail!("-H (hemisphere sampling) and --integrator name two ways of sampling direct light ({named}); give one");
+        }
+        if estimator(args) == Some(Estimator::LightTracing) {
+            bail!("-H (hemisphere sampling) has no meaning for light tracing, whose paths start at the lights; use --integrator path");
+        }
     }
     let adaptive = parse_adaptive(&args.adaptive)?;
     if estimator(args) == Some(Estimator::Caustics) {
@@ -412,6 +426,12 @@ pub(super) fn bench_render_options(
 pub(super) fn bench_accel_options(a: BenchAccelArgs) -> Result<bench::accel::AccelBenchOptions> {
     if a.threads.is_empty() || a.threads.contains(&0) {
         bail!("--threads: each count must be at least 1");
+    }
+    if let Some(t) = a.threads.iter().find(|&&t| t > super::args::MAX_THREADS) {
+        bail!(
+            "--threads: {t} is more than the {} worker threads ember starts",
+            super::args::MAX_THREADS
+        );
     }
     let defaults = bench::accel::AccelBenchOptions::default();
     Ok(bench::accel::AccelBenchOptions {

@@ -30,6 +30,25 @@ pub fn parse() -> Result<Cli, std::process::ExitCode> {
         Ok(cli) => return Ok(cli),
         Err(e) => e,
     };
+    // `ember --data DIR info x.dae`: options before a subcommand make clap read the
+    // subcommand's name as a scene. Read again with them after it.
+    let e = match (e.kind(), subcommand_first()) {
+        (ErrorKind::ArgumentConflict, Some(args)) => {
+            let name = args[1].to_string_lossy().into_owned();
+            match Cli::try_parse_from(args) {
+                Ok(cli) => return Ok(cli),
+                Err(e) if e.kind() == ErrorKind::UnknownArgument => {
+                    ember::errln!(
+                        "ember: error: the options before `{name}` are read as its own: {}",
+                        one_line(&e)
+                    );
+                    return Err(ExitCode::from(e.exit_code().clamp(1, 255) as u8));
+                }
+                Err(e) => e,
+            }
+        }
+        _ => e,
+    };
     match e.kind() {
         ErrorKind::DisplayHelp | ErrorKind::DisplayVersion => {
             let mut text = e.render().to_string();
@@ -66,6 +85,26 @@ pub fn parse() -> Result<Cli, std::process::ExitCode> {
     }
     ember::errln!("ember: error: {}", one_line(&e));
     Err(ExitCode::from(e.exit_code().clamp(1, 255) as u8))
+}
+
+/// The command line with the options before its first subcommand name moved to the
+/// end (`ember --data D bench render x.dae` → `ember bench render x.dae --data D`),
+/// if it names one after some options.
+fn subcommand_first() -> Option<Vec<std::ffi::OsString>> {
+    use clap::CommandFactory;
+    let mut args: Vec<std::ffi::OsString> = std::env::args_os().collect();
+    let cmd = Cli::command();
+    let is_subcommand = |a: &std::ffi::OsString| {
+        let a = a.to_str().unwrap_or("");
+        cmd.get_subcommands().any(|s| s.get_name() == a)
+    };
+    let at = args.iter().skip(1).position(is_subcommand)? + 1;
+    if at == 1 || !args[1].to_str().is_some_and(|a| a.starts_with('-')) {
+        return None;
+    }
+    let options: Vec<_> = args.drain(1..at).collect();
+    args.extend(options);
+    Some(args)
 }
 
 /// `-a 64 0.05 0.1 scene.dae`: clap gives `-a` two values and takes `0.1` for the scene

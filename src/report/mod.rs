@@ -84,6 +84,10 @@ pub fn run(opts: &ReportOptions, progress: &dyn Progress) -> Result<Written> {
         true => Scenes::course(opts.quick)?,
         false => {
             check_scene_names(&opts.scenes)?;
+            // Each scene loads before anything is written, so a bad one leaves no folders.
+            for path in &opts.scenes {
+                crate::scene::collada::load(path)?;
+            }
             Scenes::given(&opts.scenes)
         }
     };

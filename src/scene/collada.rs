@@ -110,22 +110,7 @@ fn uri_path(uri: &str) -> String {
         [b'/', _, b':', ..] => &s[1..],
         _ => s,
     };
-    let mut bytes = Vec::with_capacity(s.len());
-    let b = s.as_bytes();
-    let mut i = 0;
-    while i < b.len() {
-        let hex = |c: u8| (c as char).to_digit(16);
-        if b[i] == b'%' && i + 2 < b.len() {
-            if let (Some(h), Some(l)) = (hex(b[i + 1]), hex(b[i + 2])) {
-                bytes.push((h * 16 + l) as u8);
-                i += 3;
-                continue;
-            }
-        }
-        bytes.push(b[i]);
-        i += 1;
-    }
-    String::from_utf8_lossy(&bytes).replace('\\', "/")
+    xml::percent_decode(s).replace('\\', "/")
 }
 
 /// `a/./b/../c` → `a/c`, for names inside an archive.
@@ -296,11 +281,29 @@ fn parse_with(text: &str, file_label: &str, resources: &dyn Resources) -> Result
             ),
         ));
     }
-    let options = roxmltree::ParsingOptions {
-        allow_dtd: false,
-        ..Default::default()
+    let parse = |allow_dtd| {
+        let options = roxmltree::ParsingOptions {
+            allow_dtd,
+            ..Default::default()
+        };
+        roxmltree::Document::parse_with_options(text, options)
     };
-    let doc = roxmltree::Document::parse_with_options(text, options).map_err(|e| {
+    // A DTD's entities could expand without bound, so only a bare <!DOCTYPE>, which
+    // defines none (some tools write `<!DOCTYPE COLLADA>`), is read past.
+    let mut bare_doctype = false;
+    let doc = match parse(false) {
+        Err(roxmltree::Error::DtdDetected) if !has_internal_subset(text) => {
+            bare_doctype = true;
+            parse(true)
+        }
+        Err(roxmltree::Error::DtdDetected) => {
+            let msg = "<!DOCTYPE>: a document type declaration with an internal subset \
+                       ([...]) is not read; delete it";
+            return Err(LoadError::invalid(file_label, msg));
+        }
+        parsed => parsed,
+    }
+    .map_err(|e| {
         let what = e.to_string().replace(['\n', '\r'], " ");
         LoadError::invalid(file_label, format!("not well-formed XML: {what}"))
     })?;
@@ -314,5 +317,21 @@ fn parse_with(text: &str, file_label: &str, resources: &dyn Resources) -> Result
             ),
         ));
     }
-    builder::build(file_label, &doc, resources)
+    let mut scene = builder::build(file_label, &doc, resources)?;
+    if bare_doctype {
+        let w = format!("{file_label}: <!DOCTYPE>: a document type declaration; ignored");
+        scene.warnings.insert(0, w);
+    }
+    Ok(scene)
+}
+
+/// Whether the text's `<!DOCTYPE ...>` has an internal subset (`[...]`), where
+/// entities are declared.
+fn has_internal_subset(text: &str) -> bool {
+    let Some(start) = text.find("<!DOCTYPE") else {
+        return true;
+    };
+    let decl = &text[start..];
+    let end = decl.find('>').unwrap_or(decl.len());
+    decl[..end].contains('[')
 }

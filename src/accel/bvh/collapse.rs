@@ -148,7 +148,9 @@ fn plan_node(area: f32, prims: u8, a: &Planned, b: &Planned) -> (Plan, Planned) 
         let mut best = (f32::INFINITY, 0u8);
         for k in j.saturating_sub(b.slots)..j.min(a.slots) {
             let cost = a.costs[k] + b.costs[j - 1 - k];
-            if cost < best.0 {
+            // The first split counts even at an infinite or NaN cost, so a split
+            // is always chosen.
+            if cost < best.0 || best.1 == 0 {
                 best = (cost, k as u8 + 1);
             }
         }
@@ -168,7 +170,9 @@ fn plan_node(area: f32, prims: u8, a: &Planned, b: &Planned) -> (Plan, Planned) 
         f32::INFINITY
     };
     costs[0] = wide_node.min(leaf);
-    plan.split[0] = u8::from(leaf > wide_node);
+    // More than a block's primitives is always a wide node, whatever the costs say
+    // (they are infinite where areas overflow).
+    plan.split[0] = u8::from(u32::from(prims) > BLOCK || leaf > wide_node);
     for j in 1..slots {
         if shared[j].0 < costs[j - 1] {
             costs[j] = shared[j].0;

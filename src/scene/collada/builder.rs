@@ -1,6 +1,6 @@
 //! Walks the visual scene and flattens its instances into a `Scene`.
 
-use super::camera::{course_placement, read_camera};
+use super::camera::{authoring_tool, course_placement, read_camera, writes_watts};
 use super::effects::{read_material, TextureRef};
 use super::lights::read_light;
 use super::mesh::{parse_mesh, LocalMesh};
@@ -31,6 +31,9 @@ const MAX_VERTICES: usize = 1 << 24;
 const MAX_NODE_VISITS: usize = 1 << 22;
 /// Controllers a `<skin>` or `<morph>` may chain through before reaching a geometry.
 const MAX_CONTROLLER_CHAIN: usize = 16;
+/// Largest coordinate a placed vertex or sphere may have: beyond it the `f32`
+/// surface areas and slab distances of the BVH overflow.
+const MAX_COORDINATE: f32 = 1e18;
 
 pub(crate) fn build(
     file: &str,
@@ -40,6 +43,8 @@ pub(crate) fn build(
     let mut ctx = Ctx::new(file, doc);
     let (placement, placement_reason) = course_placement(doc);
     ctx.course_file = placement == Placement::Course;
+    // The course's extension keeps the course's units whichever Blender wrote it.
+    ctx.light_watts = !ctx.course_file && authoring_tool(doc).is_some_and(writes_watts);
     let up = up_axis_matrix(&mut ctx, doc);
     let mut b = Builder {
         ctx,
@@ -51,6 +56,7 @@ pub(crate) fn build(
         default_material: None,
         camera: None,
         placement,
+        dangling_camera: None,
         up,
         resources,
     };
@@ -93,6 +99,8 @@ struct Builder<'a, 'i, 'r> {
     default_material: Option<u32>,
     camera: Option<CameraDesc>,
     placement: Placement,
+    /// The first `<instance_camera>` that named nothing (warned in `finish`).
+    dangling_camera: Option<Node<'a, 'i>>,
     /// `U`, the up-axis conversion (skinned meshes are placed by it alone).
     up: DMat4,
     resources: &'r dyn Resources,
@@ -207,10 +215,13 @@ impl<'a, 'i> Builder<'a, 'i, '_> {
         let target = self.ctx.resolve_if_present(inst, "url", tag)?;
         if target.is_none() {
             let url = super::xml::clip(inst.attribute("url").unwrap_or_default());
-            self.ctx.warn(
-                inst,
-                format!("url=\"{url}\" names nothing in this file; the {tag} is skipped"),
-            );
+            if tag == "camera" {
+                // Warned in `finish`, with what follows from it: one problem, one warning.
+                self.dangling_camera.get_or_insert(inst);
+            } else {
+                let msg = format!("url=\"{url}\" names nothing in this file; the {tag} is skipped");
+                self.ctx.warn(inst, msg);
+            }
         }
         Ok(target)
     }
@@ -575,10 +586,12 @@ impl<'a, 'i> Builder<'a, 'i, '_> {
         });
         for p in &mesh.positions {
             let q = point(world, p.as_dvec3()).as_vec3();
-            if !q.is_finite() {
-                return Err(self
-                    .ctx
-                    .err(inst, "a transformed vertex position is not finite"));
+            if !q.is_finite() || q.abs().max_element() > MAX_COORDINATE {
+                let msg = format!(
+                    "a transformed vertex position has a coordinate of {:e}: not finite or beyond ±{MAX_COORDINATE:e}",
+                    q.abs().max_element()
+                );
+                return Err(self.ctx.err(inst, msg));
             }
             s.positions.push(q);
         }
@@ -591,6 +604,7 @@ impl<'a, 'i> Builder<'a, 'i, '_> {
                 Vec3::ZERO
             }
         }));
+        let mut flat = 0;
         for (k, t) in mesh.triangles.iter().enumerate() {
             let mut v = t.v.map(|i| i + base_p);
             let mut n = t.n.map(|n| n.map(|i| i + base_n));
@@ -599,6 +613,9 @@ impl<'a, 'i> Builder<'a, 'i, '_> {
                     .map_or([origin_uv; 3], |c| c.map(|i| i + base_uv))
             });
             let [p0, p1, p2] = v.map(|i| s.positions[i as usize]);
+            if (p1 - p0).cross(p2 - p0) == Vec3::ZERO {
+                flat += 1;
+            }
             if let Some(nn) = n {
                 let sum: Vec3 = nn.iter().map(|&i| s.normals[i as usize]).sum();
                 if (p1 - p0).cross(p2 - p0).dot(sum) < 0.0 {
@@ -620,6 +637,13 @@ impl<'a, 'i> Builder<'a, 'i, '_> {
                 material: materials[t.group as usize],
                 light: NO_LIGHT,
             });
+        }
+        if flat > 0 && flat == mesh.triangles.len() {
+            // A zero scale, or a mesh of slivers: nothing to see or to light.
+            let msg = format!(
+                "all {flat} triangles have zero area once placed; the mesh renders nothing"
+            );
+            self.ctx.warn(inst, msg);
         }
         Ok(())
     }
@@ -652,6 +676,13 @@ impl<'a, 'i> Builder<'a, 'i, '_> {
         }
         let centre = point(world, DVec3::ZERO).as_vec3();
         let radius = (r as f64 * sx) as f32;
+        let extent = centre.abs().max_element() + radius;
+        if extent > MAX_COORDINATE && extent.is_finite() && radius > 0.0 {
+            let msg = format!(
+                "transformed sphere reaches a coordinate of {extent:e}, beyond ±{MAX_COORDINATE:e}"
+            );
+            return Err(self.ctx.err(inst, msg));
+        }
         if !centre.is_finite() || !radius.is_finite() || radius <= 0.0 {
             let msg =
                 format!("transformed sphere (centre {centre}, radius {radius}) is degenerate");
@@ -682,11 +713,26 @@ impl<'a, 'i> Builder<'a, 'i, '_> {
                 other => self.scene.lights.push(other),
             }
         }
+        let dangling = self.dangling_camera.map(|inst| {
+            let url = super::xml::clip(inst.attribute("url").unwrap_or_default());
+            (inst, format!("url=\"{url}\" names nothing in this file"))
+        });
         self.scene.camera = match self.camera {
-            Some(c) => c,
+            Some(c) => {
+                if let Some((inst, msg)) = dangling {
+                    self.ctx.warn(inst, format!("{msg}; the camera is skipped"));
+                }
+                c
+            }
             None => {
-                self.ctx
-                    .warn(root, "no camera; using the default view down −Z");
+                match dangling {
+                    Some((inst, msg)) => self
+                        .ctx
+                        .warn(inst, format!("{msg}; using the default view down −Z")),
+                    None => self
+                        .ctx
+                        .warn(root, "no camera; using the default view down −Z"),
+                }
                 // Without a camera position the course's rule places the eye whatever
                 // the placement (`ember info` says so).
                 CameraDesc {

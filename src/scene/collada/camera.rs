@@ -47,14 +47,7 @@ pub(crate) fn course_placement(doc: &Document) -> (Placement, String) {
             "the file uses the course's CGL/CMU462 extension".into(),
         );
     }
-    let tool = child(doc.root_element(), "asset")
-        .into_iter()
-        .flat_map(|a| a.children().filter(|c| c.has_tag_name("contributor")))
-        .find_map(|c| child(c, "authoring_tool"))
-        .and_then(|t| t.text())
-        .map(str::trim)
-        .filter(|t| !t.is_empty());
-    match tool {
+    match authoring_tool(doc) {
         None => (
             Placement::Course,
             "the file names no <authoring_tool>".into(),
@@ -74,6 +67,29 @@ pub(crate) fn course_placement(doc: &Document) -> (Placement, String) {
             ),
         ),
     }
+}
+
+/// The first `<contributor>`'s `<authoring_tool>`, if it names one.
+pub(crate) fn authoring_tool<'a>(doc: &'a Document) -> Option<&'a str> {
+    child(doc.root_element(), "asset")
+        .into_iter()
+        .flat_map(|a| a.children().filter(|c| c.has_tag_name("contributor")))
+        .find_map(|c| child(c, "authoring_tool"))
+        .and_then(|t| t.text())
+        .map(str::trim)
+        .filter(|t| !t.is_empty())
+}
+
+/// Whether `tool` is Blender 2.80 or later, whose exporter writes a point or spot
+/// light's colour times its power in watts (earlier builds: a unitless energy).
+pub(crate) fn writes_watts(tool: &str) -> bool {
+    let Some(version) = tool.strip_prefix("Blender ") else {
+        return false;
+    };
+    let mut parts = version.split(|c: char| !c.is_ascii_digit());
+    let major = parts.next().and_then(|m| m.parse::<u32>().ok());
+    let minor = parts.next().and_then(|m| m.parse::<u32>().ok());
+    matches!((major, minor), (Some(m), Some(n)) if (m, n) >= (2, 80))
 }
 
 /// `F = normalize(W3·(0,0,−1))`; `U` = world +Y made orthogonal to `F`, or
@@ -115,10 +131,12 @@ fn orthogonal_part(v: DVec3, f: DVec3) -> Option<DVec3> {
 /// `tan(xfov/2)`, `tan(yfov/2)`, the missing one derived from `aspect_ratio`.
 fn field_of_view(ctx: &mut Ctx, camera: Node) -> Result<(Option<f32>, Option<f32>), LoadError> {
     let Some(persp) = path(camera, &["optics", "technique_common", "perspective"]) else {
-        ctx.warn(
-            camera,
-            "no <perspective> optics; using the default field of view",
-        );
+        let ortho = path(camera, &["optics", "technique_common", "orthographic"]);
+        let msg = match ortho {
+            Some(_) => "orthographic cameras are not supported; rendered as a perspective camera with the default field of view",
+            None => "no <perspective> optics; using the default field of view",
+        };
+        ctx.warn(camera, msg);
         let d = CameraDesc::default();
         return Ok((d.tan_half_x, d.tan_half_y));
     };
@@ -135,6 +153,12 @@ fn field_of_view(ctx: &mut Ctx, camera: Node) -> Result<(Option<f32>, Option<f32
     let (tx, ty) = (tan_half("xfov")?, tan_half("yfov")?);
     let aspect = match ctx.child_scalar(persp, "aspect_ratio")? {
         Some(a) if a > 0.0 => Some(a),
+        // SketchUp always writes 0, and Assimp where its source had none: "not given".
+        Some(0.0) => {
+            let node = child(persp, "aspect_ratio").unwrap_or(persp);
+            ctx.warn(node, "aspect ratio 0 read as not given");
+            None
+        }
         Some(a) => {
             let node = child(persp, "aspect_ratio").unwrap_or(persp);
             return Err(ctx.err(node, format!("aspect ratio {a} is not positive")));

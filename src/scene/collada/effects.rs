@@ -69,7 +69,7 @@ pub(crate) fn read_material<'a, 'i>(
     if !ctx.course_file {
         warn_unrendered(ctx, effect, model);
     }
-    let colour = diffuse_colour(ctx, model)?;
+    let colour = diffuse_colour(ctx, effect, model)?;
     let fallback = match colour {
         Some(c) => Some(c),
         None => path(model, &["ambient", "color"])
@@ -83,8 +83,13 @@ pub(crate) fn read_material<'a, 'i>(
         (Some(c), _) => c,
         // A texture alone is the albedo: it multiplies white.
         (None, Some(_)) => Color::ONE,
+        // <constant> is unlit: it shows its emission and reflects nothing.
+        (None, None) if model.has_tag_name("constant") => Color::ZERO,
         (None, None) => Color::splat(0.5),
     };
+    if let (Some(c), Some(at)) = (colour, child(model, "diffuse")) {
+        warn_gain(ctx, at, c);
+    }
     let material = Material::lambertian(albedo);
     Ok(ReadMaterial {
         // The front side emits, as the course's emission material does.
@@ -93,11 +98,43 @@ pub(crate) fn read_material<'a, 'i>(
     })
 }
 
-/// `<diffuse><color>`, if given.
-fn diffuse_colour(ctx: &Ctx, model: Node) -> Result<Option<Color>, LoadError> {
-    path(model, &["diffuse", "color"])
-        .map(|c| ctx.leading::<3>(c).map(Color::from))
-        .transpose()
+/// `<diffuse><color>`, or the `<float4>` (or `<float3>`) of the `<newparam>` that
+/// `<diffuse><param ref>` names, if given.
+fn diffuse_colour(ctx: &mut Ctx, effect: Node, model: Node) -> Result<Option<Color>, LoadError> {
+    if let Some(c) = path(model, &["diffuse", "color"]) {
+        return ctx.colour(c).map(|c| Some(Color::from(c)));
+    }
+    let Some(param) = path(model, &["diffuse", "param"]) else {
+        return Ok(None);
+    };
+    let sid = param.attribute("ref").unwrap_or("");
+    let value = effect
+        .descendants()
+        .find(|n| n.has_tag_name("newparam") && n.attribute("sid") == Some(sid))
+        .and_then(|p| child(p, "float4").or_else(|| child(p, "float3")));
+    match value {
+        Some(v) => ctx.colour(v).map(|c| Some(Color::from(c))),
+        None => {
+            let msg = format!(
+                "ref=\"{}\" names no <newparam> holding a colour; the default colour is used",
+                super::xml::clip(sid)
+            );
+            ctx.warn(param, msg);
+            Ok(None)
+        }
+    }
+}
+
+/// A reflectance above 1 in some channel returns more light than arrives: legal,
+/// but rarely meant (a colour written as 0–255, say), so it is said once.
+fn warn_gain(ctx: &mut Ctx, node: Node, c: Color) {
+    if c.max_element() > 1.0 {
+        let msg = format!(
+            "a reflectance of {} is above 1: the surface returns more light than it receives",
+            c.max_element()
+        );
+        ctx.warn(node, msg);
+    }
 }
 
 /// `<emission><color>` when it is not black.
@@ -109,7 +146,7 @@ fn emission(ctx: &mut Ctx, model: Node) -> Result<Option<Color>, LoadError> {
         ctx.warn(e, "an emission texture is not supported; ignored");
     }
     let c = child(e, "color")
-        .map(|c| ctx.leading::<3>(c).map(Color::from))
+        .map(|c| ctx.colour(c).map(Color::from))
         .transpose()?;
     Ok(c.filter(|c| c.max_element() > 0.0))
 }
@@ -252,17 +289,17 @@ fn read_special<'a, 'i>(ctx: &mut Ctx<'a, 'i>, node: Node<'a, 'i>) -> Result<Mat
     let mut p = Params { ctx, node };
     let m = match node.tag_name().name() {
         "emission" => Material::emitter(p.rgb("radiance", 1.0)?),
-        "mirror" => Material::mirror(p.rgb("reflectance", 1.0)?),
+        "mirror" => Material::mirror(p.reflectance("reflectance")?),
         "glass" => {
             p.require_smooth()?;
             let ior = p.positive("ior", 1.5)?;
-            let r = p.rgb("reflectance", 1.0)?;
-            Material::glass(ior, r, p.rgb("transmittance", 1.0)?)
+            let r = p.reflectance("reflectance")?;
+            Material::glass(ior, r, p.reflectance("transmittance")?)
         }
         "refraction" => {
             p.require_smooth()?;
             let ior = p.positive("ior", 1.5)?;
-            Material::refraction(ior, p.rgb("transmittance", 1.0)?)
+            Material::refraction(ior, p.reflectance("transmittance")?)
         }
         _ => {
             let alpha = p.positive("alpha", 0.5)?;
@@ -281,7 +318,7 @@ struct Params<'c, 'a, 'i> {
 
 impl Params<'_, '_, '_> {
     fn rgb(&mut self, name: &str, default: f32) -> Result<Color, LoadError> {
-        match self.ctx.child_rgb(self.node, name)? {
+        match self.ctx.child_colour(self.node, name)? {
             Some(c) => Ok(Color::from(c)),
             None => {
                 let msg = format!("missing <{name}>; using {default}");
@@ -289,6 +326,15 @@ impl Params<'_, '_, '_> {
                 Ok(Color::splat(default))
             }
         }
+    }
+
+    /// A reflectance or transmittance (default 1), warned above 1.
+    fn reflectance(&mut self, name: &str) -> Result<Color, LoadError> {
+        let c = self.rgb(name, 1.0)?;
+        if let Some(at) = child(self.node, name) {
+            warn_gain(self.ctx, at, c);
+        }
+        Ok(c)
     }
 
     fn positive(&mut self, name: &str, default: f32) -> Result<f32, LoadError> {

@@ -30,10 +30,18 @@ pub(crate) fn read_light(
         ctx.warn(kind, format!("{name} lights are not supported; skipped"));
         return Ok(None);
     }
-    let c = Color::from(
-        ctx.child_rgb(kind, "color")?
+    let mut c = Color::from(
+        ctx.child_colour(kind, "color")?
             .ok_or_else(|| ctx.err(kind, "missing <color>"))?,
     );
+    if ctx.light_watts && matches!(name, "point" | "spot") {
+        // Blender's power P of a point or spot light is that of the whole sphere
+        // (a spot masks a point light), so its intensity is P/4π W/sr.
+        c *= 0.25 * std::f32::consts::FRAC_1_PI;
+        let msg = "Blender 2.80 and later write a point or spot light's power in watts; \
+                   read as intensity power/4π W/sr";
+        ctx.warn_once("light watts", kind, msg);
+    }
     let light = match name {
         "area" => return area(ctx, kind, w, c),
         "point" => Light::Point {
@@ -46,7 +54,7 @@ pub(crate) fn read_light(
                 return Err(ctx.err(kind, "the node transform has no −Z direction"));
             }
             let angle = ctx.child_scalar(kind, "falloff_angle")?.unwrap_or(180.0);
-            let exponent = ctx.child_scalar(kind, "falloff_exponent")?.unwrap_or(0.0);
+            let exponent = falloff_exponent(ctx, kind)?;
             if angle <= 0.0 || exponent < 0.0 {
                 let msg = format!("falloff_angle {angle} must be positive and falloff_exponent {exponent} not negative");
                 return Err(ctx.err(kind, msg));
@@ -110,6 +118,23 @@ fn area(ctx: &mut Ctx, kind: Node, w: &DMat4, c: Color) -> Result<Option<Light>,
         normal,
         radiance: c,
     })))
+}
+
+/// `<falloff_exponent>`, 0 if absent. Assimp writes `inf` for a cone whose inner and
+/// outer angles are equal, a hard edge: read as 0, no falloff, with a warning.
+fn falloff_exponent(ctx: &mut Ctx, kind: Node) -> Result<f32, LoadError> {
+    let Some(e) = child(kind, "falloff_exponent") else {
+        return Ok(0.0);
+    };
+    let word = e.text().unwrap_or("").trim();
+    if word.parse::<f32>().is_ok_and(|v| v == f32::INFINITY) {
+        ctx.warn(
+            e,
+            "an infinite falloff exponent (a hard-edged cone) read as 0",
+        );
+        return Ok(0.0);
+    }
+    ctx.leading::<1>(e).map(|[v]| v)
 }
 
 fn finite(ctx: &Ctx, node: Node, v: DVec3) -> Result<Vec3, LoadError> {

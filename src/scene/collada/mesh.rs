@@ -118,17 +118,21 @@ pub(crate) fn parse_mesh<'a, 'i>(
             group,
             mesh: &mut mesh,
             bad_uv: false,
+            short_faces: false,
         };
         match kind {
             "triangles" => read_triangles(ctx, prim, &mut out)?,
             "polylist" => read_polylist(ctx, prim, &mut out)?,
             "polygons" => read_polygons(ctx, prim, &mut out)?,
-            _ => {
-                if read_strips(ctx, prim, kind == "tristrips", &mut out)? {
-                    let msg = "a <p> of fewer than 3 corners makes no triangle; skipped";
-                    ctx.warn_once("short strip", prim, msg);
-                }
-            }
+            _ => read_strips(ctx, prim, kind == "tristrips", &mut out)?,
+        }
+        if kind == "triangles" && children(prim, "p").nth(1).is_some() {
+            let msg = "several <p> in a <triangles> (COLLADA allows one); all are read";
+            ctx.warn_once("several p", prim, msg);
+        }
+        if out.short_faces {
+            let msg = "a face of fewer than 3 corners makes no triangle; skipped";
+            ctx.warn_once("short face", prim, msg);
         }
         if out.bad_uv {
             ctx.warn(
@@ -163,24 +167,19 @@ fn read_layout<'a, 'i>(
             Some("VERTEX") if vertex.is_none() => vertex = Some((input, offset as usize)),
             Some("NORMAL") if normal.is_none() => normal = Some((input, offset as usize)),
             Some("TEXCOORD") => texcoords.push((input, offset as usize)),
+            Some("COLOR") => warn_vertex_colours(ctx, input),
             _ => {}
         }
     }
     let (vinput, vertex_offset) = vertex.ok_or_else(|| ctx.err(prim, "no VERTEX input"))?;
-    let vertices = ctx.resolve(vinput, "source", "vertices")?;
-    let mut pos_input = None;
-    let mut vertex_normals = None;
-    for input in children(vertices, "input") {
-        match input.attribute("semantic") {
-            Some("POSITION") if pos_input.is_none() => pos_input = Some(input),
-            Some("NORMAL") if vertex_normals.is_none() => vertex_normals = Some(input),
-            // A TEXCOORD inside <vertices> shares VERTEX's index.
-            Some("TEXCOORD") => texcoords.push((input, vertex_offset)),
-            _ => {}
+    let (pos_source, vertex_normals) = match direct_source(ctx, vinput) {
+        Some(source) => {
+            let msg = "VERTEX names a <source>, not a <vertices>; read as the positions";
+            ctx.warn_once("vertex source", vinput, msg);
+            (source, None)
         }
-    }
-    let pos_input = pos_input.ok_or_else(|| ctx.err(vertices, "no POSITION input"))?;
-    let pos_source = ctx.resolve(pos_input, "source", "source")?;
+        None => vertex_inputs(ctx, vinput, vertex_offset, &mut texcoords)?,
+    };
     let positions = load_source(ctx, pos_source, &mut mesh.positions, &mut bases.positions)?;
     // A NORMAL input of the primitive wins over one inside <vertices>, which shares VERTEX's index.
     let normals = match (normal, vertex_normals) {
@@ -204,6 +203,43 @@ fn read_layout<'a, 'i>(
         normals,
         uvs,
     })
+}
+
+/// The POSITION source and NORMAL input of the `<vertices>` that VERTEX input
+/// `vinput` names; its TEXCOORD inputs join `texcoords` at VERTEX's offset.
+fn vertex_inputs<'a, 'i>(
+    ctx: &mut Ctx<'a, 'i>,
+    vinput: Node<'a, 'i>,
+    vertex_offset: usize,
+    texcoords: &mut Vec<(Node<'a, 'i>, usize)>,
+) -> Result<(Node<'a, 'i>, Option<Node<'a, 'i>>), LoadError> {
+    let vertices = ctx.resolve(vinput, "source", "vertices")?;
+    let mut pos_input = None;
+    let mut normals = None;
+    for input in children(vertices, "input") {
+        match input.attribute("semantic") {
+            Some("POSITION") if pos_input.is_none() => pos_input = Some(input),
+            Some("NORMAL") if normals.is_none() => normals = Some(input),
+            // A TEXCOORD inside <vertices> shares VERTEX's index.
+            Some("TEXCOORD") => texcoords.push((input, vertex_offset)),
+            Some("COLOR") => warn_vertex_colours(ctx, input),
+            _ => {}
+        }
+    }
+    let pos_input = pos_input.ok_or_else(|| ctx.err(vertices, "no POSITION input"))?;
+    Ok((ctx.resolve(pos_input, "source", "source")?, normals))
+}
+
+/// MeshLab and photogrammetry tools colour vertices; ember's materials do not read it.
+fn warn_vertex_colours(ctx: &mut Ctx, input: Node) {
+    let msg = "vertex colours (COLOR) are not rendered; ignored";
+    ctx.warn_once("vertex colours", input, msg);
+}
+
+/// The `<source>` a VERTEX input names directly, where COLLADA wants a `<vertices>`.
+fn direct_source<'a, 'i>(ctx: &Ctx<'a, 'i>, vinput: Node<'a, 'i>) -> Option<Node<'a, 'i>> {
+    let id = vinput.attribute("source")?.strip_prefix('#')?;
+    ctx.by_id(id).filter(|n| n.has_tag_name("source"))
 }
 
 /// The TEXCOORD inputs' sets. Texture coordinates only matter to textures, so a
@@ -374,6 +410,8 @@ struct Emitter<'l, 'm, 'a> {
     mesh: &'m mut LocalMesh<'a>,
     /// A TEXCOORD index was out of range (those triangles get no coordinates).
     bad_uv: bool,
+    /// A face of fewer than three corners was skipped.
+    short_faces: bool,
 }
 
 impl Emitter<'_, '_, '_> {
@@ -456,26 +494,28 @@ impl Emitter<'_, '_, '_> {
     }
 }
 
+/// `<triangles>`: COLLADA allows one `<p>`; some exporters write one per batch of
+/// faces, so every `<p>` is read (the caller warns) and `count` covers them all.
 fn read_triangles(ctx: &Ctx, prim: Node, out: &mut Emitter) -> Result<(), LoadError> {
-    let Some(p) = child(prim, "p") else {
-        return Ok(()); // A primitive without <p> has no faces.
-    };
-    let indices = ctx.numbers::<u32>(p)?;
     let per_face = 3 * out.layout.stride;
-    if indices.len() % per_face != 0 {
-        return Err(ctx.err(
-            p,
-            format!(
-                "{} indices is not a whole number of triangles ({per_face} per triangle)",
-                indices.len()
-            ),
-        ));
+    let mut faces = 0;
+    for p in children(prim, "p") {
+        let indices = ctx.numbers::<u32>(p)?;
+        if indices.len() % per_face != 0 {
+            return Err(ctx.err(
+                p,
+                format!(
+                    "{} indices is not a whole number of triangles ({per_face} per triangle)",
+                    indices.len()
+                ),
+            ));
+        }
+        for corners in indices.chunks_exact(per_face) {
+            out.polygon(ctx, p, faces, corners)?;
+            faces += 1;
+        }
     }
-    check_count(ctx, prim, indices.len() / per_face)?;
-    for (face, corners) in indices.chunks_exact(per_face).enumerate() {
-        out.polygon(ctx, p, face, corners)?;
-    }
-    Ok(())
+    check_count(ctx, prim, faces)
 }
 
 fn read_polylist(ctx: &Ctx, prim: Node, out: &mut Emitter) -> Result<(), LoadError> {
@@ -504,31 +544,31 @@ fn read_polylist(ctx: &Ctx, prim: Node, out: &mut Emitter) -> Result<(), LoadErr
     let mut start = 0;
     for (face, &k) in vcounts.iter().enumerate() {
         let len = k as usize * stride;
-        if k < 3 {
-            return Err(ctx.err(
-                vc,
-                format!("entry {face} is {k}; a polygon needs at least 3 corners"),
-            ));
+        // Fewer than three corners make no triangle; exporters write such faces.
+        if k >= 3 {
+            out.polygon(ctx, p, face, &indices[start..start + len])?;
+        } else {
+            out.short_faces = true;
         }
-        out.polygon(ctx, p, face, &indices[start..start + len])?;
         start += len;
     }
     Ok(())
 }
 
-/// The indices of one `<p>` (or `<h>`) holding a polygon of 3 or more corners.
-fn polygon_indices(ctx: &Ctx, p: Node, stride: usize) -> Result<Vec<u32>, LoadError> {
+/// The indices of one `<p>` (or `<h>`): whole corners, and `None` for fewer than
+/// three, which make no polygon.
+fn polygon_indices(ctx: &Ctx, p: Node, stride: usize) -> Result<Option<Vec<u32>>, LoadError> {
     let indices = ctx.numbers::<u32>(p)?;
-    if indices.len() % stride != 0 || indices.len() < 3 * stride {
+    if indices.len() % stride != 0 {
         return Err(ctx.err(
             p,
             format!(
-                "{} indices do not form a polygon of 3 or more corners ({stride} per corner)",
+                "{} indices is not a whole number of corners ({stride} per corner)",
                 indices.len()
             ),
         ));
     }
-    Ok(indices)
+    Ok((indices.len() >= 3 * stride).then_some(indices))
 }
 
 fn read_polygons(ctx: &Ctx, prim: Node, out: &mut Emitter) -> Result<(), LoadError> {
@@ -539,15 +579,25 @@ fn read_polygons(ctx: &Ctx, prim: Node, out: &mut Emitter) -> Result<(), LoadErr
         .filter(|c| c.is_element() && matches!(c.tag_name().name(), "p" | "ph"))
         .enumerate()
     {
+        faces += 1;
         if p.tag_name().name() == "p" {
-            let indices = polygon_indices(ctx, p, stride)?;
-            out.polygon(ctx, p, face, &indices)?;
+            match polygon_indices(ctx, p, stride)? {
+                Some(indices) => out.polygon(ctx, p, face, &indices)?,
+                None => out.short_faces = true,
+            }
         } else {
             let outer = child(p, "p").ok_or_else(|| ctx.err(p, "<ph> without <p>"))?;
-            let outer_indices = polygon_indices(ctx, outer, stride)?;
-            let holes = children(p, "h")
-                .map(|h| polygon_indices(ctx, h, stride))
-                .collect::<Result<Vec<_>, _>>()?;
+            let Some(outer_indices) = polygon_indices(ctx, outer, stride)? else {
+                out.short_faces = true;
+                continue;
+            };
+            let mut holes = Vec::new();
+            for h in children(p, "h") {
+                match polygon_indices(ctx, h, stride)? {
+                    Some(hole) => holes.push(hole),
+                    None => out.short_faces = true,
+                }
+            }
             let loops: Vec<&[u32]> = std::iter::once(outer_indices.as_slice())
                 .chain(holes.iter().map(Vec::as_slice))
                 .collect();
@@ -556,19 +606,16 @@ fn read_polygons(ctx: &Ctx, prim: Node, out: &mut Emitter) -> Result<(), LoadErr
                 out.triangle(ctx, outer, face, t.map(|k| corners[k]))?;
             }
         }
-        faces += 1;
     }
     check_count(ctx, prim, faces)
 }
 
 /// `<tristrips>` and `<trifans>`: each `<p>` is one strip or fan. A strip's
 /// triangle `k` is `(k, k+1, k+2)`, with corners 0 and 1 swapped on odd `k` so
-/// every triangle keeps the strip's winding. Says whether a `<p>` was too short to
-/// make a triangle.
-fn read_strips(ctx: &Ctx, prim: Node, strip: bool, out: &mut Emitter) -> Result<bool, LoadError> {
+/// every triangle keeps the strip's winding.
+fn read_strips(ctx: &Ctx, prim: Node, strip: bool, out: &mut Emitter) -> Result<(), LoadError> {
     let stride = out.layout.stride;
     let mut faces = 0;
-    let mut short = false;
     for p in children(prim, "p") {
         let indices = ctx.numbers::<u32>(p)?;
         if indices.len() % stride != 0 {
@@ -584,7 +631,7 @@ fn read_strips(ctx: &Ctx, prim: Node, strip: bool, out: &mut Emitter) -> Result<
         if n < 3 {
             // Fewer than three corners make no triangle; exporters write such stubs.
             faces += 1;
-            short = true;
+            out.short_faces = true;
             continue;
         }
         if !strip {
@@ -602,7 +649,7 @@ fn read_strips(ctx: &Ctx, prim: Node, strip: bool, out: &mut Emitter) -> Result<
         }
         faces += 1;
     }
-    check_count(ctx, prim, faces).map(|()| short)
+    check_count(ctx, prim, faces)
 }
 
 /// The primitive's `count` attribute, when present, must equal its face count.

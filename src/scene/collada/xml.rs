@@ -19,6 +19,9 @@ pub(crate) struct Ctx<'a, 'i> {
     /// The course wrote the file (`camera::course_placement`): its effects mean what
     /// spec §6 says, so what a Lambertian surface cannot show is not warned about.
     pub course_file: bool,
+    /// Blender 2.80 or later wrote the file (`camera::writes_watts`) without the
+    /// course's extension: its point and spot lights give power in watts.
+    pub light_watts: bool,
     doc: &'a Document<'i>,
     ids: HashMap<&'a str, Node<'a, 'i>>,
     warnings: Vec<String>,
@@ -43,6 +46,7 @@ impl<'a, 'i> Ctx<'a, 'i> {
         Ctx {
             file,
             course_file: true,
+            light_watts: false,
             doc,
             ids,
             warnings: Vec::new(),
@@ -103,15 +107,20 @@ impl<'a, 'i> Ctx<'a, 'i> {
     /// The `<image>` whose id is `id` (without `#`; some exporters write one).
     pub fn image_by_id(&self, id: &str) -> Option<Node<'a, 'i>> {
         let id = id.strip_prefix('#').unwrap_or(id);
-        self.ids
-            .get(id)
-            .copied()
-            .filter(|n| n.has_tag_name("image"))
+        self.by_id(id).filter(|n| n.has_tag_name("image"))
     }
 
-    /// The element with id `id`, whatever it is.
+    /// The element with id `id`, whatever it is. A URL fragment may escape
+    /// characters (`#Cube%20mesh` for `id="Cube mesh"`), so an id not found as
+    /// written is looked up decoded.
     pub fn by_id(&self, id: &str) -> Option<Node<'a, 'i>> {
-        self.ids.get(id).copied()
+        let found = self.ids.get(id).copied();
+        found.or_else(|| {
+            let decoded = percent_decode(id);
+            (decoded != id)
+                .then(|| self.ids.get(decoded.as_str()).copied())
+                .flatten()
+        })
     }
 
     /// The element named by `node@attr` (a `#id` URL), which must be a `<tag>`.
@@ -144,7 +153,7 @@ impl<'a, 'i> Ctx<'a, 'i> {
             .attribute(attr)
             .ok_or_else(|| self.err(node, format!("missing attribute {attr}")))?;
         // A reference into another file names nothing in this one.
-        let Some(&target) = self.local_id(url).and_then(|id| self.ids.get(id)) else {
+        let Some(target) = self.local_id(url).and_then(|id| self.by_id(id)) else {
             return Ok(None);
         };
         if target.tag_name().name() != tag {
@@ -270,9 +279,19 @@ impl<'a, 'i> Ctx<'a, 'i> {
             .transpose()
     }
 
-    /// Three numbers (a colour or vector) from child `<name>`, if present.
-    pub fn child_rgb(&self, node: Node, name: &str) -> Result<Option<[f32; 3]>, LoadError> {
-        child(node, name).map(|c| self.leading::<3>(c)).transpose()
+    /// The first three numbers of `node` as a colour, none of them negative (a
+    /// negative radiance or reflectance makes negative pixels).
+    pub fn colour(&self, node: Node) -> Result<[f32; 3], LoadError> {
+        let c = self.leading::<3>(node)?;
+        if let Some(v) = c.iter().find(|&&v| v < 0.0) {
+            return Err(self.err(node, format!("colour component {v} is negative")));
+        }
+        Ok(c)
+    }
+
+    /// `colour` of child `<name>`, if present.
+    pub fn child_colour(&self, node: Node, name: &str) -> Result<Option<[f32; 3]>, LoadError> {
+        child(node, name).map(|c| self.colour(c)).transpose()
     }
 
     /// A non-negative integer attribute, if present.
@@ -492,4 +511,24 @@ pub(crate) fn line_col(text: &str, offset: usize) -> (usize, usize) {
     let line = before.matches('\n').count() + 1;
     let col = before.len() - before.rfind('\n').map_or(0, |k| k + 1) + 1;
     (line, col)
+}
+
+/// `s` with its `%XX` escapes decoded (invalid UTF-8 replaced); other `%` kept.
+pub(crate) fn percent_decode(s: &str) -> String {
+    let b = s.as_bytes();
+    let mut bytes = Vec::with_capacity(b.len());
+    let mut i = 0;
+    while i < b.len() {
+        let hex = |c: u8| (c as char).to_digit(16);
+        if b[i] == b'%' && i + 2 < b.len() {
+            if let (Some(h), Some(l)) = (hex(b[i + 1]), hex(b[i + 2])) {
+                bytes.push((h * 16 + l) as u8);
+                i += 3;
+                continue;
+            }
+        }
+        bytes.push(b[i]);
+        i += 1;
+    }
+    String::from_utf8_lossy(&bytes).into_owned()
 }
