@@ -5,7 +5,9 @@
 
 use crate::common;
 
-use common::{edit, geometry_instance, parse_err, parse_ok, quad_instance, scene_doc, TEMPLATE};
+use common::{
+    edit, edit_doc, geometry_instance, parse_err, parse_ok, quad_instance, scene_doc, TEMPLATE,
+};
 use ember::camera::Camera;
 use ember::info::scene_info;
 use ember::lights::Light;
@@ -991,4 +993,21 @@ fn a_dangling_camera_gives_one_warning() {
     ));
     assert_eq!(s.warnings.len(), 1, "{:?}", s.warnings);
     assert!(s.warnings[0].contains("#gone") && s.warnings[0].contains("default view"));
+}
+
+/// An emissive mesh flattened to nothing emits nothing: the render's "image will be
+/// black" check must not count it.
+#[test]
+fn only_surfaces_with_area_emit() {
+    let emissive = effect_doc(
+        "<lambert><emission><color>2 3 4 1</color></emission><diffuse><color>0 0 0 1</color></diffuse></lambert>",
+    );
+    assert!(parse_ok(&emissive).has_emitting_surface());
+    let flat = edit_doc(
+        &emissive,
+        "<matrix>1 0 0 0 0 1 0 0 0 0 1 0 0 0 0 1</matrix>",
+        "<scale>0 0 0</scale>",
+    );
+    assert!(!parse_ok(&flat).has_emitting_surface());
+    assert!(!parse_ok(TEMPLATE).has_emitting_surface());
 }

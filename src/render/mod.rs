@@ -455,7 +455,7 @@ fn render_warnings(job: &RenderJob, s: &RenderSettings) -> Vec<String> {
             ));
         }
     }
-    if s.shading == Shading::Radiance && !scene.materials.iter().any(|m| m.emits()) {
+    if s.shading == Shading::Radiance && !scene.has_emitting_surface() {
         w.extend(darkness_warning(scene));
     }
     w

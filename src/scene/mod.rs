@@ -343,6 +343,17 @@ impl Scene {
         }
     }
 
+    /// Whether some surface emits light that can leave it: an emissive sphere, or an
+    /// emissive triangle of non-zero area.
+    pub fn has_emitting_surface(&self) -> bool {
+        let emits = |m: u32| self.materials[m as usize].emits();
+        self.spheres.iter().any(|s| emits(s.material))
+            || (0..self.triangles.len()).any(|i| {
+                let [a, b, c] = self.triangle_positions(i);
+                emits(self.triangles[i].material) && (b - a).cross(c - a) != Vec3::ZERO
+            })
+    }
+
     /// Emitters that no `Light` represents (emissive materials outside area lights):
     /// only BSDF sampling can find them.
     pub fn has_unsampled_emitters(&self) -> bool {
