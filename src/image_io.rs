@@ -53,6 +53,12 @@ impl OutputFormat {
     }
 }
 
+/// Whether `a` and `b` name one existing file (through links and `..`), so that
+/// writing one would overwrite the other.
+pub fn is_same_file(a: &Path, b: &Path) -> bool {
+    matches!((a.canonicalize(), b.canonicalize()), (Ok(a), Ok(b)) if a == b)
+}
+
 /// The sRGB transfer function of spec §8 applied to a clamped linear value, rounded.
 pub fn srgb8(x: f32) -> u8 {
     let x = if x.is_finite() {
@@ -94,13 +100,8 @@ impl PendingImage {
         if path.is_dir() {
             return Err(ImageIoError::IsDirectory { path: display });
         }
-        if let Ok(out) = path.canonicalize() {
-            if inputs
-                .iter()
-                .any(|i| i.canonicalize().is_ok_and(|i| i == out))
-            {
-                return Err(ImageIoError::SameAsInput { path: display });
-            }
+        if inputs.iter().any(|i| is_same_file(path, i)) {
+            return Err(ImageIoError::SameAsInput { path: display });
         }
         let tmp = temp_sibling(path);
         let file = create_temp(&tmp, path)?;

@@ -629,7 +629,6 @@ pub struct RenderArgs {
     pub quiet: bool,
 }
 
-/// A count of at least 1 (`-s`, `-t`): "-s 0" and "-s -1" get the same message.
 /// The most worker threads `-t` takes: far beyond any machine's cores (more only
 /// slow a render), and short of what the system refuses to start.
 pub(super) const MAX_THREADS: usize = 1024;
@@ -664,6 +663,7 @@ fn positive_seconds(s: &str) -> Result<f64, String> {
     }
 }
 
+/// A count of at least 1 (`-s`, `-t`): "-s 0" and "-s -1" get the same message.
 fn at_least_one<T: TryFrom<u64>>(s: &str) -> Result<T, String> {
     let n: i128 = s
         .parse()

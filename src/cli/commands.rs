@@ -10,7 +10,7 @@ use super::interrupt::{self, Interrupted};
 use anyhow::{bail, Context, Result};
 use ember::accel;
 use ember::camera::course_file::CourseCameraFile;
-use ember::image_io::{OutputFormat, PendingImage};
+use ember::image_io::{is_same_file, OutputFormat, PendingImage};
 use ember::image_metadata::ImageMetadata;
 use ember::integrators::Estimator;
 use ember::render::{
@@ -629,11 +629,6 @@ pub(super) fn camera(a: CameraArgs) -> Result<()> {
         Some(path) => write_text_file(path, &text)?,
     }
     Ok(())
-}
-
-/// Whether `a` and `b` name one existing file.
-fn is_same_file(a: &Path, b: &Path) -> bool {
-    matches!((a.canonicalize(), b.canonicalize()), (Ok(a), Ok(b)) if a == b)
 }
 
 /// Writes `text` to `path` through a temporary sibling, so no partial file is ever left.

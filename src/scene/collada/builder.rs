@@ -613,12 +613,13 @@ impl<'a, 'i> Builder<'a, 'i, '_> {
                     .map_or([origin_uv; 3], |c| c.map(|i| i + base_uv))
             });
             let [p0, p1, p2] = v.map(|i| s.positions[i as usize]);
-            if (p1 - p0).cross(p2 - p0) == Vec3::ZERO {
+            let face_normal = (p1 - p0).cross(p2 - p0);
+            if face_normal == Vec3::ZERO {
                 flat += 1;
             }
             if let Some(nn) = n {
                 let sum: Vec3 = nn.iter().map(|&i| s.normals[i as usize]).sum();
-                if (p1 - p0).cross(p2 - p0).dot(sum) < 0.0 {
+                if face_normal.dot(sum) < 0.0 {
                     v.swap(1, 2);
                     n = Some([nn[0], nn[2], nn[1]]);
                     uv = uv.map(|c| [c[0], c[2], c[1]]);

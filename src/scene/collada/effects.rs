@@ -108,10 +108,8 @@ fn diffuse_colour(ctx: &mut Ctx, effect: Node, model: Node) -> Result<Option<Col
         return Ok(None);
     };
     let sid = param.attribute("ref").unwrap_or("");
-    let value = effect
-        .descendants()
-        .find(|n| n.has_tag_name("newparam") && n.attribute("sid") == Some(sid))
-        .and_then(|p| child(p, "float4").or_else(|| child(p, "float3")));
+    let value =
+        newparam(effect, sid).and_then(|p| child(p, "float4").or_else(|| child(p, "float3")));
     match value {
         Some(v) => ctx.colour(v).map(|c| Some(Color::from(c))),
         None => {
@@ -225,14 +223,9 @@ fn texture_ref<'a, 'i>(
     fallback: Option<Color>,
 ) -> Result<Option<TextureRef<'a, 'i>>, LoadError> {
     let name = tex.attribute("texture").unwrap_or("");
-    let newparam = |sid: &str| {
-        effect
-            .descendants()
-            .find(|n| n.has_tag_name("newparam") && n.attribute("sid") == Some(sid))
-    };
-    let sampler = newparam(name).and_then(|p| child(p, "sampler2D"));
+    let sampler = newparam(effect, name).and_then(|p| child(p, "sampler2D"));
     let image = match sampler {
-        Some(s) => sampler_image(ctx, s, &newparam),
+        Some(s) => sampler_image(ctx, effect, s),
         None => ctx.image_by_id(name),
     };
     let Some(image) = image else {
@@ -265,16 +258,23 @@ fn texture_ref<'a, 'i>(
     }))
 }
 
+/// The `<newparam>` of `effect` whose sid is `sid`.
+fn newparam<'a, 'i>(effect: Node<'a, 'i>, sid: &str) -> Option<Node<'a, 'i>> {
+    effect
+        .descendants()
+        .find(|n| n.has_tag_name("newparam") && n.attribute("sid") == Some(sid))
+}
+
 fn sampler_image<'a, 'i>(
     ctx: &Ctx<'a, 'i>,
+    effect: Node<'a, 'i>,
     sampler: Node<'a, 'i>,
-    newparam: &dyn Fn(&str) -> Option<Node<'a, 'i>>,
 ) -> Option<Node<'a, 'i>> {
     if let Some(inst) = child(sampler, "instance_image") {
         return ctx.resolve_if_present(inst, "url", "image").ok().flatten();
     }
     let source = child(sampler, "source")?.text()?.trim();
-    let surface = newparam(source).and_then(|p| child(p, "surface"));
+    let surface = newparam(effect, source).and_then(|p| child(p, "surface"));
     let id = match surface {
         Some(s) => children(s, "init_from").next()?.text()?.trim(),
         // Some exporters name the image directly in <source>.

@@ -555,8 +555,8 @@ fn read_polylist(ctx: &Ctx, prim: Node, out: &mut Emitter) -> Result<(), LoadErr
     Ok(())
 }
 
-/// The indices of one `<p>` (or `<h>`): whole corners, and `None` for fewer than
-/// three, which make no polygon.
+/// The indices of one `<p>` (or `<h>`, or a strip's or fan's `<p>`): whole corners,
+/// and `None` for fewer than three, which make no polygon.
 fn polygon_indices(ctx: &Ctx, p: Node, stride: usize) -> Result<Option<Vec<u32>>, LoadError> {
     let indices = ctx.numbers::<u32>(p)?;
     if indices.len() % stride != 0 {
@@ -616,38 +616,26 @@ fn read_polygons(ctx: &Ctx, prim: Node, out: &mut Emitter) -> Result<(), LoadErr
 fn read_strips(ctx: &Ctx, prim: Node, strip: bool, out: &mut Emitter) -> Result<(), LoadError> {
     let stride = out.layout.stride;
     let mut faces = 0;
-    for p in children(prim, "p") {
-        let indices = ctx.numbers::<u32>(p)?;
-        if indices.len() % stride != 0 {
-            return Err(ctx.err(
-                p,
-                format!(
-                    "{} indices is not a whole number of corners ({stride} per corner)",
-                    indices.len()
-                ),
-            ));
-        }
-        let n = indices.len() / stride;
-        if n < 3 {
-            // Fewer than three corners make no triangle; exporters write such stubs.
-            faces += 1;
+    for (face, p) in children(prim, "p").enumerate() {
+        faces += 1;
+        // Fewer than three corners make no triangle; exporters write such stubs.
+        let Some(indices) = polygon_indices(ctx, p, stride)? else {
             out.short_faces = true;
             continue;
-        }
+        };
         if !strip {
-            out.polygon(ctx, p, faces, &indices)?;
+            out.polygon(ctx, p, face, &indices)?;
         } else {
             let corner = |k: usize| &indices[k * stride..(k + 1) * stride];
-            for k in 0..n - 2 {
+            for k in 0..indices.len() / stride - 2 {
                 let c = if k % 2 == 0 {
                     [corner(k), corner(k + 1), corner(k + 2)]
                 } else {
                     [corner(k + 1), corner(k), corner(k + 2)]
                 };
-                out.triangle(ctx, p, faces, c)?;
+                out.triangle(ctx, p, face, c)?;
             }
         }
-        faces += 1;
     }
     check_count(ctx, prim, faces)
 }
