@@ -20,7 +20,6 @@ use crate::Color;
 use glam::Vec3;
 use std::collections::BTreeMap;
 use std::fmt::Write as _;
-use std::io::Write as _;
 use std::path::{Path, PathBuf};
 
 /// How the exported scene is rendered.
@@ -249,7 +248,7 @@ pub fn write_mitsuba(
     }
     xml += "</scene>\n";
     let path = dir.join(format!("{stem}.xml"));
-    std::fs::write(&path, xml).map_err(|source| ExportError::Io {
+    crate::image_io::write_atomically(&path, xml.as_bytes()).map_err(|source| ExportError::Io {
         path: path.clone(),
         source,
     })?;
@@ -639,8 +638,7 @@ fn write_ply(scene: &Scene, triangles: &[usize], uv: bool, path: &Path) -> Resul
             bytes.extend_from_slice(&(3 * f + c).to_le_bytes());
         }
     }
-    let mut file = std::fs::File::create(path).map_err(io)?;
-    file.write_all(&bytes).map_err(io)
+    crate::image_io::write_atomically(path, &bytes).map_err(io)
 }
 
 fn push_vec(bytes: &mut Vec<u8>, v: Vec3) {

@@ -241,6 +241,21 @@ mod temporaries {
     }
 }
 
+/// Writes `bytes` to `path` through a temporary sibling renamed into place, so a
+/// failure (a full disk, an interrupt) never leaves a partial file: every file ember
+/// writes, not only images, goes through here or [`PendingImage`].
+pub fn write_atomically(path: &Path, bytes: &[u8]) -> std::io::Result<()> {
+    let tmp = temp_sibling(path);
+    temporaries::register(&tmp);
+    let written = File::create(&tmp)
+        .and_then(|mut f| f.write_all(bytes).and_then(|()| f.sync_all()))
+        .and_then(|()| std::fs::rename(&tmp, path));
+    if written.is_err() {
+        let _ = std::fs::remove_file(&tmp);
+    }
+    written
+}
+
 fn temp_sibling(path: &Path) -> PathBuf {
     let name = path
         .file_name()

@@ -2,7 +2,7 @@
 
 mod cli;
 
-use ember::output::{error_chain_message, is_broken_pipe};
+use ember::output::{error_chain_message, is_broken_pipe, BROKEN_PIPE_MESSAGE, EXIT_BROKEN_PIPE};
 use std::process::ExitCode;
 
 fn main() -> ExitCode {
@@ -12,8 +12,11 @@ fn main() -> ExitCode {
     };
     match cli::run(args) {
         Ok(()) => ExitCode::SUCCESS,
-        // The reader of our output went away (`ember info x.dae | head -1`): not an error.
-        Err(e) if is_broken_pipe(e.as_ref()) => ExitCode::SUCCESS,
+        // The reader of our output went away (`ember info x.dae | head -1`).
+        Err(e) if is_broken_pipe(e.as_ref()) => {
+            ember::errln!("{BROKEN_PIPE_MESSAGE}");
+            ExitCode::from(EXIT_BROKEN_PIPE)
+        }
         // Ctrl-C: what was rendered is written; say so, and exit as an interrupted program.
         Err(e) if e.is::<cli::Interrupted>() => {
             ember::errln!("ember: {e}");

@@ -1,13 +1,23 @@
 //! Terminal output that never panics: `println!` panics when stdout is a closed pipe
 //! or a full disk. Reports go through [`write_stdout`] (an `io::Result` the caller
 //! propagates), notes and warnings through [`write_stderr`] (errors ignored: there is
-//! nowhere left to report them). [`is_broken_pipe`] lets `main` exit quietly, as
-//! ripgrep does, when the reader went away; [`error_chain_message`] prints an error
-//! chain with each cause said once.
+//! nowhere left to report them). [`is_broken_pipe`] lets `main` tell a reader that went
+//! away from other failures: the output was cut short, so it says so in one line and
+//! exits with [`EXIT_BROKEN_PIPE`], the status a shell reports for a program that
+//! SIGPIPE stopped, so `set -o pipefail` sees it. [`error_chain_message`] prints an
+//! error chain with each cause said once.
 
 use std::error::Error;
 use std::fmt;
 use std::io::{self, Write};
+
+/// The exit status after stdout's reader went away: 128 + SIGPIPE, as `cat` or `grep`
+/// end in the same place.
+pub const EXIT_BROKEN_PIPE: u8 = 141;
+
+/// The one line said when stdout's reader went away.
+pub const BROKEN_PIPE_MESSAGE: &str =
+    "ember: standard output was closed by its reader; output cut short";
 
 /// Writes to stdout and flushes, so a full disk is reported here and not lost at exit.
 pub fn write_stdout(args: fmt::Arguments) -> io::Result<()> {

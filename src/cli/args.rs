@@ -595,10 +595,12 @@ pub struct RenderArgs {
     #[arg(long, default_value = "throughput", value_name = "off|throughput|PROB")]
     pub rr: String,
 
-    /// First bounce at which Russian roulette may end a path. It never plays at the -m cap, where
-    /// the last ray only looks for emission.
-    #[arg(long, default_value_t = Roulette::DEFAULT_START, value_name = "BOUNCE")]
-    pub rr_start: u32,
+    #[arg(long, value_name = "BOUNCE", help = format!(
+        "First bounce at which Russian roulette may end a path [default: {}]. It never plays \
+         at the -m cap, where the last ray only looks for emission.",
+        Roulette::DEFAULT_START
+    ))]
+    pub rr_start: Option<u32>,
 
     /// Render for at most SECONDS (after loading), in passes of 1, 1, 2, 4, 8, 16, 16, ... samples per
     /// pixel, then write what was rendered; -s, if given, still caps the samples.

@@ -631,17 +631,10 @@ pub(super) fn camera(a: CameraArgs) -> Result<()> {
     Ok(())
 }
 
-/// Writes `text` to `path` through a temporary sibling, so no partial file is ever left.
+/// Writes `text` to `path` whole or not at all.
 fn write_text_file(path: &Path, text: &str) -> Result<()> {
-    let fail = |e: std::io::Error| anyhow::anyhow!("{}: cannot write: {e}", path.display());
-    let mut tmp_name = path.file_name().unwrap_or_default().to_os_string();
-    tmp_name.push(".ember-tmp");
-    let tmp = path.with_file_name(tmp_name);
-    std::fs::write(&tmp, text).map_err(fail)?;
-    std::fs::rename(&tmp, path).map_err(|e| {
-        let _ = std::fs::remove_file(&tmp);
-        fail(e)
-    })
+    ember::image_io::write_atomically(path, text.as_bytes())
+        .map_err(|e| anyhow::anyhow!("{}: cannot write: {e}", path.display()))
 }
 
 /// `ember info SCENE`: what the scene holds and the backends of this build.

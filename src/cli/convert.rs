@@ -5,7 +5,9 @@ use super::args::{
     BenchAccelArgs, BenchConvergeArgs, BenchEstimatorsArgs, BenchRenderArgs, BenchStabilityArgs,
     ReportArgs,
 };
-use super::args::{CameraPlacement, LensArgs, PlacementArgs, RenderArgs, SimdChoice};
+use super::args::{
+    CameraPlacement, IntegratorChoice, LensArgs, PlacementArgs, RenderArgs, SimdChoice,
+};
 use anyhow::{bail, Context, Result};
 use clap::ValueEnum;
 use ember::accel::Backend;
@@ -147,7 +149,11 @@ pub(super) fn parse_adaptive(a: &Option<Vec<String>>) -> Result<Option<Adaptive>
     Ok(Some(Adaptive::new(batch, tol)))
 }
 
-pub(super) fn parse_roulette(s: &str, start: u32) -> Result<Roulette> {
+pub(super) fn parse_roulette(s: &str, start: Option<u32>) -> Result<Roulette> {
+    if s == "off" && start.is_some() {
+        bail!("--rr-start: Russian roulette is off (--rr off); give one of the two");
+    }
+    let start = start.unwrap_or(Roulette::DEFAULT_START);
     Ok(match s {
         "off" => Roulette::Off,
         "throughput" => Roulette::Throughput {
@@ -206,6 +212,7 @@ pub(super) fn settings_from(args: &RenderArgs) -> Result<RenderSettings> {
         }
     }
     let adaptive = parse_adaptive(&args.adaptive)?;
+    no_radiance_flags(args, adaptive.is_some())?;
     if estimator(args) == Some(Estimator::Caustics) {
         caustics_allowed(adaptive.is_some())?;
     }
@@ -233,6 +240,22 @@ pub(super) fn settings_from(args: &RenderArgs) -> Result<RenderSettings> {
         sampler: args.sampler,
         direct_split: args.direct_split,
     })
+}
+
+/// Refuses flags that steer how radiance is estimated when the image shows none
+/// (`--shading normals` or `bvh-cost`): they would be ignored without a word.
+fn no_radiance_flags(args: &RenderArgs, adaptive: bool) -> Result<()> {
+    if args.shading == Shading::Radiance {
+        return Ok(());
+    }
+    let shading = ember::names::Named::name(args.shading);
+    if adaptive {
+        bail!("-a: adaptive sampling stops on the noise of radiance, which --shading {shading} does not show; drop one");
+    }
+    if args.hemisphere || args.integrator != IntegratorChoice::default() {
+        bail!("--integrator and -H choose how radiance is estimated, which --shading {shading} does not show; drop one");
+    }
+    Ok(())
 }
 
 /// `--simd`: caps the instruction set `ember::lanes::dispatch` runs with, process-wide;

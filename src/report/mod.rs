@@ -165,11 +165,10 @@ fn intro(opts: &ReportOptions) -> Vec<String> {
     )]
 }
 
-/// Writes `text` to `path` through a temporary sibling, so a reader never sees half a page.
+/// Writes a page whole or not at all, so a reader never sees half of one.
 fn write_atomically(path: &Path, text: &str) -> Result<()> {
-    let tmp = path.with_extension("ember-tmp");
-    std::fs::write(&tmp, text).with_context(|| format!("{}: cannot write", tmp.display()))?;
-    std::fs::rename(&tmp, path).with_context(|| format!("{}: cannot write", path.display()))
+    crate::image_io::write_atomically(path, text.as_bytes())
+        .with_context(|| format!("{}: cannot write", path.display()))
 }
 
 /// Carries out the plan: renders (each recipe once), tables and charts.
