@@ -212,7 +212,12 @@ fn options_before_a_subcommand() {
         .arg("info")
         .arg(scene()))
     .success();
-    run(command().args(["--simd", "portable", "info"]).arg(scene())).success();
+    let o = run(command().args(["--simd", "portable", "info"]).arg(scene())).success();
+    assert!(
+        o.stdout().contains("packets of 16 paths (portable)"),
+        "{}",
+        o.stdout()
+    );
     run(command().args(["-t", "1", "info"]).arg(scene()))
         .fails_with("the options before `info` are read as its own");
 }

@@ -286,14 +286,14 @@ fn packet_renders_are_the_scalar_renders_far_from_the_origin() {
 }
 
 /// Renders `scene` at 64×48 with both engines (the packet one on every instruction
-/// set) and asserts identical pixels; a scene the packet engine declines must be
-/// CBgems (glass).
+/// set) and asserts identical pixels; every radiance render runs in packets.
 fn assert_packet_matches_scalar(path: &str, scene: Scene, settings: &RenderSettings) {
     let job = RenderJob::new(scene, AccelKind::Native(BvhBuilder::Sah), 64, 48).unwrap();
-    if let Some(why) = settings.packet_blocker() {
-        assert!(path.contains("CBgems"), "{path}: {why}");
-        return;
-    }
+    assert!(
+        settings.uses_packets(),
+        "{path}: {:?}",
+        settings.packet_blocker()
+    );
     let scalar = render(
         &job,
         &RenderSettings {

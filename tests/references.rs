@@ -12,8 +12,8 @@ use ember::integrators::{DirectStrategy, Estimator, Roulette};
 use ember::render::RenderSettings;
 
 struct Reference {
-    mean: [f64; 3],
-    mean_clamped: [f64; 3],
+    /// The standard error of the reference's own image mean, per channel.
+    noise_mean: [f64; 3],
     noise_box8: f64,
     image: Image,
 }
@@ -37,21 +37,9 @@ fn reference(file: &str) -> Reference {
         ]
     };
     Reference {
-        mean: arr("mean_rgb"),
-        mean_clamped: arr("mean_rgb_clamped"),
+        noise_mean: arr("noise_mean_rgb"),
         noise_box8: e["noise_rmse_box8"].as_f64().unwrap(),
         image: read_image(&repo(&format!("tests/data/references/{file}"))).expect("reference exr"),
-    }
-}
-
-fn clamp01(img: &Image) -> Image {
-    Image {
-        pixels: img
-            .pixels
-            .iter()
-            .map(|p| p.clamp(ember::Color::ZERO, ember::Color::ONE))
-            .collect(),
-        ..img.clone()
     }
 }
 
@@ -60,12 +48,10 @@ fn clamp01(img: &Image) -> Image {
 enum MeanOf {
     /// Plain linear mean.
     All,
-    /// Mean after clamping to [0, 1] (the manifest's `mean_rgb_clamped`); unbiased only
-    /// where our render is nearly converged, i.e. for direct lighting.
-    Clamped,
     /// Linear mean over the pixels whose reference value is below the threshold: drops
-    /// CBempty's two ceiling hot-spot pixels (~480), whose path-traced estimate is too noisy
-    /// to compare, without the bias that clamping a noisy image has.
+    /// CBempty's two ceiling hot-spot pixels (~478), which the reference has 0.48 % above
+    /// the closed form (ember meets it: `transport_analytic.rs`). In the 8×8-pixel
+    /// blocks they added a systematic 0.003 to the RMSE.
     ExcludingHotSpot(f32),
 }
 
@@ -132,6 +118,7 @@ fn check_with(
 ) {
     let r = reference(file);
     let scene = load(scene_rel);
+    let job = common::job(&scene, 160, 120, AccelKind::Native(BvhBuilder::Sah));
     let settings = RenderSettings {
         estimator: Some(estimator),
         spp,
@@ -142,69 +129,118 @@ fn check_with(
             DirectStrategy::Light
         }),
         roulette: Roulette::default(),
-        seed: 1234,
         ..Default::default()
     };
-    let h = render_halves(
-        &scene,
-        (160, 120),
-        &settings,
-        AccelKind::Native(BvhBuilder::Sah),
-    );
-    assert!(h.avg.all_finite());
-    assert_eq!((r.image.width, r.image.height), (160, 120));
-
-    // 1. Image mean: 1.5 % of the reference plus 4 standard errors of our own mean.
-    let (ours, want, se_mean) = match mean_of {
-        MeanOf::All => (
-            h.avg.mean().to_array().map(f64::from),
-            r.mean,
-            h.noise_of_mean(),
-        ),
-        MeanOf::Clamped => {
-            let (ca, cb) = (clamp01(&h.a), clamp01(&h.b));
-            let se = ca.rmse(&cb) / 2.0 / (ca.pixels.len() as f64).sqrt();
-            (
-                clamp01(&h.avg).mean().to_array().map(f64::from),
-                r.mean_clamped,
-                se,
-            )
-        }
-        MeanOf::ExcludingHotSpot(limit) => {
-            let (ours, n) = masked_mean(&h.avg, &r.image, limit);
-            let (want, _) = masked_mean(&r.image, &r.image, limit);
-            assert!(
-                n + 8 >= r.image.pixels.len(),
-                "{file}: the mask drops more than the hot spot"
-            );
-            (ours, want, h.noise_per_pixel() / (n as f64).sqrt())
-        }
+    let runs = Runs::render(&job, &settings, 1234);
+    let limit = match mean_of {
+        MeanOf::All => f32::INFINITY,
+        MeanOf::ExcludingHotSpot(limit) => limit,
     };
+    let (want, n) = masked_mean(&r.image, &r.image, limit);
+    assert!(
+        n + 8 >= r.image.pixels.len(),
+        "{file}: the mask drops more than the hot spot"
+    );
+
+    // 1. Image mean: within T15 standard errors of the difference (ours from the spread
+    // of the runs' means, the reference's from its manifest). No slack for systematic
+    // differences: over 8 seeds per case every |z| stayed below 5.2.
+    let (ours, se) = runs.masked_mean(&r.image, limit);
     for c in 0..3 {
-        let tol = 0.015 * want[c] + 4.0 * se_mean;
+        let tol = T15 * (se[c].powi(2) + r.noise_mean[c].powi(2)).sqrt();
         assert!(
             (ours[c] - want[c]).abs() <= tol,
-            "{file}: mean[{c}] = {} vs reference {} (tol {tol})",
+            "{file}: mean[{c}] = {} vs reference {} (tol {tol}, se {})",
             ours[c],
-            want[c]
+            want[c],
+            se[c]
         );
     }
 
-    // 2. Block RMSE at the noise floor: up to 3× the expected value plus 0.002 for edges.
-    let (h, reference) = match mean_of {
-        MeanOf::ExcludingHotSpot(limit) => {
-            (h.masked(&r.image, limit), mask(&r.image, &r.image, limit))
-        }
-        _ => (h, r.image.clone()),
-    };
+    // 2. Block RMSE against the combined noise floor of both images. Were block means
+    // Gaussian, the RMSE over 900 values would stay within 1.1 of the floor; fireflies and
+    // splats give heavier tails: over 8 seeds per case the ratio ran 0.6-1.6. 2 holds
+    // it, where the former bound (3x the floor plus 0.002) passed edges shifted by up to
+    // 10x the noise in the quiet scenes.
+    let h = runs.halves.masked(&r.image, limit);
+    let reference = mask(&r.image, &r.image, limit);
     let rmse8 = h.avg.block_average(8).rmse(&reference.block_average(8));
     let expected = (r.noise_box8.powi(2) + h.noise_box8().powi(2)).sqrt();
-    let tol = 3.0 * expected + 0.002;
-    eprintln!("{file}: box8 RMSE {rmse8:.5}, expected noise {expected:.5}, tol {tol:.5}; mean {ours:?} vs {want:?}");
+    let tol = 2.0 * expected;
+    eprintln!("{file}: box8 RMSE {rmse8:.5}, expected noise {expected:.5}, tol {tol:.5}; mean {ours:?} vs {want:?}, se {se:?}");
     assert!(
         rmse8 <= tol,
         "{file}: 8x8-block RMSE {rmse8} exceeds {tol} (noise floor {expected})"
     );
+}
+
+/// The two-sided Student t bound with 15 degrees of freedom (`RUNS` - 1) whose tail
+/// probability is that of a normal's 4.5σ (6.8e-6).
+const T15: f64 = 6.73;
+
+/// Independent renders of one setting at `spp / RUNS` each: the spread of their image
+/// means is the mean's standard error whatever the estimator (light tracing splats a
+/// path into several pixels, so a per-pixel formula would understate it).
+struct Runs {
+    images: Vec<Image>,
+    /// The first and second half of the runs, averaged, and the average of all.
+    halves: common::HalfRenders,
+}
+
+const RUNS: usize = 16;
+
+impl Runs {
+    fn render(job: &ember::render::RenderJob, settings: &RenderSettings, seed: u64) -> Runs {
+        assert_eq!(settings.spp % RUNS as u32, 0);
+        let images: Vec<Image> = (0..RUNS as u64)
+            .map(|k| {
+                let s = RenderSettings {
+                    spp: settings.spp / RUNS as u32,
+                    seed: seed * RUNS as u64 + k,
+                    ..settings.clone()
+                };
+                let out = job.render(&s);
+                assert_eq!(out.nonfinite_samples, 0, "non-finite samples");
+                out.image
+            })
+            .collect();
+        let half = RUNS / 2;
+        let halves = common::HalfRenders {
+            a: average_of(&images[..half]),
+            b: average_of(&images[half..]),
+            avg: average_of(&images),
+        };
+        Runs { images, halves }
+    }
+
+    /// The mean over the pixels where the reference is below `limit`, and its standard
+    /// error, per channel.
+    fn masked_mean(&self, reference: &Image, limit: f32) -> ([f64; 3], [f64; 3]) {
+        let means: Vec<[f64; 3]> = (self.images.iter())
+            .map(|img| masked_mean(img, reference, limit).0)
+            .collect();
+        let k = means.len() as f64;
+        let mut mean = [0.0; 3];
+        let mut se = [0.0; 3];
+        for c in 0..3 {
+            mean[c] = means.iter().map(|m| m[c]).sum::<f64>() / k;
+            let var = means.iter().map(|m| (m[c] - mean[c]).powi(2)).sum::<f64>() / (k - 1.0);
+            se[c] = (var / k).sqrt();
+        }
+        (mean, se)
+    }
+}
+
+fn average_of(images: &[Image]) -> Image {
+    let mut avg = images[0].clone();
+    for img in &images[1..] {
+        for (a, p) in avg.pixels.iter_mut().zip(&img.pixels) {
+            *a += *p;
+        }
+    }
+    let n = images.len() as f32;
+    avg.pixels.iter_mut().for_each(|a| *a /= n);
+    avg
 }
 
 #[test]
@@ -258,7 +294,7 @@ fn cbempty_m1() {
         "CBempty_m1.exr",
         1,
         64,
-        MeanOf::Clamped,
+        MeanOf::ExcludingHotSpot(20.0),
     );
 }
 
@@ -364,16 +400,18 @@ fn light_tracing_cbbunny_m5() {
     );
 }
 
-/// Light tracing estimates CBempty's hot spot as well as the rest: no clamping or mask.
+/// Light tracing on CBempty. The two hot-spot pixels are left out as for path tracing:
+/// the reference has them 0.48 % above the closed form, which both of ember's estimators
+/// meet to 0.005 % (`transport_analytic::point_light_hot_spot_matches_the_closed_form`).
 #[test]
-fn light_tracing_cbempty_m1_and_m5_unmasked() {
+fn light_tracing_cbempty_m1_and_m5() {
     for (m, file) in [(1, "CBempty_m1.exr"), (5, "CBempty_m5.exr")] {
         check_with(
             "scenes/cs184/sky/CBempty.dae",
             file,
             m,
             32,
-            MeanOf::All,
+            MeanOf::ExcludingHotSpot(20.0),
             Estimator::LightTracing,
         );
     }

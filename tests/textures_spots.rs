@@ -245,7 +245,12 @@ fn textures_and_spots_export_to_mitsuba() {
                 .into_rgb32f();
             let (w, _, t) = texels();
             for (k, p) in exr.pixels().enumerate() {
-                assert!((p[1] as f64 - t[k][1]).abs() < 1e-6, "texel {k} of {w}");
+                for c in 0..3 {
+                    assert!(
+                        (p[c] as f64 - t[k][c]).abs() < 1e-6,
+                        "texel {k} of {w}, channel {c}"
+                    );
+                }
             }
         }
     }

@@ -193,7 +193,9 @@ fn chi2_from_cells(observed: &[f64], expected: &[f64]) -> Result<f64, String> {
         dof += 1;
     }
     if dof < 2 {
-        return Ok(1.0);
+        return Err(format!(
+            "{dof} cell(s) left after pooling: too few for a chi-square test"
+        ));
     }
     Ok(gamma_q(0.5 * (dof - 1) as f64, 0.5 * chi2))
 }
