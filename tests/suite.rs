@@ -29,6 +29,7 @@ mod loader_exporters;
 mod loader_fuzz;
 mod loader_scenes;
 mod loader_semantics;
+mod loader_skins;
 mod packet_engine;
 mod pinned_images;
 mod references;

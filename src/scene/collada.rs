@@ -10,6 +10,7 @@ mod camera;
 mod effects;
 mod lights;
 mod mesh;
+mod skin;
 mod transform;
 mod xml;
 

@@ -2,6 +2,7 @@
 
 use ember::scene::collada::parse;
 use ember::scene::Scene;
+use ember::Vec3;
 
 /// A unit quad (two triangles with normals), a sphere, a point light and a
 /// camera, Z_UP like the course files. Loads without warnings.
@@ -138,4 +139,18 @@ pub fn geometry_instance(url: &str, symbol: &str, target: &str) -> String {
 /// The template's quad, bound to its grey material.
 pub fn quad_instance() -> String {
     geometry_instance("quad", "grey-sym", "grey")
+}
+
+/// Whether two points agree to within the loader's f32 rounding.
+pub fn close(a: Vec3, b: Vec3) -> bool {
+    (a - b).length() < 1e-5
+}
+
+pub fn assert_close(a: Vec3, b: Vec3) {
+    assert!(close(a, b), "{a} is not {b}");
+}
+
+/// How many of the scene's warnings contain `needle`.
+pub fn count_warnings(s: &Scene, needle: &str) -> usize {
+    s.warnings.iter().filter(|w| w.contains(needle)).count()
 }

@@ -4,9 +4,8 @@ use super::camera::{authoring_tool, course_placement, read_camera, writes_watts}
 use super::effects::{read_material, TextureRef};
 use super::lights::read_light;
 use super::mesh::{parse_mesh, LocalMesh};
-use super::transform::{
-    bind_shape_matrix, linear, local_matrix, normal_matrix, point, up_axis_matrix,
-};
+use super::skin;
+use super::transform::{linear, local_matrix, normal_matrix, point, up_axis_matrix};
 use super::xml::{child, children, extension_technique, path, Ctx};
 use super::{LoadError, Resources};
 use crate::geometry::Aabb;
@@ -58,10 +57,12 @@ pub(crate) fn build(
         placement,
         dangling_camera: None,
         up,
+        joint_scope: doc.root_element(),
         resources,
     };
     b.scene.placement_reason = placement_reason;
     if let Some(vs) = b.visual_scene(doc.root_element())? {
+        b.joint_scope = vs;
         b.walk(vs, up)?;
     }
     if b.scene.meshes.is_empty() && b.scene.spheres.is_empty() {
@@ -85,6 +86,13 @@ enum Pending<'a, 'i> {
     },
 }
 
+/// What an `<instance_controller>` places: the `<skin>`s its controllers chain
+/// through (outermost first; morphs add nothing) and the geometry they end at.
+struct Chain<'a, 'i> {
+    skins: Vec<Node<'a, 'i>>,
+    geometry: Node<'a, 'i>,
+}
+
 struct Builder<'a, 'i, 'r> {
     ctx: Ctx<'a, 'i>,
     scene: Scene,
@@ -103,6 +111,9 @@ struct Builder<'a, 'i, 'r> {
     dangling_camera: Option<Node<'a, 'i>>,
     /// `U`, the up-axis conversion (skinned meshes are placed by it alone).
     up: DMat4,
+    /// Where a skin's joints are looked for when its instance names no `<skeleton>`:
+    /// the visual scene.
+    joint_scope: Node<'a, 'i>,
     resources: &'r dyn Resources,
 }
 
@@ -276,14 +287,83 @@ impl<'a, 'i> Builder<'a, 'i, '_> {
             .is_some_and(Option::is_some)
     }
 
-    /// A skinned (or morphed) mesh at its bind pose: the skin's `bind_shape_matrix`
-    /// applied to its source mesh. At the bind pose every joint's world matrix is the
-    /// inverse of its inverse bind matrix, so COLLADA's skinning equation leaves
-    /// `bind_shape_matrix · v` in world space: the instancing node's transform does
-    /// not enter (only the up-axis conversion does). A morph is read as its base mesh.
+    /// A skinned mesh posed by COLLADA's skinning equation at the visual scene's pose
+    /// of its joints (`skin::vertex_matrices`). The equation leaves the mesh in world
+    /// space, so the instancing node's transform does not enter (only the up-axis
+    /// conversion does). A skin without joints or weights stays at its bind shape
+    /// (`bind_shape_matrix · v`), a morph is read as its base mesh.
     fn instance_controller(&mut self, inst: Node<'a, 'i>) -> Result<(), LoadError> {
+        let Some(chain) = self.controller_chain(inst)? else {
+            return Ok(());
+        };
+        match self.skinnable_mesh(&chain)? {
+            Some(mesh) => self.place_skinned(inst, &chain, &mesh),
+            None => self.place_at_bind_pose(inst, &chain),
+        }
+    }
+
+    /// The chain's mesh, if a skin of the chain has joints and weights to pose it by.
+    fn skinnable_mesh(
+        &mut self,
+        chain: &Chain<'a, 'i>,
+    ) -> Result<Option<Rc<LocalMesh<'a>>>, LoadError> {
+        if !chain.skins.iter().any(|&s| skin::has_joints(s)) {
+            return Ok(None);
+        }
+        let mesh = self.local_mesh(chain.geometry)?;
+        Ok(mesh.filter(|m| m.vertices.is_some()))
+    }
+
+    /// Places a posed copy of the mesh; the cached mesh stays as read, for plain
+    /// instances of the same geometry.
+    fn place_skinned(
+        &mut self,
+        inst: Node<'a, 'i>,
+        chain: &Chain<'a, 'i>,
+        mesh: &LocalMesh<'a>,
+    ) -> Result<(), LoadError> {
+        self.ctx.warn_once(
+            "skin",
+            inst,
+            "skinned mesh placed at the visual scene's joint pose; animation is ignored",
+        );
+        let count = mesh.vertices.map_or(0, |(_, n)| n as usize);
+        // A skin of a skin poses the inner skin's result: the innermost applies first.
+        let mut pose = vec![DMat4::IDENTITY; count];
+        for &s in chain.skins.iter().rev() {
+            let m = skin::vertex_matrices(&mut self.ctx, s, inst, self.joint_scope, count)?;
+            for (p, m) in pose.iter_mut().zip(m) {
+                *p = m * *p;
+            }
+        }
+        let up = self.up;
+        self.place_bound_mesh(inst, &skin::posed(mesh, &pose), &up)
+    }
+
+    /// `BSM_outer · … · BSM_inner · v`: each skin's bind shape, the innermost first.
+    fn place_at_bind_pose(
+        &mut self,
+        inst: Node<'a, 'i>,
+        chain: &Chain<'a, 'i>,
+    ) -> Result<(), LoadError> {
+        self.ctx.warn_once(
+            "controller",
+            inst,
+            "skinned or morphed mesh placed at its bind pose (a skin without joint weights \
+             at its bind shape, a morph as its base mesh); animation is ignored",
+        );
+        let mut bind = DMat4::IDENTITY;
+        for &s in &chain.skins {
+            bind *= skin::bind_shape(&self.ctx, s)?;
+        }
+        self.instance_geometry_node(inst, chain.geometry, &(self.up * bind))
+    }
+
+    /// The controllers an instance chains through to its geometry; `None` (warned)
+    /// for a controller of neither skin nor morph.
+    fn controller_chain(&mut self, inst: Node<'a, 'i>) -> Result<Option<Chain<'a, 'i>>, LoadError> {
         let mut controller = self.ctx.resolve(inst, "url", "controller")?;
-        let mut bind_shape = DMat4::IDENTITY;
+        let mut skins = Vec::new();
         for _ in 0..MAX_CONTROLLER_CHAIN {
             let Some(kind) = controller
                 .children()
@@ -293,21 +373,16 @@ impl<'a, 'i> Builder<'a, 'i, '_> {
                     controller,
                     "controller has neither <skin> nor <morph>; skipped",
                 );
-                return Ok(());
+                return Ok(None);
             };
-            if let Some(m) = child(kind, "bind_shape_matrix") {
-                bind_shape = bind_shape_matrix(&self.ctx, m)? * bind_shape;
+            if kind.has_tag_name("skin") {
+                skins.push(kind);
             }
-            self.ctx.warn_once(
-                "controller",
-                inst,
-                "skinned or morphed mesh placed at its bind pose; animation is ignored",
-            );
             let url = kind.attribute("source").unwrap_or("");
             let target = url.strip_prefix('#').and_then(|id| self.ctx.by_id(id));
             match target {
-                Some(t) if t.has_tag_name("geometry") => {
-                    return self.instance_geometry_node(inst, t, &(self.up * bind_shape));
+                Some(geometry) if geometry.has_tag_name("geometry") => {
+                    return Ok(Some(Chain { skins, geometry }));
                 }
                 Some(t) if t.has_tag_name("controller") => controller = t,
                 _ => {
@@ -334,26 +409,8 @@ impl<'a, 'i> Builder<'a, 'i, '_> {
         geometry: Node<'a, 'i>,
         world: &DMat4,
     ) -> Result<(), LoadError> {
-        if let Some(mesh_node) = child(geometry, "mesh") {
-            let mesh = match self.meshes.get(&geometry.id()) {
-                Some(m) => Rc::clone(m),
-                None => {
-                    let m = Rc::new(parse_mesh(&mut self.ctx, mesh_node)?);
-                    self.meshes.insert(geometry.id(), Rc::clone(&m));
-                    m
-                }
-            };
-            let materials = mesh
-                .symbols
-                .iter()
-                .map(|s| self.bound_material(inst, *s))
-                .collect::<Result<Vec<_>, _>>()?;
-            let uv_sets = materials
-                .iter()
-                .map(|&(m, set)| self.textured(m).then_some(set))
-                .collect::<Vec<_>>();
-            let materials: Vec<u32> = materials.iter().map(|&(m, _)| m).collect();
-            return self.place_mesh(inst, &mesh, &materials, &uv_sets, world);
+        if let Some(mesh) = self.local_mesh(geometry)? {
+            return self.place_bound_mesh(inst, &mesh, world);
         }
         match extension_technique(geometry).and_then(|t| child(t, "sphere")) {
             Some(sphere) => self.place_sphere(inst, sphere, world),
@@ -365,6 +422,42 @@ impl<'a, 'i> Builder<'a, 'i, '_> {
                 Ok(())
             }
         }
+    }
+
+    /// The geometry's `<mesh>`, read once per geometry (posing a skin copies it).
+    fn local_mesh(
+        &mut self,
+        geometry: Node<'a, 'i>,
+    ) -> Result<Option<Rc<LocalMesh<'a>>>, LoadError> {
+        let Some(mesh_node) = child(geometry, "mesh") else {
+            return Ok(None);
+        };
+        if let Some(m) = self.meshes.get(&geometry.id()) {
+            return Ok(Some(Rc::clone(m)));
+        }
+        let m = Rc::new(parse_mesh(&mut self.ctx, mesh_node)?);
+        self.meshes.insert(geometry.id(), Rc::clone(&m));
+        Ok(Some(m))
+    }
+
+    /// Places `mesh` with the materials the instance binds to its symbols.
+    fn place_bound_mesh(
+        &mut self,
+        inst: Node<'a, 'i>,
+        mesh: &LocalMesh,
+        world: &DMat4,
+    ) -> Result<(), LoadError> {
+        let materials = mesh
+            .symbols
+            .iter()
+            .map(|s| self.bound_material(inst, *s))
+            .collect::<Result<Vec<_>, _>>()?;
+        let uv_sets = materials
+            .iter()
+            .map(|&(m, set)| self.textured(m).then_some(set))
+            .collect::<Vec<_>>();
+        let materials: Vec<u32> = materials.iter().map(|&(m, _)| m).collect();
+        self.place_mesh(inst, mesh, &materials, &uv_sets, world)
     }
 
     /// The material bound to `symbol` by the instance's `instance_material`s

@@ -21,7 +21,7 @@ pub(crate) struct LocalTriangle {
 
 /// One TEXCOORD set of a mesh: per triangle, its corners' indices into
 /// `LocalMesh::uvs` (`None` for triangles of primitives without this set).
-#[derive(Debug)]
+#[derive(Clone, Debug)]
 pub(crate) struct UvSet {
     /// The inputs' `set` attribute (0 when absent).
     pub set: u32,
@@ -29,9 +29,12 @@ pub(crate) struct UvSet {
 }
 
 /// One `<geometry>`'s mesh before instancing.
-#[derive(Default, Debug)]
+#[derive(Clone, Default, Debug)]
 pub(crate) struct LocalMesh<'a> {
     pub positions: Vec<Vec3>,
+    /// Base and count in `positions` of the `<vertices>` POSITION source: the
+    /// vertices a skin's weights index (`None` if no primitive reads them).
+    pub vertices: Option<(u32, u32)>,
     pub normals: Vec<Vec3>,
     pub uvs: Vec<Vec2>,
     pub triangles: Vec<LocalTriangle>,
@@ -141,7 +144,16 @@ pub(crate) fn parse_mesh<'a, 'i>(
             );
         }
     }
+    mesh.vertices =
+        vertices_source(ctx, mesh_node).and_then(|s| bases.positions.get(&s.id()).copied());
     Ok(mesh)
+}
+
+/// The POSITION `<source>` of the mesh's `<vertices>`, if it names one.
+fn vertices_source<'a, 'i>(ctx: &Ctx<'a, 'i>, mesh_node: Node<'a, 'i>) -> Option<Node<'a, 'i>> {
+    let input = children(child(mesh_node, "vertices")?, "input")
+        .find(|i| i.attribute("semantic") == Some("POSITION"))?;
+    ctx.resolve(input, "source", "source").ok()
 }
 
 /// Reads the primitive's `<input>`s, loading the sources they name.
@@ -151,22 +163,17 @@ fn read_layout<'a, 'i>(
     mesh: &mut LocalMesh<'a>,
     bases: &mut SourceBases,
 ) -> Result<Layout, LoadError> {
-    let mut stride = 0u64;
+    let mut stride = 0;
     let mut vertex = None;
     let mut normal = None;
     let mut texcoords = Vec::new();
     for input in children(prim, "input") {
-        let offset = ctx
-            .uint_attr(input, "offset")?
-            .ok_or_else(|| ctx.err(input, "missing attribute offset"))?;
-        if offset > MAX_OFFSET {
-            return Err(ctx.err(input, format!("offset {offset} is too large")));
-        }
+        let offset = input_offset(ctx, input)?;
         stride = stride.max(offset + 1);
         match input.attribute("semantic") {
-            Some("VERTEX") if vertex.is_none() => vertex = Some((input, offset as usize)),
-            Some("NORMAL") if normal.is_none() => normal = Some((input, offset as usize)),
-            Some("TEXCOORD") => texcoords.push((input, offset as usize)),
+            Some("VERTEX") if vertex.is_none() => vertex = Some((input, offset)),
+            Some("NORMAL") if normal.is_none() => normal = Some((input, offset)),
+            Some("TEXCOORD") => texcoords.push((input, offset)),
             Some("COLOR") => warn_vertex_colours(ctx, input),
             _ => {}
         }
@@ -197,12 +204,23 @@ fn read_layout<'a, 'i>(
     };
     let uvs = read_texcoords(ctx, &texcoords, mesh, bases);
     Ok(Layout {
-        stride: stride as usize,
+        stride,
         vertex_offset,
         positions,
         normals,
         uvs,
     })
+}
+
+/// A shared `<input>`'s `offset` (in `<p>`, or in a skin's `<v>`).
+pub(crate) fn input_offset(ctx: &Ctx, input: Node) -> Result<usize, LoadError> {
+    let offset = ctx
+        .uint_attr(input, "offset")?
+        .ok_or_else(|| ctx.err(input, "missing attribute offset"))?;
+    if offset > MAX_OFFSET {
+        return Err(ctx.err(input, format!("offset {offset} is too large")));
+    }
+    Ok(offset as usize)
 }
 
 /// The POSITION source and NORMAL input of the `<vertices>` that VERTEX input
@@ -329,7 +347,7 @@ fn accessor_params(source: Node) -> Option<usize> {
 
 /// A `<source>`'s numbers, its accessor's stride (at least `dims`; `default_stride`
 /// without an accessor) and element count.
-fn source_values(
+pub(crate) fn source_values(
     ctx: &Ctx,
     source: Node,
     dims: u64,

@@ -50,6 +50,21 @@ pub(crate) fn local_matrix(ctx: &mut Ctx, node: Node) -> Result<DMat4, LoadError
     Ok(m)
 }
 
+/// A `<node>`'s matrix in the file's frame (without `U`): the `local_matrix` of each
+/// enclosing `<node>` from the outermost down. Skinning reads joints by it, wherever
+/// the walk has got to.
+pub(crate) fn node_world(ctx: &mut Ctx, node: Node) -> Result<DMat4, LoadError> {
+    let chain: Vec<Node> = node
+        .ancestors()
+        .filter(|n| n.has_tag_name("node"))
+        .collect();
+    let mut m = DMat4::IDENTITY;
+    for n in chain.into_iter().rev() {
+        m *= local_matrix(ctx, n)?;
+    }
+    Ok(m)
+}
+
 /// A row-major `<matrix>`; missing trailing entries are 0 (spec §2).
 fn matrix(ctx: &mut Ctx, node: Node) -> Result<DMat4, LoadError> {
     let v = ctx.numbers::<f64>(node)?;

@@ -339,6 +339,14 @@ impl Number for u32 {
     }
 }
 
+impl Number for i64 {
+    const WHAT: &'static str = "an integer";
+    const FRACTIONAL: bool = false;
+    fn is_finite(self) -> bool {
+        true
+    }
+}
+
 /// First element child of `node` with local name `name`.
 pub(crate) fn child<'a, 'i>(node: Node<'a, 'i>, name: &str) -> Option<Node<'a, 'i>> {
     node.children()
