@@ -129,7 +129,38 @@ fn camera_file_moves_the_view() {
         &dir.path().join("moved.exr"),
         SPHERES,
     );
-    assert_ne!(plain.pixels, moved.pixels);
+    // 0.3 to the right is about 2.7 pixels at the spheres' depth: the view slides left.
+    let shift = best_shift(&column_profile(&plain), &column_profile(&moved));
+    assert!(
+        (2..=3).contains(&shift),
+        "the view moved by {shift} columns"
+    );
+}
+
+/// The mean of each column of `img`, summed over channels.
+fn column_profile(img: &Image) -> Vec<f64> {
+    let w = img.width as usize;
+    let mut cols = vec![0.0; w];
+    for (i, p) in img.pixels.iter().enumerate() {
+        cols[i % w] += f64::from(p.x + p.y + p.z) / f64::from(img.height);
+    }
+    cols
+}
+
+/// The `k` in -6..=6 for which `moved[x]` best matches `plain[x + k]` (least mean
+/// squared difference over the columns both hold).
+fn best_shift(plain: &[f64], moved: &[f64]) -> i32 {
+    let n = plain.len() as i32;
+    let error = |k: i32| {
+        let xs = (0..n).filter(|&x| (0..n).contains(&(x + k)));
+        let d: Vec<f64> = xs
+            .map(|x| plain[(x + k) as usize] - moved[x as usize])
+            .collect();
+        d.iter().map(|d| d * d).sum::<f64>() / d.len() as f64
+    };
+    (-6..=6)
+        .min_by(|&a, &b| error(a).total_cmp(&error(b)))
+        .unwrap()
 }
 
 #[test]

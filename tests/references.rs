@@ -418,9 +418,10 @@ fn light_tracing_cbempty_m1_and_m5() {
 }
 
 /// The issue's per-pixel test: 16 renders at 32 spp with independent seeds, a Welch t per
-/// pixel and channel against the reference and its noise (Šidák, 1 % family-wise); at
-/// least 99.75 % of pixels pass with the estimator `--integrator auto` picks for CBempty.
-/// The Welch test is case 9's (`ember::bench`, feature `bench`).
+/// pixel and channel against the reference and its noise (Šidák, 1 % family-wise): with
+/// the estimator `--integrator auto` picks for CBempty, no pixel fails but the two the
+/// reference has wrong (the issue allowed 0.25 % of them, 48 pixels). The Welch test is
+/// case 9's (`ember::bench`, feature `bench`).
 #[cfg(feature = "bench")]
 #[test]
 fn cbempty_m5_per_pixel_with_the_default_estimator() {
@@ -462,11 +463,21 @@ fn cbempty_m5_per_pixel_with_the_default_estimator() {
         t.fail_high,
         t.fail_low
     );
-    assert!(
-        t.pass_rate >= 0.9975,
-        "{:.3}% of pixels pass",
-        100.0 * t.pass_rate
-    );
+    assert_only_the_hot_spot_fails(&t.failing, &reference);
+}
+
+/// The Welch test is Šidák-corrected to 1 % family-wise, so a correct render fails no
+/// pixel but the reference's two hot-spot pixels, which it has 0.48 % above the closed
+/// form (`transport_analytic::point_light_hot_spot_matches_the_closed_form`).
+pub fn assert_only_the_hot_spot_fails(failing: &[usize], reference: &Image) {
+    for &i in failing {
+        let (x, y) = (i % reference.width as usize, i / reference.width as usize);
+        assert!(
+            reference.pixels[i].max_element() >= 20.0,
+            "pixel ({x}, {y}) fails: {} in the reference",
+            reference.pixels[i]
+        );
+    }
 }
 
 /// Not a test: prints the masked CBempty m5 mean at high spp (EMBER_SPP), to check for bias by hand.

@@ -375,15 +375,19 @@ fn case9_cbempty_point_light_needs_light_tracing() {
         assert_eq!(r.nonfinite, 0, "{}", r.name);
     }
     let lt = c.run("light tracing");
+    let (reference, _) =
+        light_paths::reference(&data.join("tests/data/references"), "CBempty_m5.exr").unwrap();
+    crate::references::assert_only_the_hot_spot_fails(&lt.failing, &reference);
+    // The image mean agrees with the reference: 4.5 s.e. of the 16 renders' mean, plus
+    // 0.5 % of the hot spot's share of the mean, which the reference has 0.48 % high
+    // (the reference's own noise in its mean, 3e-5 of it, is far below either).
+    let hot_share = (reference.pixels.iter())
+        .filter(|p| p.max_element() >= 20.0)
+        .map(|&p| f64::from(ember::color::luminance(p)))
+        .sum::<f64>()
+        / reference.pixels.len() as f64;
     assert!(
-        lt.pass_rate >= 0.9975,
-        "light tracing: {:.3}%",
-        100.0 * lt.pass_rate
-    );
-    // The image mean agrees with the reference (4.5 s.e. of the 16 renders' mean, plus
-    // 0.5% for the reference's own pixel noise and edge differences).
-    assert!(
-        (lt.mean - lt.reference_mean).abs() <= Z_MAX * lt.se + 0.005 * lt.reference_mean,
+        (lt.mean - lt.reference_mean).abs() <= Z_MAX * lt.se + 0.005 * hot_share,
         "light tracing mean {} ± {} vs {}",
         lt.mean,
         lt.se,

@@ -35,6 +35,8 @@ pub struct PixelTestRun {
     /// Failing pixels above / below the reference.
     pub fail_high: usize,
     pub fail_low: usize,
+    /// The failing pixels' indices, row-major.
+    pub failing: Vec<usize>,
     pub seconds: f64,
     pub nonfinite: u64,
 }
@@ -121,6 +123,7 @@ pub fn cbempty(b: &Budget, data: &Path) -> Result<CbemptyCase> {
             reference_mean: reference.mean_luminance() as f64,
             fail_high: t.fail_high,
             fail_low: t.fail_low,
+            failing: t.failing,
             seconds,
             nonfinite,
         });
@@ -200,11 +203,13 @@ fn mean_and_se(v: &[f64]) -> (f64, f64) {
 }
 
 /// Outcome of `welch_pixel_test`.
-#[derive(Clone, Copy, Debug)]
+#[derive(Clone, Debug)]
 pub struct PixelTest {
     pub pass_rate: f64,
     pub fail_high: usize,
     pub fail_low: usize,
+    /// The failing pixels' indices, row-major.
+    pub failing: Vec<usize>,
 }
 
 /// For every pixel and channel: Welch's t of the mean of `renders` (variance from their
@@ -217,6 +222,7 @@ pub fn welch_pixel_test(renders: &[Image], reference: &Image, ref_noise: [f64; 3
     let npix = reference.pixels.len();
     let alpha = 1.0 - 0.99f64.powf(1.0 / (3 * npix) as f64);
     let (mut pass, mut high, mut low) = (0, 0, 0);
+    let mut failing = Vec::new();
     for i in 0..npix {
         let mut ok = true;
         let mut above = false;
@@ -249,7 +255,10 @@ pub fn welch_pixel_test(renders: &[Image], reference: &Image, ref_noise: [f64; 3
         }
         if ok {
             pass += 1;
-        } else if above {
+            continue;
+        }
+        failing.push(i);
+        if above {
             high += 1;
         } else {
             low += 1;
@@ -259,6 +268,7 @@ pub fn welch_pixel_test(renders: &[Image], reference: &Image, ref_noise: [f64; 3
         pass_rate: pass as f64 / npix.max(1) as f64,
         fail_high: high,
         fail_low: low,
+        failing,
     }
 }
 
