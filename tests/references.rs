@@ -469,6 +469,7 @@ fn cbempty_m5_per_pixel_with_the_default_estimator() {
 /// The Welch test is Šidák-corrected to 1 % family-wise, so a correct render fails no
 /// pixel but the reference's two hot-spot pixels, which it has 0.48 % above the closed
 /// form (`transport_analytic::point_light_hot_spot_matches_the_closed_form`).
+#[cfg(feature = "bench")]
 pub fn assert_only_the_hot_spot_fails(failing: &[usize], reference: &Image) {
     for &i in failing {
         let (x, y) = (i % reference.width as usize, i / reference.width as usize);
