@@ -32,14 +32,29 @@ pub fn run(cmd: &mut Command) -> Run {
 }
 
 /// A child spawned from `cmd` (made by [`command`], with piped stdout and stderr),
-/// waited for to its end: for a test that signals it or closes its pipes first.
+/// waited for to its end: for a test that signals it or closes its pipes first. A
+/// child still running after [`HANG_LIMIT`] is killed, so a signal that stopped
+/// working fails the test ("killed by a signal") instead of blocking the suite.
 pub fn wait(cmd: &Command, child: Child) -> Run {
+    use std::sync::mpsc;
+    let pid = child.id().to_string();
+    let (done, finished) = mpsc::channel::<()>();
+    let watchdog = std::thread::spawn(move || {
+        if finished.recv_timeout(HANG_LIMIT).is_err() {
+            let _ = Command::new("kill").args(["-KILL", &pid]).status();
+        }
+    });
     let output = child.wait_with_output().expect("wait for ember");
+    let _ = done.send(());
+    let _ = watchdog.join();
     Run {
         args: args_of(cmd),
         output,
     }
 }
+
+/// How long [`wait`] lets a child run: a hang guard, far above any test's run time.
+pub const HANG_LIMIT: std::time::Duration = std::time::Duration::from_secs(120);
 
 fn args_of(cmd: &Command) -> String {
     let args: Vec<String> = cmd
