@@ -181,9 +181,11 @@ fn mean_var(v: &[f64]) -> (f64, f64) {
     (mean, var)
 }
 
-/// Welch's t on each channel's image mean. 8 renders a side: t beyond 5.4 has
-/// probability below 0.1% per channel under the null. The reference README's
-/// 1% of the mean covers sub-pixel geometric differences between two renderers.
+/// Welch's t on each channel's image mean, on every reference scene and the course's
+/// glossy, glass and textured ones. 8 renders a side: t beyond 5.4 has probability
+/// below 0.1% per channel under the null. No slack for geometric differences between
+/// the two renderers: the 1% of the mean once allowed was not needed (the largest
+/// |t| over these 27 channels was 2.7, 0.17% of the mean, when measured).
 #[test]
 #[ignore = "needs Mitsuba 3 (scripts/mitsuba-env); scripts/test runs it"]
 fn mitsuba_renders_the_exported_scene_to_embers_mean() {
@@ -193,6 +195,13 @@ fn mitsuba_renders_the_exported_scene_to_embers_mean() {
     for (scene, m) in [
         ("scenes/cs184/sky/CBspheres_lambertian.dae", 5),
         ("scenes/cs184/sky/CBspheres.dae", 5),
+        ("scenes/cs184/sky/CBbunny.dae", 5),
+        ("scenes/cs184/sky/CBempty.dae", 5),
+        ("scenes/cs184/sky/CBspheres_microfacet_al_ag.dae", 5),
+        ("scenes/cs184/sky/CBbunny_microfacet_cu.dae", 5),
+        ("scenes/cs184/sky/CBgems.dae", 8),
+        ("scenes/cs184/keenan/banana.dae", 3),
+        ("scenes/cs184/sky/CBcoil.dae", 5),
     ] {
         let dir = tempfile::tempdir().unwrap();
         let xml = export(scene, dir.path(), SPP, m);
@@ -204,8 +213,13 @@ fn mitsuba_renders_the_exported_scene_to_embers_mean() {
             let (mt, vt) = mean_var(&theirs.iter().map(|x| x[c]).collect::<Vec<_>>());
             let se = ((vo + vt) / RENDERS as f64).sqrt();
             let diff = (mo - mt).abs();
+            eprintln!(
+                "{scene} channel {c}: ember {mo:.5} vs Mitsuba {mt:.5}, t {:.2}, {:.3} %",
+                diff / se,
+                100.0 * diff / mt
+            );
             assert!(
-                diff <= 5.4 * se + 0.01 * mt,
+                diff <= 5.4 * se,
                 "{scene} channel {c}: ember {mo:.5} vs Mitsuba {mt:.5} (se {se:.2e})"
             );
         }
