@@ -23,11 +23,12 @@ Examples:
 
 Stopping a render:
   Ctrl-C (or SIGTERM) stops within one pixel's time, writes the pixels finished so far
-  (the rest black; samples per pixel and `stopped: interrupted` in the file's metadata,
+  (the rest black; samples per pixel and `ember.stopped: interrupted` in the metadata,
   see `ember info IMAGE`) through a temporary file renamed into place, never a partial
   file, and exits with status 130. A second Ctrl-C quits at once, writing nothing.
   --time S renders passes of 1, 1, 2, 4, 8, 16, 16, ... spp until S seconds are spent
-  (or -s is reached), then writes; --checkpoint S writes the image so far every S seconds.
+  (or -s is reached), then writes, keeping the pixels its last pass finished (so pixels
+  may differ in samples); --checkpoint S writes the image so far every S seconds.
 
 Where ember differs from the CS184 binary on purpose:
   - the field of view does not depend on the resolution (the course's shrinks below 800x600);
@@ -284,7 +285,8 @@ pub enum BenchCommand {
     /// Where methods fail: a row per hard case with what each method does there.
     ///
     /// The cases: delta lights, tiny lights, glossy vs rough, caustics, scale, grazing rays, adaptive sampling,
-    /// roulette. Writes stability.csv, stability.md and a chart.
+    /// roulette, CBempty's point light (light tracing), an environment map's sun. Writes stability.csv,
+    /// stability.md and a chart.
     #[command(allow_negative_numbers = true)]
     Stability(BenchStabilityArgs),
     /// Whether --integrator auto picks the more efficient of path tracing and light tracing, scene by scene.
@@ -548,8 +550,8 @@ pub struct RenderArgs {
     #[command(flatten)]
     pub lens: LensArgs,
 
-    /// Intersection backend. auto: the native BVH below a measured primitive count, Embree from it (in builds
-    /// with Embree; `ember info SCENE` says which and why).
+    /// Intersection backend. auto: the native BVH (auto would switch to Embree above a measured primitive count,
+    /// but the last measurement found no size where Embree is faster; `ember info SCENE` says which and why).
     #[arg(long, value_parser = named::<Backend>(), default_value_t = Backend::Auto)]
     pub accel: Backend,
 
