@@ -17,6 +17,10 @@ fn main() -> ExitCode {
             ember::errln!("{BROKEN_PIPE_MESSAGE}");
             ExitCode::from(EXIT_BROKEN_PIPE)
         }
+        Err(e) if e.is::<cli::UsageError>() => {
+            ember::errln!("ember: error: {e}");
+            ExitCode::from(cli::EXIT_USAGE)
+        }
         // Ctrl-C: what was rendered is written; say so, and exit as an interrupted program.
         Err(e) if e.is::<cli::Interrupted>() => {
             ember::errln!("ember: {e}");

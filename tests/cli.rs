@@ -797,3 +797,13 @@ fn bench_estimators_rows_say_what_auto_runs_and_why_light_tracing_is_left_out() 
         .arg(&missing))
     .fails_with("missing.dae");
 }
+
+/// Exit statuses: 2 for a command line that names no job (as clap's usage errors), 1
+/// for work that failed.
+#[test]
+fn no_scene_is_a_usage_error_and_a_missing_one_a_failure() {
+    let o = run(&mut command()).fails_with("no scene given");
+    assert_eq!(o.code(), Some(2));
+    let o = run(command().arg("missing.dae")).fails_with("missing.dae");
+    assert_eq!(o.code(), Some(1));
+}

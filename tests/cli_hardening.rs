@@ -21,14 +21,13 @@ fn dev_full() -> Stdio {
     )
 }
 
-/// Runs `cmd` with its stdout a pipe whose read end is closed at once (`| head -0`).
+/// Runs `cmd` with its stdout a pipe whose read end is closed before it starts, so
+/// its first write fails whatever the timing (closing the end after the spawn raced
+/// a quick `--help`, which could fit its text in the pipe first).
 fn with_closed_stdout(cmd: &mut Command) -> Run {
-    let mut child = cmd
-        .stdout(Stdio::piped())
-        .stderr(Stdio::piped())
-        .spawn()
-        .unwrap();
-    drop(child.stdout.take());
+    let (reader, writer) = std::io::pipe().unwrap();
+    drop(reader);
+    let child = cmd.stdout(writer).stderr(Stdio::piped()).spawn().unwrap();
     wait(cmd, child)
 }
 

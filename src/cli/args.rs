@@ -38,7 +38,7 @@ Where ember differs from the CS184 binary on purpose:
     beside a small light), it takes more batches first;
   - -t defaults to all cores, and the image does not depend on it;
   - <out>_rate.png is written only with -a, with a legend below the map: blue = 0, red = -s
-    samples per pixel (an <out>_rate.exr holds the raw counts).
+    samples per pixel (with -f X.exr, <out>_rate.exr instead, with the raw counts).
   The full list is in docs/scene-semantics.md, section 9.";
 
 /// What `ember -h` and `--help` say first.

@@ -111,7 +111,10 @@ impl RenderRequest {
             bail!("{}", accel::AccelError::EmbreeUnavailable);
         }
         let Some(scene_path) = args.scene.clone() else {
-            bail!("no scene given; usage: ember [OPTIONS] SCENE.dae (see ember --help)");
+            return Err(super::UsageError(
+                "no scene given; usage: ember [OPTIONS] SCENE.dae (see ember --help)".into(),
+            )
+            .into());
         };
         let (width, height) = (args.resolution[0], args.resolution[1]);
         check_resolution(width, height)?;

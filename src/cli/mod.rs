@@ -18,8 +18,17 @@ pub use interrupt::{Interrupted, EXIT_INTERRUPTED};
 /// The course binary's getopt string: flags a CS184 script may pass.
 const COURSE_FLAGS: &str = "s:l:t:m:o:e:h:H:f:r:c:b:d:a:p:";
 
+/// A command line that names no job (no scene): `main` exits with [`EXIT_USAGE`], as
+/// clap does for its usage errors, not 1, which is for work that failed.
+#[derive(Debug, thiserror::Error)]
+#[error("{0}")]
+pub struct UsageError(pub String);
+
+/// The exit status of a usage error (clap's).
+pub const EXIT_USAGE: u8 = 2;
+
 /// Parses the command line. Help and version go through [`ember::out!`], so a full
-/// disk is an error and a closed pipe is quiet; a course flag that ember does not
+/// disk is an error and a closed pipe is said in one line; a course flag that ember does not
 /// have yet is named as such rather than as an unknown argument; any other error is
 /// one line, as every error of ember is.
 pub fn parse() -> Result<Cli, std::process::ExitCode> {
