@@ -2,7 +2,7 @@
 
 mod cli;
 
-use ember::output::{error_chain_message, is_broken_pipe, BROKEN_PIPE_MESSAGE, EXIT_BROKEN_PIPE};
+use ember::output::{cut_short, error_chain_message, is_broken_pipe};
 use std::process::ExitCode;
 
 fn main() -> ExitCode {
@@ -13,10 +13,7 @@ fn main() -> ExitCode {
     match cli::run(args) {
         Ok(()) => ExitCode::SUCCESS,
         // The reader of our output went away (`ember info x.dae | head -1`).
-        Err(e) if is_broken_pipe(e.as_ref()) => {
-            ember::errln!("{BROKEN_PIPE_MESSAGE}");
-            ExitCode::from(EXIT_BROKEN_PIPE)
-        }
+        Err(e) if is_broken_pipe(e.as_ref()) => cut_short(),
         Err(e) if e.is::<cli::UsageError>() => {
             ember::errln!("ember: error: {e}");
             ExitCode::from(cli::EXIT_USAGE)

@@ -2,8 +2,8 @@
 //! or a full disk. Reports go through [`write_stdout`] (an `io::Result` the caller
 //! propagates), notes and warnings through [`write_stderr`] (errors ignored: there is
 //! nowhere left to report them). [`is_broken_pipe`] lets `main` tell a reader that went
-//! away from other failures: the output was cut short, so it says so in one line and
-//! exits with [`EXIT_BROKEN_PIPE`], the status a shell reports for a program that
+//! away from other failures: the output was cut short, so [`cut_short`] says so in one
+//! line and gives [`EXIT_BROKEN_PIPE`], the status a shell reports for a program that
 //! SIGPIPE stopped, so `set -o pipefail` sees it. [`error_chain_message`] prints an
 //! error chain with each cause said once.
 
@@ -18,6 +18,12 @@ pub const EXIT_BROKEN_PIPE: u8 = 141;
 /// The one line said when stdout's reader went away.
 pub const BROKEN_PIPE_MESSAGE: &str =
     "ember: standard output was closed by its reader; output cut short";
+
+/// Says in one line that stdout's reader went away, and gives the status to exit with.
+pub fn cut_short() -> std::process::ExitCode {
+    write_stderr(format_args!("{BROKEN_PIPE_MESSAGE}\n"));
+    std::process::ExitCode::from(EXIT_BROKEN_PIPE)
+}
 
 /// Writes to stdout and flushes, so a full disk is reported here and not lost at exit.
 pub fn write_stdout(args: fmt::Arguments) -> io::Result<()> {

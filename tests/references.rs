@@ -131,7 +131,9 @@ fn check_with(
         roulette: Roulette::default(),
         ..Default::default()
     };
+    assert_eq!((r.image.width, r.image.height), (160, 120));
     let runs = Runs::render(&job, &settings, 1234);
+    assert!(runs.halves.avg.all_finite());
     let limit = match mean_of {
         MeanOf::All => f32::INFINITY,
         MeanOf::ExcludingHotSpot(limit) => limit,
@@ -219,13 +221,10 @@ impl Runs {
         let means: Vec<[f64; 3]> = (self.images.iter())
             .map(|img| masked_mean(img, reference, limit).0)
             .collect();
-        let k = means.len() as f64;
-        let mut mean = [0.0; 3];
-        let mut se = [0.0; 3];
+        let (mut mean, mut se) = ([0.0; 3], [0.0; 3]);
         for c in 0..3 {
-            mean[c] = means.iter().map(|m| m[c]).sum::<f64>() / k;
-            let var = means.iter().map(|m| (m[c] - mean[c]).powi(2)).sum::<f64>() / (k - 1.0);
-            se[c] = (var / k).sqrt();
+            let channel: Vec<f64> = means.iter().map(|m| m[c]).collect();
+            (mean[c], se[c]) = common::mean_and_stderr(&channel);
         }
         (mean, se)
     }

@@ -67,8 +67,7 @@ pub fn parse() -> Result<Cli, std::process::ExitCode> {
             return Err(match ember::out!("{text}") {
                 Ok(()) => ExitCode::SUCCESS,
                 Err(io) if io.kind() == std::io::ErrorKind::BrokenPipe => {
-                    ember::errln!("{}", ember::output::BROKEN_PIPE_MESSAGE);
-                    ExitCode::from(ember::output::EXIT_BROKEN_PIPE)
+                    ember::output::cut_short()
                 }
                 Err(io) => {
                     ember::errln!("ember: error: {io}");

@@ -144,16 +144,7 @@ pub(crate) fn parse_mesh<'a, 'i>(
             );
         }
     }
-    mesh.vertices =
-        vertices_source(ctx, mesh_node).and_then(|s| bases.positions.get(&s.id()).copied());
     Ok(mesh)
-}
-
-/// The POSITION `<source>` of the mesh's `<vertices>`, if it names one.
-fn vertices_source<'a, 'i>(ctx: &Ctx<'a, 'i>, mesh_node: Node<'a, 'i>) -> Option<Node<'a, 'i>> {
-    let input = children(child(mesh_node, "vertices")?, "input")
-        .find(|i| i.attribute("semantic") == Some("POSITION"))?;
-    ctx.resolve(input, "source", "source").ok()
 }
 
 /// Reads the primitive's `<input>`s, loading the sources they name.
@@ -179,15 +170,21 @@ fn read_layout<'a, 'i>(
         }
     }
     let (vinput, vertex_offset) = vertex.ok_or_else(|| ctx.err(prim, "no VERTEX input"))?;
-    let (pos_source, vertex_normals) = match direct_source(ctx, vinput) {
+    let (pos_source, vertex_normals, via_vertices) = match direct_source(ctx, vinput) {
         Some(source) => {
             let msg = "VERTEX names a <source>, not a <vertices>; read as the positions";
             ctx.warn_once("vertex source", vinput, msg);
-            (source, None)
+            (source, None, false)
         }
-        None => vertex_inputs(ctx, vinput, vertex_offset, &mut texcoords)?,
+        None => {
+            let (source, normals) = vertex_inputs(ctx, vinput, vertex_offset, &mut texcoords)?;
+            (source, normals, true)
+        }
     };
     let positions = load_source(ctx, pos_source, &mut mesh.positions, &mut bases.positions)?;
+    if via_vertices {
+        mesh.vertices.get_or_insert(positions);
+    }
     // A NORMAL input of the primitive wins over one inside <vertices>, which shares VERTEX's index.
     let normals = match (normal, vertex_normals) {
         (Some((input, offset)), _) => Some((offset, input)),
